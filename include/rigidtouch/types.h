@@ -29,11 +29,11 @@ struct Wrench {
 /// What a haptic device reports each tick (world frame, SI units). `valid` is false when the
 /// reading is stale or missing (e.g. a network watchdog fired); the tick then outputs zero force.
 struct DeviceState {
-  std::uint64_t sequence = 0;         // monotonically increasing per reading
-  double time_s = 0.0;                // device clock
-  Vec3 position_m = Vec3::Zero();     // end-effector position
+  std::uint64_t sequence = 0;      // monotonically increasing per reading
+  double time_s = 0.0;             // device clock
+  Vec3 position_m = Vec3::Zero();  // end-effector position
   Quat orientation = Quat::Identity();
-  Vec3 velocity_mps = Vec3::Zero();   // as the device estimates it
+  Vec3 velocity_mps = Vec3::Zero();  // as the device estimates it
   Vec3 angular_velocity_radps = Vec3::Zero();
   std::uint32_t buttons = 0;
   bool valid = true;
@@ -41,13 +41,13 @@ struct DeviceState {
 
 /// What the renderer commands the device to display for the next tick.
 struct DeviceCommand {
-  std::uint64_t sequence = 0;               // the DeviceState sequence this answers
-  Vec3 force_N = Vec3::Zero();              // total force sent to the device (after limits)
+  std::uint64_t sequence = 0;   // the DeviceState sequence this answers
+  Vec3 force_N = Vec3::Zero();  // total force sent to the device (after limits)
   Vec3 torque_Nm = Vec3::Zero();
-  Vec3 penalty_force_N = Vec3::Zero();      // penalty (or coupling) part, before limits
-  Vec3 impulsive_force_N = Vec3::Zero();    // Eq. 9 part, before limits
-  bool clipped = false;                     // the device force limit clipped this command
-  bool safe_fallback = false;               // an error was detected; the output is zero
+  Vec3 penalty_force_N = Vec3::Zero();    // penalty (or coupling) part, before limits
+  Vec3 impulsive_force_N = Vec3::Zero();  // Eq. 9 part, before limits
+  bool clipped = false;                   // the device force limit clipped this command
+  bool safe_fallback = false;             // an error was detected; the output is zero
 };
 
 }  // namespace rigidtouch

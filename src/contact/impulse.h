@@ -14,10 +14,10 @@ namespace rigidtouch::contact {
 /// A dynamic body of a contact group, packed for the impulse solver; world frame (W), at the
 /// centre of mass.
 struct SolverBody {
-  double inv_mass = 0.0;                  // 1 / m  [1/kg]
-  Mat3 inv_inertia_W = Mat3::Zero();      // I^-1 in world frame  [1/(kg m^2)]
-  Vec3 v_W = Vec3::Zero();                // linear velocity of the centre of mass  [m/s]
-  Vec3 w_W = Vec3::Zero();                // angular velocity  [rad/s]
+  double inv_mass = 0.0;              // 1 / m  [1/kg]
+  Mat3 inv_inertia_W = Mat3::Zero();  // I^-1 in world frame  [1/(kg m^2)]
+  Vec3 v_W = Vec3::Zero();            // linear velocity of the centre of mass  [m/s]
+  Vec3 w_W = Vec3::Zero();            // angular velocity  [rad/s]
 };
 
 /// One frictionless contact row (Eq. 3). A normal impulse p >= 0 acts as +p n on body a and -p n
@@ -27,9 +27,9 @@ struct SolverBody {
 struct SolverRow {
   int body_a = -1;
   int body_b = -1;
-  Vec3 n_W = Vec3::UnitZ();      // unit normal, pointing from b towards a
-  Vec3 r_a_W = Vec3::Zero();     // contact point from a's centre of mass  [m]
-  Vec3 r_b_W = Vec3::Zero();     // contact point from b's centre of mass  [m]
+  Vec3 n_W = Vec3::UnitZ();   // unit normal, pointing from b towards a
+  Vec3 r_a_W = Vec3::Zero();  // contact point from a's centre of mass  [m]
+  Vec3 r_b_W = Vec3::Zero();  // contact point from b's centre of mass  [m]
 };
 
 /// A read-only view of one group's impulse problem.
