@@ -1,0 +1,131 @@
+// The data: all mutable state of a running scene, preallocated by MakeData (MuJoCo's mjData).
+// Fields are grouped by what they depend on, as in mjdata.h.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "rigidtouch/model.h"
+#include "rigidtouch/types.h"
+
+struct mjData_;
+
+namespace rigidtouch {
+
+/// Phase of one contact (DESIGN.md tick stage 3).
+enum class ContactPhase {
+  kSeparated,  ///< detected but not penetrating (only with a detection margin)
+  kColliding,  ///< penetrating, and its group is inside a collision-rendering window
+  kResting,    ///< penetrating, outside any window: penalty only
+};
+
+/// One contact point. The normal points from body b towards body a: the penalty force and the
+/// impulse act as +n on a and -n on b. Body indices are into Model::bodies, -1 for static geometry.
+struct Contact {
+  int id = -1;                   // persistent identity across ticks
+  int geom_a = -1, geom_b = -1;  // Model::geoms indices
+  int body_a = -1, body_b = -1;
+  Vec3 p_W = Vec3::Zero();   // contact point (midpoint between the surfaces)
+  Vec3 n_W = Vec3::UnitZ();  // unit normal, from b towards a
+  double depth_m = 0.0;      // penetration, > 0 when the geoms overlap
+  int pair_points = 1;       // points the geom pair has this tick (shares the stiffness)
+  Vec3 p_A = Vec3::Zero();   // contact point in a's principal frame (for matching)
+  Vec3 p_B = Vec3::Zero();   // contact point in b's frame (world frame when b is static)
+  ContactPhase phase = ContactPhase::kResting;
+  bool is_new = false;           // penetrating now, not matched to a penetrating contact before
+  bool sticking = false;         // friction anchor holds
+  Vec3 anchor_A = Vec3::Zero();  // friction stick anchor on a (a's frame) and b (b's frame)
+  Vec3 anchor_B = Vec3::Zero();
+  double normal_force_N = 0.0;           // penalty force this tick
+  Vec3 friction_force_W = Vec3::Zero();  // on a
+  double impulse_Ns = 0.0;               // normal impulse this tick
+  int group = -1;
+};
+
+/// A contact group's collision-rendering window, kept per body so it survives regrouping.
+struct WindowState {
+  std::int64_t onset_step = -1;  // step of the last collision onset; -1: never
+  int impulses_done = 0;         // impulses applied since onset
+};
+
+/// One applied collision impulse (kept for the ticks it happened in; see Data::impulses).
+struct ImpulseEvent {
+  std::int64_t step = 0;
+  double time_s = 0.0;
+  int group = -1;
+  int contacts = 0;   // contact rows in the group (Jc rows)
+  int index = 0;      // i, 1-based position in the train
+  int total = 0;      // N
+  bool tool = false;  // the tool is in the group
+  double kinetic_energy_before_J = 0.0;
+  double kinetic_energy_after_J = 0.0;
+  double impulse_norm_Ns = 0.0;        // |p|, Euclidean norm over the group's rows
+  Vec3 tool_impulse_W = Vec3::Zero();  // linear impulse on the tool  [N s]
+};
+
+/// Conditions Tick counts instead of throwing (MuJoCo's mjtWarning).
+enum class Warning : int {
+  kContactFull = 0,  ///< more contacts than Model::max_contacts; extras dropped
+  kGroupTooLarge,    ///< a group exceeded Model::max_group_bodies; its bodies move freely
+  kSolverFailed,     ///< the impulse solver failed; the impulse was skipped (zero)
+  kBadDeviceState,   ///< device state invalid or non-finite; zero force output
+  kNonFiniteState,   ///< the simulation produced NaN/Inf; state reset to initial
+  kForceClipped,     ///< the device force limit clipped the output
+  kImpulseClipped,   ///< ... and the clipped output contained an impulsive force
+  kCount
+};
+
+/// Name of a warning for reports.
+const char* WarningName(Warning w);
+
+/// Count and last step of one warning.
+struct WarningStat {
+  int count = 0;
+  std::int64_t last_step = -1;
+};
+
+struct Workspace;  // solver scratch, defined in src/render/workspace.h
+/// Deleter so Data can own a Workspace without exposing it.
+struct WorkspaceDeleter {
+  void operator()(Workspace* w) const;
+};
+
+/// All mutable state. Create with MakeData; every buffer is sized there and never grows in Tick.
+struct Data {
+  // time
+  std::int64_t step = 0;
+  double time_s = 0.0;
+
+  // POSITION and VELOCITY state, per body
+  std::vector<BodyState> bodies;  // (nbody)
+
+  // CONTACT dependent, per tick
+  std::vector<Contact> contacts;  // (max_contacts); the first ncontact are valid
+  int ncontact = 0;
+  std::vector<Contact> previous;  // last tick's contacts, for identity matching
+  int nprevious = 0;
+  int next_contact_id = 0;
+  std::vector<int> body_group;  // (nbody) group of each body, -1 if in no contact
+  int ngroup = 0;
+  std::vector<WindowState> window;  // (nbody) collision-window state of each body's group
+
+  // FORCE outputs of the last tick
+  Vec3 tool_penalty_force_W = Vec3::Zero();   // contact penalty on the tool
+  Vec3 tool_coupling_force_W = Vec3::Zero();  // virtual coupling on the tool
+  Vec3 tool_impulse_W = Vec3::Zero();         // linear impulse on the tool this tick
+  double tool_penetration_m = 0.0;
+  Vec3 tool_normal_W = Vec3::UnitZ();
+  int tool_contacts = 0;
+  std::vector<ImpulseEvent> impulses;  // (nbody) impulses applied this tick
+  int nimpulse = 0;
+
+  // diagnostics
+  std::array<WarningStat, static_cast<int>(Warning::kCount)> warnings{};
+
+  // scratch
+  std::unique_ptr<Workspace, WorkspaceDeleter> workspace;
+};
+
+}  // namespace rigidtouch

@@ -1,0 +1,123 @@
+// The model: everything that is constant while a scene runs (MuJoCo's mjModel, Pinocchio's Model).
+// Built by LoadModel from an MJCF file plus rigidtouch's own parameters; Tick takes it as const.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rigidtouch/types.h"
+
+struct mjModel_;
+
+namespace rigidtouch {
+
+/// Geometric primitive of a collision geom (the MJCF geom types rigidtouch accepts).
+enum class GeomType { kPlane, kSphere, kCapsule, kBox, kMesh };
+
+/// Which rendering method produces the collision impulses (METHOD.md).
+enum class RendererKind {
+  kPenalty,  ///< penalty feedback only, no impulses
+  kImpulse,  ///< one impulse at contact onset, Eq. 5 with restitution e (the [IAP] model)
+  kTrain,    ///< a modulated train of N impulses over the collision window, Eq. 8 (e = 0)
+};
+
+/// How the device drives the virtual tool (DESIGN.md tick stage 1).
+enum class Coupling {
+  kNone,     ///< no device: the user wrench comes from TickInput::tool_wrench (offline simulation)
+  kDirect,   ///< the tool is the device end effector: its pose and velocity are the device's
+  kVirtual,  ///< a spring-damper between device and tool (Colgate et al. 1995)
+};
+
+/// A free rigid body; its state lives at the centre of mass in the principal inertial frame.
+struct BodyModel {
+  std::string name;
+  double mass_kg = 0.0;
+  Vec3 inertia_kgm2 = Vec3::Zero();  // principal moments, inertial frame
+  Vec3 ipos_B = Vec3::Zero();        // inertial frame origin in the MJCF body frame
+  Quat iquat_B = Quat::Identity();   // inertial frame orientation in the MJCF body frame
+  int mj_body = -1;                  // id in the compiled MuJoCo model
+  int mj_qpos_adr = -1;              // freejoint qpos address (7 numbers)
+  int mj_qvel_adr = -1;              // freejoint qvel address (6 numbers)
+};
+
+/// A collision geom. `body` is an index into Model::bodies, or -1 for static world geometry.
+struct GeomModel {
+  std::string name;
+  GeomType type = GeomType::kSphere;
+  int body = -1;
+  double friction = 0.0;  // MJCF sliding friction coefficient
+  int mj_geom = -1;
+};
+
+/// Penalty contact law (tick stage 4). Stiffness and damping are per geom pair; a manifold of n
+/// points shares them equally, so a box face on a plane is as stiff as a sphere on it.
+struct ContactParams {
+  /// Contacts involving the tool: the haptic wall the device renders, explicit as on a device.
+  double stiffness_N_per_m = 2000.0;
+  double damping_Ns_per_m = 2.0;
+  /// Contacts between other bodies and the world: simulated with implicit (backward Euler) penalty,
+  /// stiff enough that a 10-box stack compresses less than 1 mm.
+  double scene_stiffness_N_per_m = 2.0e5;
+  double scene_damping_Ns_per_m = 100.0;
+  /// Coulomb friction during penalty contact; negative means "use the MJCF geom friction".
+  double friction_static = -1.0;
+  double friction_kinetic = -1.0;
+  /// Tangential stick-anchor spring relative to the normal stiffness and damping.
+  double tangential_ratio = 1.0;
+  /// A new contact starts a collision window only if it approaches faster than this.
+  double onset_speed_mps = 1.0e-3;
+};
+
+/// Collision rendering (METHOD.md II.a, II.b).
+struct RenderParams {
+  RendererKind renderer = RendererKind::kTrain;
+  double restitution = 0.0;       // e in [0, 1]; the train requires e = 0
+  double t_collision_s = 0.1;     // t_c, collision-rendering window, at most 0.1 s
+  double frequency_hz = 250.0;    // f, impulse-train frequency, in [1/t_c, 1/h]
+  bool reference_solver = false;  // use the exact Eq. 5/8 pseudo-inverse (may pull) instead
+};
+
+/// Impulse schedule derived from RenderParams and the time step (Eq. 6, Eq. 7).
+struct Schedule {
+  int window_steps = 1;    // n = t_c / h, rounded to the nearest whole step
+  int interval_steps = 1;  // n_i = 1 / (f h), rounded to the nearest whole step
+  int impulses = 1;        // N = round(n / n_i); impulse k (0-based) at step k n_i after onset
+};
+
+/// Device-side settings used by Tick's render stage.
+struct DeviceParams {
+  Coupling coupling = Coupling::kNone;
+  double max_force_N = 0.0;                    // 0: no limit
+  double coupling_stiffness_N_per_m = 1000.0;  // virtual coupling
+  double coupling_damping_Ns_per_m = 5.0;
+  Vec3 workspace_offset_m = Vec3::Zero();  // tool position = device position + offset
+};
+
+/// The state of one body: centre of mass and principal-frame orientation, world frame (W).
+struct BodyState {
+  Vec3 x_W = Vec3::Zero();
+  Quat q_WB = Quat::Identity();
+  Vec3 v_W = Vec3::Zero();
+  Vec3 w_W = Vec3::Zero();
+};
+
+/// Everything constant while a scene runs.
+struct Model {
+  std::string source;         // scene file it was loaded from
+  double timestep_s = 0.001;  // h
+  Vec3 gravity_W = Vec3(0, 0, -9.81);
+  std::vector<BodyModel> bodies;   // dynamic bodies (MJCF freejoint bodies)
+  std::vector<GeomModel> geoms;    // collision geoms, static (body -1) and dynamic
+  std::vector<BodyState> initial;  // per body, from keyframe "initial" or the MJCF defaults
+  int tool = 0;                    // index of the tool in `bodies` (METHOD.md body 1)
+  ContactParams contact;
+  RenderParams render;
+  Schedule schedule;  // derived by Configure from render and timestep_s
+  DeviceParams device;
+  int max_contacts = 0;                 // capacity of the contact list; extra contacts are dropped
+  int max_group_bodies = 0;             // capacity of one group (implicit penalty solve is dense)
+  std::shared_ptr<mjModel_> collision;  // compiled MJCF, owned (shared by copies of the Model)
+};
+
+}  // namespace rigidtouch

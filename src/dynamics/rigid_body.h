@@ -1,0 +1,38 @@
+// Free rigid bodies (Eq. 1): world-frame inertia, kinetic energy, free-motion forces and the
+// semi-implicit position update.
+#pragma once
+
+#include "rigidtouch/model.h"
+
+namespace rigidtouch::dynamics {
+
+/// Inertia tensor in the world frame, I_W = R diag(I) R^T  [kg m^2].
+inline Mat3 WorldInertia(const BodyModel& b, const BodyState& s) {
+  const Mat3 R = s.q_WB.toRotationMatrix();
+  return R * b.inertia_kgm2.asDiagonal() * R.transpose();
+}
+
+/// Inverse inertia tensor in the world frame  [1/(kg m^2)].
+inline Mat3 WorldInverseInertia(const BodyModel& b, const BodyState& s) {
+  const Mat3 R = s.q_WB.toRotationMatrix();
+  return R * b.inertia_kgm2.cwiseInverse().asDiagonal() * R.transpose();
+}
+
+/// Velocity of a body point at offset r_W from the centre of mass.
+inline Vec3 PointVelocity(const BodyState& s, const Vec3& r_W) {
+  return s.v_W + s.w_W.cross(r_W);
+}
+
+/// Kinetic energy 1/2 m v.v + 1/2 w.I w  [J].
+double KineticEnergy(const BodyModel& b, const BodyState& s);
+
+/// Gyroscopic torque -w x (I w) of Eq. 1's B term  [N m].
+inline Vec3 GyroscopicTorque(const BodyModel& b, const BodyState& s) {
+  return -s.w_W.cross(WorldInertia(b, s) * s.w_W);
+}
+
+/// Semi-implicit Euler position update with the new velocities: x += h v, q = exp(h w) q, with
+/// the quaternion renormalised so it stays unit.
+void IntegratePosition(BodyState& s, double h);
+
+}  // namespace rigidtouch::dynamics

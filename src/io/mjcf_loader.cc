@@ -1,0 +1,207 @@
+// Scene loading: MJCF compiled by libmujoco, copied into rigidtouch's Model (DESIGN.md).
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <string>
+
+#include "rigidtouch/rigidtouch.h"
+
+namespace rigidtouch {
+namespace {
+
+std::string MjName(const mjModel* m, int type, int id) {
+  const char* name = mj_id2name(m, type, id);
+  if (name != nullptr && name[0] != '\0') return name;
+  std::ostringstream s;
+  s << "#" << id;
+  return s.str();
+}
+
+const char* MjGeomTypeName(int type) {
+  switch (type) {
+    case mjGEOM_PLANE:
+      return "plane";
+    case mjGEOM_HFIELD:
+      return "hfield";
+    case mjGEOM_SPHERE:
+      return "sphere";
+    case mjGEOM_CAPSULE:
+      return "capsule";
+    case mjGEOM_ELLIPSOID:
+      return "ellipsoid";
+    case mjGEOM_CYLINDER:
+      return "cylinder";
+    case mjGEOM_BOX:
+      return "box";
+    case mjGEOM_MESH:
+      return "mesh";
+    default:
+      return "unknown";
+  }
+}
+
+// rigidtouch's geom type for a MuJoCo one, or false when the collision backend cannot give it
+// contact manifolds (MuJoCo 2.2 collides ellipsoids and cylinders through single-point MPR, so a
+// cylinder would rock on a plane instead of resting flat)
+bool ToGeomType(int mj_type, GeomType* out) {
+  switch (mj_type) {
+    case mjGEOM_PLANE:
+      *out = GeomType::kPlane;
+      return true;
+    case mjGEOM_SPHERE:
+      *out = GeomType::kSphere;
+      return true;
+    case mjGEOM_CAPSULE:
+      *out = GeomType::kCapsule;
+      return true;
+    case mjGEOM_BOX:
+      *out = GeomType::kBox;
+      return true;
+    case mjGEOM_MESH:
+      *out = GeomType::kMesh;
+      return true;
+    default:
+      return false;
+  }
+}
+
+Quat MjQuat(const mjtNum* q) {
+  return Quat(q[0], q[1], q[2], q[3]);
+}
+
+// body state at the centre of mass from a freejoint's qpos (origin, quat) and qvel (world linear
+// velocity of the origin, body-frame angular velocity: MuJoCo's convention for free joints)
+BodyState StateFromFreejoint(const BodyModel& b, const mjtNum* qpos, const mjtNum* qvel) {
+  BodyState s;
+  const Vec3 origin_W(qpos[0], qpos[1], qpos[2]);
+  const Quat q_W_body = MjQuat(qpos + 3).normalized();
+  s.q_WB = (q_W_body * b.iquat_B).normalized();
+  const Vec3 com_offset_W = q_W_body * b.ipos_B;
+  s.x_W = origin_W + com_offset_W;
+  s.w_W = q_W_body * Vec3(qvel[3], qvel[4], qvel[5]);
+  s.v_W = Vec3(qvel[0], qvel[1], qvel[2]) + s.w_W.cross(com_offset_W);
+  return s;
+}
+
+}  // namespace
+
+Model LoadModel(const std::string& path, const LoadOptions& options) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw Error("scene file '" + path + "' does not exist or is not a regular file");
+  }
+  char error[1024] = "";
+  mjModel* raw = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  if (raw == nullptr) {
+    throw Error("scene file '" + path + "': MuJoCo could not compile it: " + error);
+  }
+  Model model;
+  model.collision = std::shared_ptr<mjModel>(raw, [](mjModel* m) { mj_deleteModel(m); });
+  const mjModel* m = raw;
+  model.source = path;
+  model.timestep_s = options.timestep_s.value_or(m->opt.timestep);
+  model.gravity_W = Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
+
+  // bodies: freejoint children of the world are dynamic; joint-less bodies are static
+  std::vector<int> body_index(m->nbody, -1);
+  for (int b = 1; b < m->nbody; ++b) {
+    const std::string name = MjName(m, mjOBJ_BODY, b);
+    if (m->body_jntnum[b] == 0) {
+      if (m->body_weldid[b] != 0) {
+        throw Error("scene file '" + path + "': body '" + name +
+                    "' is nested in a free body; rigidtouch simulates free bodies as single rigid "
+                    "bodies: put its geoms into the free body itself");
+      }
+      continue;  // static, welded to the world
+    }
+    const int jnt = m->body_jntadr[b];
+    if (m->body_jntnum[b] != 1 || m->jnt_type[jnt] != mjJNT_FREE || m->body_parentid[b] != 0) {
+      throw Error("scene file '" + path + "': body '" + name +
+                  "' has joints other than one <freejoint/> at the top level; rigidtouch supports "
+                  "free bodies and static bodies only");
+    }
+    BodyModel body;
+    body.name = name;
+    body.mass_kg = m->body_mass[b];
+    body.inertia_kgm2 =
+        Vec3(m->body_inertia[3 * b], m->body_inertia[3 * b + 1], m->body_inertia[3 * b + 2]);
+    body.ipos_B = Vec3(m->body_ipos[3 * b], m->body_ipos[3 * b + 1], m->body_ipos[3 * b + 2]);
+    body.iquat_B = MjQuat(m->body_iquat + 4 * b).normalized();
+    body.mj_body = b;
+    body.mj_qpos_adr = m->jnt_qposadr[jnt];
+    body.mj_qvel_adr = m->jnt_dofadr[jnt];
+    if (!(body.mass_kg > 0.0) || !(body.inertia_kgm2.minCoeff() > 0.0)) {
+      throw Error("scene file '" + path + "': free body '" + name +
+                  "' has no positive mass and inertia (give its geoms a mass or density)");
+    }
+    body_index[b] = static_cast<int>(model.bodies.size());
+    model.bodies.push_back(body);
+  }
+  if (model.bodies.empty()) {
+    throw Error("scene file '" + path + "': no free bodies (<freejoint/>); nothing to simulate");
+  }
+
+  // geoms
+  for (int g = 0; g < m->ngeom; ++g) {
+    GeomModel geom;
+    geom.name = MjName(m, mjOBJ_GEOM, g);
+    if (!ToGeomType(m->geom_type[g], &geom.type)) {
+      throw Error("scene file '" + path + "': geom '" + geom.name + "' has type " +
+                  MjGeomTypeName(m->geom_type[g]) +
+                  ", which the collision backend cannot give contact manifolds for; supported "
+                  "types: plane, sphere, capsule, box, mesh (convex)");
+    }
+    geom.body = body_index[m->body_weldid[m->geom_bodyid[g]]];
+    if (geom.type == GeomType::kPlane && geom.body >= 0) {
+      throw Error("scene file '" + path + "': geom '" + geom.name +
+                  "' is a plane on a free body; planes must be static (in the worldbody)");
+    }
+    geom.friction = m->geom_friction[3 * g];
+    geom.mj_geom = g;
+    model.geoms.push_back(geom);
+  }
+
+  // the tool
+  const auto tool = std::find_if(model.bodies.begin(), model.bodies.end(),
+                                 [&](const BodyModel& b) { return b.name == options.tool_name; });
+  if (tool == model.bodies.end()) {
+    std::string names;
+    for (const auto& b : model.bodies) names += (names.empty() ? "" : ", ") + b.name;
+    throw Error("scene file '" + path + "': no free body named '" + options.tool_name +
+                "' to use as the tool (free bodies: " + names + "); pass --tool NAME");
+  }
+  model.tool = static_cast<int>(tool - model.bodies.begin());
+
+  // initial state: keyframe "initial" when present, else the model defaults (qpos0, zero qvel)
+  std::vector<mjtNum> qpos(m->qpos0, m->qpos0 + m->nq);
+  std::vector<mjtNum> qvel(m->nv, 0.0);
+  const int key = mj_name2id(m, mjOBJ_KEY, "initial");
+  if (key >= 0) {
+    std::copy(m->key_qpos + key * m->nq, m->key_qpos + (key + 1) * m->nq, qpos.begin());
+    std::copy(m->key_qvel + key * m->nv, m->key_qvel + (key + 1) * m->nv, qvel.begin());
+  }
+  for (const auto& b : model.bodies) {
+    model.initial.push_back(
+        StateFromFreejoint(b, qpos.data() + b.mj_qpos_adr, qvel.data() + b.mj_qvel_adr));
+  }
+
+  model.contact = options.contact;
+  model.render = options.render;
+  model.device = options.device;
+  model.max_contacts = options.max_contacts > 0
+                           ? options.max_contacts
+                           : std::max(64, 16 * static_cast<int>(model.geoms.size()));
+  model.max_group_bodies = options.max_group_bodies > 0
+                               ? std::min<int>(options.max_group_bodies, model.bodies.size())
+                               : static_cast<int>(model.bodies.size());
+  // the collision backend's contact list is sized from the model
+  raw->nconmax = model.max_contacts;
+  for (int g = 0; g < m->ngeom; ++g) raw->geom_margin[g] = 0.0;
+  Configure(model);
+  return model;
+}
+
+}  // namespace rigidtouch

@@ -1,0 +1,79 @@
+// Parameter validation (load-time error tier: throw with the parameter and its range).
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "contact/schedule.h"
+#include "rigidtouch/rigidtouch.h"
+
+namespace rigidtouch {
+namespace {
+
+void Require(bool ok, const std::string& name, double value, const std::string& range) {
+  if (ok) return;
+  std::ostringstream msg;
+  msg << "parameter " << name << " = " << value << " is out of range: valid " << range;
+  throw Error(msg.str());
+}
+
+void RequireFinite(const std::string& name, double value, double lo, double hi,
+                   const std::string& range) {
+  Require(std::isfinite(value) && value >= lo && value <= hi, name, value, range);
+}
+
+constexpr double kInf = INFINITY;
+
+}  // namespace
+
+void Configure(Model& model) {
+  RequireFinite("timestep_s", model.timestep_s, 1e-6, 0.1, "0 < h <= 0.1 s (at least 1 us)");
+  Require(std::isfinite(model.timestep_s) && model.timestep_s > 0.0, "timestep_s", model.timestep_s,
+          "h > 0");
+  const ContactParams& c = model.contact;
+  RequireFinite("stiffness_N_per_m", c.stiffness_N_per_m, 0.0, kInf, "k >= 0 N/m, finite");
+  RequireFinite("damping_Ns_per_m", c.damping_Ns_per_m, 0.0, kInf, "b >= 0 N s/m, finite");
+  RequireFinite("scene_stiffness_N_per_m", c.scene_stiffness_N_per_m, 0.0, kInf,
+                "k >= 0 N/m, finite");
+  RequireFinite("scene_damping_Ns_per_m", c.scene_damping_Ns_per_m, 0.0, kInf,
+                "b >= 0 N s/m, finite");
+  RequireFinite("friction_static", c.friction_static, -1.0, kInf,
+                ">= 0, or -1 for the MJCF geom friction");
+  RequireFinite("friction_kinetic", c.friction_kinetic, -1.0, kInf,
+                ">= 0, or -1 for the MJCF geom friction");
+  RequireFinite("tangential_ratio", c.tangential_ratio, 0.0, kInf, ">= 0");
+  RequireFinite("onset_speed_mps", c.onset_speed_mps, 0.0, kInf, ">= 0 m/s");
+
+  const RenderParams& r = model.render;
+  RequireFinite("restitution", r.restitution, 0.0, 1.0, "0 <= e <= 1 (Eq. 4)");
+  if (r.renderer == RendererKind::kTrain) {
+    RequireFinite("t_collision_s", r.t_collision_s, 0.0, 0.1,
+                  "0 < t_c <= 0.1 s (shorter than human reaction time, METHOD.md II.a)");
+    Require(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, "0 < t_c <= 0.1 s");
+    Require(std::isfinite(r.frequency_hz) && r.frequency_hz > 0.0, "frequency_hz", r.frequency_hz,
+            "f > 0 Hz, within [1/t_c, 1/h] (Eq. 6-7)");
+    if (r.restitution != 0.0) {
+      std::ostringstream msg;
+      msg << "parameter restitution = " << r.restitution
+          << " is not allowed with the train renderer: the method requires perfectly plastic "
+             "collisions (e = 0), the only post-collision velocity compatible with every "
+             "intermediate velocity of the train (METHOD.md Eq. 8)";
+      throw Error(msg.str());
+    }
+  }
+  model.schedule = contact::MakeSchedule(model.timestep_s, r);
+
+  const DeviceParams& d = model.device;
+  RequireFinite("max_force_N", d.max_force_N, 0.0, kInf, ">= 0 N (0: unlimited)");
+  RequireFinite("coupling_stiffness_N_per_m", d.coupling_stiffness_N_per_m, 0.0, kInf, ">= 0 N/m");
+  RequireFinite("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m, 0.0, kInf, ">= 0 N s/m");
+  Require(d.workspace_offset_m.allFinite(), "workspace_offset_m", d.workspace_offset_m.norm(),
+          "finite");
+  Require(model.tool >= 0 && model.tool < static_cast<int>(model.bodies.size()), "tool", model.tool,
+          "an index of a free body");
+  for (auto& b : model.bodies) {
+    Require(std::isfinite(b.mass_kg) && b.mass_kg > 0.0, "mass_kg of body '" + b.name + "'",
+            b.mass_kg, "> 0 kg");
+  }
+}
+
+}  // namespace rigidtouch

@@ -1,0 +1,130 @@
+// Data lifecycle and per-tick reports.
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+
+#include "dynamics/rigid_body.h"
+#include "render/workspace.h"
+#include "rigidtouch/rigidtouch.h"
+
+namespace rigidtouch {
+namespace {
+
+// MuJoCo prints warnings (e.g. a full contact list) to stderr; Tick counts them instead
+void SilentWarning(const char*) {}
+
+}  // namespace
+
+Workspace::~Workspace() {
+  if (collision != nullptr) mj_deleteData(collision);
+}
+
+void WorkspaceDeleter::operator()(Workspace* w) const {
+  delete w;
+}
+
+const char* WarningName(Warning w) {
+  switch (w) {
+    case Warning::kContactFull:
+      return "contact_full";
+    case Warning::kGroupTooLarge:
+      return "group_too_large";
+    case Warning::kSolverFailed:
+      return "solver_failed";
+    case Warning::kBadDeviceState:
+      return "bad_device_state";
+    case Warning::kNonFiniteState:
+      return "non_finite_state";
+    case Warning::kForceClipped:
+      return "force_clipped";
+    case Warning::kImpulseClipped:
+      return "impulse_clipped";
+    case Warning::kCount:
+      break;
+  }
+  return "unknown";
+}
+
+Data MakeData(const Model& model) {
+  mju_user_warning = SilentWarning;
+  Data data;
+  const int nbody = static_cast<int>(model.bodies.size());
+  const int ncap = model.max_contacts;
+  data.bodies.resize(nbody);
+  data.contacts.resize(ncap);
+  data.previous.resize(ncap);
+  data.body_group.assign(nbody, -1);
+  data.window.resize(nbody);
+  data.impulses.resize(nbody);
+  data.workspace.reset(new Workspace);
+  Workspace& ws = *data.workspace;
+  ws.collision = mj_makeData(model.collision.get());
+  if (ws.collision == nullptr) throw Error("could not allocate the collision backend's data");
+  ws.groups.Reserve(nbody, ncap);
+  ws.laws.resize(ncap);
+  ws.normal_velocity.resize(ncap);
+  ws.force_W.resize(nbody);
+  ws.torque_W.resize(nbody);
+  ws.rows.resize(3 * ncap);
+  ws.group_solver.Reserve(model.max_group_bodies);
+  ws.solver_bodies.resize(nbody);
+  ws.solver_rows.resize(ncap);
+  ws.impulses.resize(ncap);
+  ws.impulse_solver = std::make_unique<contact::ImpulseSolver>(ncap, nbody);
+  ResetData(model, data);
+  return data;
+}
+
+void ResetData(const Model& model, Data& data) {
+  data.step = 0;
+  data.time_s = 0.0;
+  std::copy(model.initial.begin(), model.initial.end(), data.bodies.begin());
+  data.ncontact = 0;
+  data.nprevious = 0;
+  data.next_contact_id = 0;
+  data.ngroup = 0;
+  std::fill(data.body_group.begin(), data.body_group.end(), -1);
+  std::fill(data.window.begin(), data.window.end(), WindowState{});
+  data.tool_penalty_force_W.setZero();
+  data.tool_coupling_force_W.setZero();
+  data.tool_impulse_W.setZero();
+  data.tool_penetration_m = 0.0;
+  data.tool_normal_W = Vec3::UnitZ();
+  data.tool_contacts = 0;
+  data.nimpulse = 0;
+  data.warnings.fill(WarningStat{});
+}
+
+double KineticEnergy(const Model& model, const Data& data) {
+  double e = 0.0;
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    e += dynamics::KineticEnergy(model.bodies[i], data.bodies[i]);
+  }
+  return e;
+}
+
+TraceSample MakeTraceSample(const Model& model, const Data& data, const DeviceCommand& command) {
+  TraceSample s;
+  s.step = data.step;
+  s.time_s = data.time_s;
+  const BodyState& tool = data.bodies[model.tool];
+  s.tool_position_m = tool.x_W;
+  s.tool_velocity_mps = tool.v_W;
+  s.penalty_force_N = command.penalty_force_N;
+  s.impulsive_force_N = command.impulsive_force_N;
+  s.device_force_N = command.force_N;
+  s.wall_normal = data.tool_normal_W;
+  s.penetration_m = data.tool_penetration_m;
+  s.tool_contacts = data.tool_contacts;
+  s.clipped = command.clipped;
+  for (int k = 0; k < data.nimpulse; ++k) {
+    const ImpulseEvent& e = data.impulses[k];
+    if (!e.tool) continue;
+    ++s.impulses;
+    s.kinetic_energy_before_J = e.kinetic_energy_before_J;
+    s.kinetic_energy_after_J = e.kinetic_energy_after_J;
+  }
+  return s;
+}
+
+}  // namespace rigidtouch

@@ -1,0 +1,33 @@
+// Solver scratch owned by Data: sized once by MakeData, reused every tick.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "contact/groups.h"
+#include "contact/impulse.h"
+#include "contact/impulse_solver.h"
+#include "contact/penalty.h"
+#include "dynamics/group_dynamics.h"
+
+struct mjData_;
+
+namespace rigidtouch {
+
+struct Workspace {
+  mjData_* collision = nullptr;  // MuJoCo scratch for the narrow phase
+  contact::Groups groups;
+  std::vector<contact::PenaltyLaw> laws;    // (max_contacts)
+  std::vector<double> normal_velocity;      // (max_contacts) relative normal velocity
+  std::vector<Vec3> force_W, torque_W;      // (nbody) explicit force and torque this tick
+  std::vector<dynamics::ImplicitRow> rows;  // (3 max_contacts) implicit rows of one group
+  dynamics::GroupSolverScratch group_solver;
+  std::vector<contact::SolverBody> solver_bodies;  // (max_group_bodies)
+  std::vector<contact::SolverRow> solver_rows;     // (max_contacts)
+  std::vector<double> impulses;                    // (max_contacts)
+  std::unique_ptr<contact::ImpulseSolver> impulse_solver;
+
+  ~Workspace();
+};
+
+}  // namespace rigidtouch

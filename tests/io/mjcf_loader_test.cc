@@ -1,0 +1,128 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rigidtouch/rigidtouch.h"
+#include "test_util.h"
+
+namespace rigidtouch {
+namespace {
+
+using test::TestScene;
+
+std::string LoadError(const std::string& path, const LoadOptions& options = {}) {
+  try {
+    LoadModel(path, options);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MjcfLoaderTest, CopiesMassInertiaAndToolFromMuJoCo) {
+  const Model m = LoadModel(TestScene("box_plane.xml"), {});
+  ASSERT_EQ(m.bodies.size(), 2u);
+  EXPECT_EQ(m.bodies[m.tool].name, "tool");
+  const BodyModel& box = m.bodies[0];
+  EXPECT_DOUBLE_EQ(box.mass_kg, 0.1);
+  // solid cube of side a = 0.05: I = m a^2 / 6 (MuJoCo's compiler, to rounding)
+  EXPECT_NEAR(box.inertia_kgm2.x(), 0.1 * 0.05 * 0.05 / 6.0, 1e-12);
+  EXPECT_DOUBLE_EQ(m.timestep_s, 0.001);
+  EXPECT_NEAR(m.initial[0].x_W.z(), 0.025, 1e-12);
+  EXPECT_EQ(m.geoms[0].type, GeomType::kPlane);
+  EXPECT_EQ(m.geoms[0].body, -1);
+  EXPECT_DOUBLE_EQ(m.geoms[0].friction, 0.5);
+}
+
+TEST(MjcfLoaderTest, KeyframeInitialSetsPositionsAndVelocities) {
+  const Model m = LoadModel(TestScene("two_spheres.xml"), {});
+  EXPECT_NEAR(m.initial[0].v_W.x(), 0.5, 1e-12);
+  EXPECT_NEAR(m.initial[1].v_W.x(), -0.2, 1e-12);
+  EXPECT_NEAR(m.initial[1].x_W.x(), 0.0105, 1e-12);
+}
+
+TEST(MjcfLoaderTest, ToolFlagAndTimestepOverride) {
+  LoadOptions o;
+  o.tool_name = "box";
+  o.timestep_s = 0.0005;
+  const Model m = LoadModel(TestScene("box_plane.xml"), o);
+  EXPECT_EQ(m.bodies[m.tool].name, "box");
+  EXPECT_DOUBLE_EQ(m.timestep_s, 0.0005);
+}
+
+TEST(MjcfLoaderTest, MalformedXmlGivesMuJoCoMessageWithFileAndLine) {
+  const std::string e = LoadError(TestScene("malformed.xml"));
+  EXPECT_NE(e.find("malformed.xml"), std::string::npos) << e;
+  // MuJoCo (tinyxml2) reports the line of the mismatched element: the unclosed geom on line 5
+  EXPECT_NE(e.find("Line number=5"), std::string::npos) << e;
+}
+
+TEST(MjcfLoaderTest, MissingFileIsNamed) {
+  const std::string e = LoadError("no/such/scene.xml");
+  EXPECT_NE(e.find("no/such/scene.xml"), std::string::npos) << e;
+}
+
+TEST(MjcfLoaderTest, UnsupportedGeomTypeNamesTheGeom) {
+  const std::string e = LoadError(TestScene("cylinder.xml"));
+  EXPECT_NE(e.find("'can'"), std::string::npos) << e;
+  EXPECT_NE(e.find("cylinder"), std::string::npos) << e;
+  EXPECT_NE(e.find("supported types: plane, sphere, capsule, box, mesh"), std::string::npos) << e;
+}
+
+TEST(MjcfLoaderTest, UnsupportedJointNamesTheBody) {
+  const std::string e = LoadError(TestScene("hinge.xml"));
+  EXPECT_NE(e.find("'tool'"), std::string::npos) << e;
+  EXPECT_NE(e.find("freejoint"), std::string::npos) << e;
+}
+
+TEST(MjcfLoaderTest, NoToolBodyNamesWhatWasLookedFor) {
+  LoadOptions o;
+  o.tool_name = "stylus";
+  const std::string e = LoadError(TestScene("box_plane.xml"), o);
+  EXPECT_NE(e.find("'stylus'"), std::string::npos) << e;
+  EXPECT_NE(e.find("box, tool"), std::string::npos) << e;  // lists the candidates
+}
+
+struct BadParam {
+  const char* name;
+  void (*set)(LoadOptions&);
+  const char* expected;
+};
+
+TEST(MjcfLoaderTest, OutOfRangeParametersNameParameterAndRange) {
+  const BadParam cases[] = {
+      {"stiffness_N_per_m", [](LoadOptions& o) { o.contact.stiffness_N_per_m = -1; }, ">= 0"},
+      {"damping_Ns_per_m", [](LoadOptions& o) { o.contact.damping_Ns_per_m = NAN; }, ">= 0"},
+      {"restitution",
+       [](LoadOptions& o) {
+         o.render.renderer = RendererKind::kImpulse;
+         o.render.restitution = 1.5;
+       },
+       "0 <= e <= 1"},
+      {"t_collision_s", [](LoadOptions& o) { o.render.t_collision_s = 0.2; }, "0.1 s"},
+      {"timestep_s", [](LoadOptions& o) { o.timestep_s = INFINITY; }, "h <= 0.1 s"},
+      {"frequency_hz", [](LoadOptions& o) { o.render.frequency_hz = 5.0; }, "[1/t_c, 1/h]"},
+      {"max_force_N", [](LoadOptions& o) { o.device.max_force_N = -3; }, ">= 0 N"},
+  };
+  for (const BadParam& c : cases) {
+    LoadOptions o;
+    c.set(o);
+    const std::string e = LoadError(TestScene("sphere_plane.xml"), o);
+    EXPECT_NE(e.find(c.name), std::string::npos) << c.name << ": " << e;
+    EXPECT_NE(e.find(c.expected), std::string::npos) << c.name << ": " << e;
+  }
+}
+
+TEST(MjcfLoaderTest, TrainRequiresPerfectlyPlasticCollisions) {
+  LoadOptions o;
+  o.render.renderer = RendererKind::kTrain;
+  o.render.restitution = 0.5;
+  const std::string e = LoadError(TestScene("sphere_plane.xml"), o);
+  EXPECT_NE(e.find("restitution"), std::string::npos) << e;
+  EXPECT_NE(e.find("perfectly plastic"), std::string::npos) << e;
+  o.render.renderer = RendererKind::kImpulse;  // allowed with the single impulse
+  EXPECT_EQ(LoadError(TestScene("sphere_plane.xml"), o), "");
+}
+
+}  // namespace
+}  // namespace rigidtouch

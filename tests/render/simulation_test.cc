@@ -1,0 +1,101 @@
+// Whole-simulation sanity checks over seconds of simulated time (issue: simulation sanity).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rigidtouch/rigidtouch.h"
+#include "test_util.h"
+
+namespace rigidtouch {
+namespace {
+
+using test::TestScene;
+
+void Simulate(const Model& m, Data& d, double seconds, const Vec3& tool_force = Vec3::Zero()) {
+  TickInput in;
+  in.tool_wrench.force_N = tool_force;
+  const long steps = std::lround(seconds / m.timestep_s);
+  for (long s = 0; s < steps; ++s) Tick(m, d, in);
+}
+
+int BodyIndex(const Model& m, const std::string& name) {
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    if (m.bodies[i].name == name) return static_cast<int>(i);
+  }
+  ADD_FAILURE() << "no body " << name;
+  return 0;
+}
+
+// a box resting on a plane for 10 s drifts less than 0.1 mm
+TEST(SimulationTest, BoxRestingOnPlaneDriftsLessThanATenthOfAMillimetre) {
+  const Model m = LoadModel(TestScene("box_plane.xml"), {});
+  Data d = MakeData(m);
+  const Vec3 start = m.initial[0].x_W;
+  Simulate(m, d, 10.0);
+  EXPECT_LT((d.bodies[0].x_W - start).norm(), 1e-4);
+  EXPECT_LT(d.bodies[0].w_W.norm(), 1e-3);  // no spurious spin
+  // it rests flat: orientation within 0.1 degree of the initial one
+  EXPECT_LT(d.bodies[0].q_WB.angularDistance(m.initial[0].q_WB), 0.1 * M_PI / 180.0);
+}
+
+// a stack of 10 boxes stands for 10 s with the tool pressing on top with 2 N: the top box
+// moves less than 1 mm
+TEST(SimulationTest, StackOfTenStandsForTenSeconds) {
+  const Model m = LoadModel(TestScene("stack10.xml"), {});
+  Data d = MakeData(m);
+  const int top = BodyIndex(m, "box_9");
+  const Vec3 start = m.initial[top].x_W;
+  Simulate(m, d, 10.0, Vec3(0.0, 0.0, -2.0));
+  EXPECT_LT((d.bodies[top].x_W - start).norm(), 1e-3);
+  for (const BodyState& s : d.bodies) EXPECT_TRUE(s.x_W.allFinite());
+}
+
+// a sphere pressed with 2 N (no gravity) settles at penetration 2/k within 1%
+TEST(SimulationTest, PressedSphereSettlesAtForceOverStiffness) {
+  for (const RendererKind kind : {RendererKind::kPenalty, RendererKind::kTrain}) {
+    LoadOptions o;
+    o.render.renderer = kind;
+    Model m = LoadModel(TestScene("sphere_plane.xml"), o);
+    m.gravity_W.setZero();
+    Data d = MakeData(m);
+    Simulate(m, d, 3.0, Vec3(0.0, 0.0, -2.0));
+    const double expected = 2.0 / m.contact.stiffness_N_per_m;
+    EXPECT_NEAR(d.tool_penetration_m, expected, 0.01 * expected);
+    // and the device is shown the force that holds it: 2 N up
+    EXPECT_NEAR(d.tool_penalty_force_W.z(), 2.0, 0.02);
+  }
+}
+
+// a box on a 20 degree incline stays put with friction 0.5 and slides with friction 0.2 at
+// acceleration g (sin 20 - 0.2 cos 20) within 5%
+TEST(SimulationTest, InclineStickAndSlide) {
+  const double theta = 20.0 * M_PI / 180.0;
+  // the ramp's normal is (sin, 0, cos): downhill is +x and down
+  const Vec3 downhill(std::cos(theta), 0.0, -std::sin(theta));
+  {
+    LoadOptions o;
+    o.contact.friction_static = o.contact.friction_kinetic = 0.5;
+    const Model m = LoadModel(TestScene("incline.xml"), o);
+    Data d = MakeData(m);
+    Simulate(m, d, 0.2);
+    const Vec3 settled = d.bodies[0].x_W;
+    Simulate(m, d, 2.0);
+    EXPECT_LT((d.bodies[0].x_W - settled).norm(), 1e-4) << "the box crept with friction 0.5";
+  }
+  {
+    LoadOptions o;
+    o.contact.friction_static = o.contact.friction_kinetic = 0.2;
+    const Model m = LoadModel(TestScene("incline.xml"), o);
+    Data d = MakeData(m);
+    Simulate(m, d, 0.2);
+    const double v1 = d.bodies[0].v_W.dot(downhill);
+    Simulate(m, d, 0.5);
+    const double v2 = d.bodies[0].v_W.dot(downhill);
+    const double a = (v2 - v1) / 0.5;
+    const double expected = 9.81 * (std::sin(theta) - 0.2 * std::cos(theta));
+    EXPECT_NEAR(a, expected, 0.05 * expected);
+  }
+}
+
+}  // namespace
+}  // namespace rigidtouch

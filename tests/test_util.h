@@ -1,0 +1,51 @@
+// Helpers shared by the tests: scene paths and temporary files.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace rigidtouch::test {
+
+/// Path of a scene shipped for the tests (tests/scenes/NAME).
+inline std::string TestScene(const std::string& name) {
+  return std::string(RIGIDTOUCH_SOURCE_DIR) + "/tests/scenes/" + name;
+}
+
+/// Writes `text` to a fresh file in the test's temporary directory and returns its path.
+inline std::string WriteTempFile(const std::string& name, const std::string& text) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rigidtouch_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+/// MJCF text of a pile of boxes (half-size 25 mm, 0.1 kg) on an nx x ny x nz grid with spacing
+/// `pitch`, a floor, and the tool sphere (5 mm, 0.1 kg) at height tool_z.
+inline std::string PileXml(int nx, int ny, int nz, double pitch, double tool_z) {
+  std::string xml =
+      "<mujoco model=\"pile\"><option timestep=\"0.001\" gravity=\"0 0 -9.81\"/><worldbody>"
+      "<geom name=\"floor\" type=\"plane\" size=\"1 1 0.1\" friction=\"0.5\"/>";
+  int n = 0;
+  for (int z = 0; z < nz; ++z) {
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x) {
+        xml += "<body name=\"box_" + std::to_string(n++) + "\" pos=\"" +
+               std::to_string(-0.1 + pitch * x) + " " + std::to_string(-0.1 + pitch * y) + " " +
+               std::to_string(0.025 + pitch * z) +
+               "\"><freejoint/><geom type=\"box\" size=\"0.025 0.025 0.025\" mass=\"0.1\"/></body>";
+      }
+    }
+  }
+  xml += "<body name=\"tool\" pos=\"0 0 " + std::to_string(tool_z) +
+         "\"><freejoint/><geom type=\"sphere\" size=\"0.005\" mass=\"0.1\"/></body>";
+  xml += "</worldbody></mujoco>";
+  return xml;
+}
+
+}  // namespace rigidtouch::test
