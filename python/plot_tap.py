@@ -49,10 +49,12 @@ def main():
 
     fig, ax = plt.subplots(figsize=(7, 4))
     # forces are held over each tick (zero-order hold): draw them as steps
-    ax.step(t_ms, [penalty[i] for i in rows], where="post", label="penalty", color="tab:blue")
+    # the sum first, wide and grey, so the parts stay visible on top of it
+    ax.step(t_ms, total, where="post", label="sum", color="0.55", linewidth=2.4)
+    ax.step(t_ms, [penalty[i] for i in rows], where="post", label="penalty", color="tab:blue",
+            linewidth=1.1)
     ax.step(t_ms, [impulsive[i] for i in rows], where="post", label="impulsive (Eq. 9)",
-            color="tab:orange")
-    ax.step(t_ms, total, where="post", label="sum", color="black", linewidth=1.2)
+            color="tab:orange", linewidth=1.1)
     if any(abs(device[i] - (penalty[i] + impulsive[i])) > 1e-9 for i in rows):
         ax.step(t_ms, [device[i] for i in rows], where="post", label="displayed (after limits)",
                 color="tab:red", linestyle="--")
@@ -64,7 +66,7 @@ def main():
     ax.set_ylabel("force along wall normal [N]")
     ax.set_title(args.title or f"tap {args.tap}: {len(impulse_rows)} impulse(s)")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper right")
+    ax.legend(loc="best")
     fig.tight_layout()
     try:
         fig.savefig(args.out, dpi=150)

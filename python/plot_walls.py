@@ -46,12 +46,13 @@ def main():
         t0 = time_s[onset]
         rows = [i for i in rows if -args.before_ms <= (time_s[i] - t0) * 1e3 <= args.after_ms]
         t_ms = [(time_s[i] - t0) * 1e3 for i in rows]
-        ax.step(t_ms, [penalty[i] for i in rows], where="post", label="penalty",
-                color="tab:blue")
-        ax.step(t_ms, [impulsive[i] for i in rows], where="post", label="impulsive (Eq. 9)",
-                color="tab:orange")
+        # the sum first, wide and grey, so the parts stay visible on top of it
         ax.step(t_ms, [penalty[i] + impulsive[i] for i in rows], where="post", label="sum",
-                color="black", linewidth=1.2)
+                color="0.55", linewidth=2.4)
+        ax.step(t_ms, [penalty[i] for i in rows], where="post", label="penalty",
+                color="tab:blue", linewidth=1.1)
+        ax.step(t_ms, [impulsive[i] for i in rows], where="post", label="impulsive (Eq. 9)",
+                color="tab:orange", linewidth=1.1)
         impulse_rows = [i for i in rows if columns["impulses"][i] > 0]
         for n, i in enumerate(impulse_rows):
             ax.axvline((time_s[i] - t0) * 1e3, color="tab:gray", linestyle=":", linewidth=0.8,
@@ -60,7 +61,7 @@ def main():
         ax.set_xlabel("time from contact onset [ms]")
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("force along wall normal [N]")
-    axes[0].legend(loc="upper right")
+    axes[0].legend(loc="best")
     fig.tight_layout()
     try:
         fig.savefig(args.out, dpi=150)
