@@ -3,12 +3,36 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 #include <string>
 #include <vector>
 
 #include "device/presets.h"
 #include "rigidtouch/types.h"
+
+// counts heap allocations while armed, to prove the haptic-loop calls never allocate
+namespace {
+std::atomic<bool> g_count_allocations{false};
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+// gcc flags free() in a replacement operator delete as mismatched once inlined: a false positive
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+void* operator new(std::size_t size) {
+  if (g_count_allocations.load()) ++g_allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
 
 namespace rigidtouch::device {
 namespace {
@@ -423,6 +447,37 @@ TEST(SimulatedDeviceTest, UncompensatedGravitySagsByWeightOverStiffness) {
   // after 4 s the transient (decay rate B / 2M = 5.4 1/s) is below 1e-9 of the sag
   EXPECT_NEAR(dev.true_position_m().z(), script.start_height_m - sag_m, 1e-6 * sag_m);
   EXPECT_EQ(dev.current_tap(), -1);
+}
+
+TEST(SimulatedDeviceTest, ReadWriteAdvanceNeverAllocate) {
+  DeviceModelParams model;
+  model.delay_ticks = 1;
+  TapScript script;
+  script.taps = 2;
+  script.speed_spread = 0.1;
+  SimulatedDevice dev(FindPreset("touch"), HandParams{}, model, script);
+  // self-check: the counter sees a heap allocation
+  g_allocations = 0;
+  g_count_allocations = true;
+  delete new double(1.0);
+  g_count_allocations = false;
+  ASSERT_EQ(g_allocations.load(), 1);
+
+  long ticks = 0;
+  g_allocations = 0;
+  g_count_allocations = true;
+  while (!dev.finished()) {
+    const DeviceState s = dev.Read();
+    const double p_m = -s.position_m.z();
+    // a stiff wall that saturates the 3.3 N limit, so the clipping path runs too
+    dev.Write(ForceCommand(Vec3(0.0, 0.0, p_m > 0.0 ? 5000.0 * p_m : 0.0)));
+    dev.Advance(dev.tick_s());
+    ++ticks;
+  }
+  g_count_allocations = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_GT(ticks, 1000);
+  EXPECT_GT(dev.clipped_count(), 0);
 }
 
 }  // namespace
