@@ -459,7 +459,8 @@ TEST(SimulatedDeviceTest, ReadWriteAdvanceNeverAllocate) {
   // self-check: the counter sees a heap allocation
   g_allocations = 0;
   g_count_allocations = true;
-  delete new double(1.0);
+  // (a direct call: a new-expression may be elided by the compiler)
+  ::operator delete(::operator new(sizeof(double)));
   g_count_allocations = false;
   ASSERT_EQ(g_allocations.load(), 1);
 
