@@ -6,6 +6,9 @@
 #include <numbers>
 #include <vector>
 
+#include "device/presets.h"
+#include "device/simulated_device.h"
+
 namespace rigidtouch::analysis {
 namespace {
 
@@ -187,6 +190,70 @@ TEST(TapMetricsTest, SplitTapsByScriptedIndex) {
   EXPECT_EQ(spans[2].size(), 1u);
   EXPECT_EQ(spans[2].front().tap, 2);
   EXPECT_TRUE(SplitTaps({}).empty());
+}
+
+// the offline tap loop (Read, render, Write, Advance, record) on the simulated Touch with a
+// penalty wall at z = 0 rendered from the device's readings: F = max(0, k p - b v_z)
+std::vector<TraceSample> SimulatedPenaltyTaps(device::SimulatedDevice& dev, double k_N_per_m,
+                                              double b_Ns_per_m) {
+  std::vector<TraceSample> trace;
+  std::int64_t step = 0;
+  while (!dev.finished()) {
+    const DeviceState state = dev.Read();
+    const double p_m = -state.position_m.z();
+    DeviceCommand command;
+    if (p_m > 0.0) {
+      command.penalty_force_N.z() =
+          std::max(0.0, k_N_per_m * p_m - b_Ns_per_m * state.velocity_mps.z());
+    }
+    command.force_N = command.penalty_force_N;
+    TraceSample sample;
+    sample.step = step++;
+    sample.tap = dev.current_tap();
+    sample.time_s = dev.time_s();
+    sample.tool_position_m = dev.true_position_m();
+    sample.tool_velocity_mps = dev.true_velocity_mps();
+    sample.hand_force_N = dev.hand_force_N();
+    sample.penetration_m = std::max(0.0, p_m);
+    sample.tool_contacts = p_m > 0.0 ? 1 : 0;
+    dev.Write(command);
+    sample.penalty_force_N = command.penalty_force_N;
+    sample.device_force_N = dev.displayed_force_N();
+    sample.clipped = dev.last_command_clipped();
+    dev.Advance(dev.tick_s());
+    trace.push_back(sample);
+  }
+  return trace;
+}
+
+TEST(TapMetricsTest, SimulatedTapsOnAPassivePenaltyWall) {
+  device::TapScript script;
+  script.taps = 3;
+  script.approach_speed_mps = 0.15;
+  device::SimulatedDevice dev(device::FindPreset("touch"), device::HandParams{},
+                              device::DeviceModelParams{}, script);
+  // Touch limits: 400 N/m, 4 N s/m; b = 1 N s/m exceeds k T / 2 = 0.2 N s/m
+  const std::vector<TraceSample> trace = SimulatedPenaltyTaps(dev, 400.0, 1.0);
+
+  // the trace's ZOH energy over the whole run equals the device's own bookkeeping (same
+  // positions, same held forces; rounding only)
+  EXPECT_NEAR(EnergyToUserJ(trace), dev.energy_to_user_J(), 1e-12);
+
+  const auto taps = SplitTaps(trace);
+  ASSERT_EQ(taps.size(), 3u);
+  for (std::size_t i = 0; i < taps.size(); ++i) {
+    const TapMetrics m = ComputeTapMetrics(taps[i]);
+    EXPECT_EQ(m.tap, static_cast<int>(i));
+    ASSERT_TRUE(m.contact);
+    // with the inertia feedforward the hand arrives at the scripted speed (2%)
+    EXPECT_NEAR(m.approach_speed_mps, 0.15, 0.02 * 0.15);
+    EXPECT_LE(m.energy_to_user_J, 0.0);  // passive wall, tap starts and ends out of contact
+    EXPECT_GT(m.max_penetration_m, 0.0);
+    EXPECT_GT(m.peak_force_N, 0.0);
+    EXPECT_LE(m.peak_force_N, 3.3 + 1e-12);  // the Touch's force limit
+    EXPECT_GE(m.rate_hardness_N_per_m, 0.0);
+    EXPECT_FALSE(std::isnan(m.time_to_stop_s));
+  }
 }
 
 }  // namespace
