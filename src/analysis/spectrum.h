@@ -1,0 +1,47 @@
+// Power spectrum of a sampled force signal (FFTW), its dominant frequency and band energy
+// fractions. Offline analysis: allocates, never runs inside the haptic loop.
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+namespace rigidtouch::analysis {
+
+/// How a signal window is turned into a spectrum.
+struct SpectrumOptions {
+  /// Subtract the window's mean before windowing, so the sustained (pressing) force does not
+  /// leak into the lowest bins and the spectrum describes the force's fluctuation.
+  bool remove_mean = true;
+  /// Zero-pad to the next power of two that is at least this many samples (and at least the
+  /// signal length). Padding interpolates the spectrum; it adds no resolution.
+  int min_fft_length = 0;
+};
+
+/// One-sided power spectrum: power[k] at frequency k * bin_hz, k = 0 .. fft_length / 2.
+struct Spectrum {
+  double sample_rate_hz = 0.0;
+  double bin_hz = 0.0;        // sample_rate_hz / fft_length
+  int fft_length = 0;         // power of two >= the signal length
+  std::vector<double> power;  // |X_k|^2, doubled for 0 < k < fft_length / 2  [N^2]
+};
+
+/// Power spectrum of `signal` sampled at `sample_rate_hz`: optional mean removal, a Hann window
+/// w[n] = 0.5 (1 - cos(2 pi n / (N - 1))) over the N samples, zero padding to a power of two,
+/// then a real-to-complex FFT (FFTW). Returns an empty spectrum for fewer than 2 samples.
+Spectrum PowerSpectrum(std::span<const double> signal, double sample_rate_hz,
+                       const SpectrumOptions& options = {});
+
+/// Frequency of the largest power bin, excluding DC (bin 0) [Hz]; 0 when every bin above DC is 0.
+double DominantFrequencyHz(const Spectrum& spectrum);
+
+/// Edges between the four reported bands [Hz]: below 40, 40-100, 100-400, above 400.
+inline constexpr std::array<double, 3> kDefaultBandEdgesHz = {40.0, 100.0, 400.0};
+
+/// Fraction of the spectrum's power (DC bin excluded) in each band: bin frequency f in band i
+/// when edges[i-1] <= f < edges[i] (edges[-1] = 0, edges[3] = infinity). All zeros when the
+/// power above DC is 0.
+std::array<double, 4> BandEnergyFractions(
+    const Spectrum& spectrum, const std::array<double, 3>& edges_hz = kDefaultBandEdgesHz);
+
+}  // namespace rigidtouch::analysis

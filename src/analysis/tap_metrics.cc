@@ -1,0 +1,148 @@
+#include "analysis/tap_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rigidtouch::analysis {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+}  // namespace
+
+std::vector<std::span<const TraceSample>> SplitTaps(std::span<const TraceSample> samples) {
+  std::vector<std::span<const TraceSample>> taps;
+  std::size_t i = 0;
+  while (i < samples.size()) {
+    if (samples[i].tap < 0) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i + 1;
+    while (j < samples.size() && samples[j].tap == samples[i].tap) ++j;
+    taps.push_back(samples.subspan(i, j - i));
+    i = j;
+  }
+  return taps;
+}
+
+double EnergyToUserJ(std::span<const TraceSample> samples) {
+  double energy_J = 0.0;
+  for (std::size_t k = 0; k + 1 < samples.size(); ++k) {
+    energy_J +=
+        samples[k].device_force_N.dot(samples[k + 1].tool_position_m - samples[k].tool_position_m);
+  }
+  return energy_J;
+}
+
+std::vector<double> CumulativeEnergyToUserJ(std::span<const TraceSample> samples) {
+  std::vector<double> energy_J(samples.size(), 0.0);
+  for (std::size_t k = 0; k + 1 < samples.size(); ++k) {
+    energy_J[k + 1] = energy_J[k] + samples[k].device_force_N.dot(samples[k + 1].tool_position_m -
+                                                                  samples[k].tool_position_m);
+  }
+  return energy_J;
+}
+
+TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOptions& options) {
+  TapMetrics m;
+  if (s.empty()) return m;
+  m.tap = s.front().tap;
+  m.energy_to_user_J = EnergyToUserJ(s);
+  for (const TraceSample& sample : s) {
+    m.max_penetration_m = std::max(m.max_penetration_m, sample.penetration_m);
+    m.force_clipped = m.force_clipped || sample.clipped;
+    if (sample.impulses > 0) {
+      m.impulses.push_back(
+          {sample.time_s, sample.kinetic_energy_before_J, sample.kinetic_energy_after_J});
+    }
+  }
+
+  std::size_t onset = 0;
+  while (onset < s.size() && s[onset].tool_contacts <= 0) ++onset;
+  if (onset == s.size()) {
+    m.contact_onset_time_s = kNaN;
+    m.approach_speed_mps = kNaN;
+    m.rate_hardness_N_per_m = kNaN;
+    m.extended_rate_hardness_N_per_m = kNaN;
+    m.time_to_stop_s = kNaN;
+    m.dominant_frequency_hz = kNaN;
+    m.band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+    for (const TraceSample& sample : s) {
+      m.peak_force_N = std::max(m.peak_force_N, sample.device_force_N.dot(sample.wall_normal));
+    }
+    return m;
+  }
+  m.contact = true;
+  m.contact_onset_time_s = s[onset].time_s;
+  const Vec3 n = s[onset].wall_normal;
+  const auto normal_force_N = [&](std::size_t k) { return s[k].device_force_N.dot(n); };
+  const auto approach_speed_mps = [&](std::size_t k) { return -s[k].tool_velocity_mps.dot(n); };
+
+  const std::size_t before = onset > 0 ? onset - 1 : onset;
+  m.approach_speed_mps = approach_speed_mps(before);
+
+  for (std::size_t k = 0; k < s.size(); ++k)
+    m.peak_force_N = std::max(m.peak_force_N, normal_force_N(k));
+
+  // rate hardness (Lawrence et al. 2000): first tick of contact
+  if (onset > 0 && s[onset].time_s > s[before].time_s) {
+    const double rate_N_per_s =
+        (normal_force_N(onset) - normal_force_N(before)) / (s[onset].time_s - s[before].time_s);
+    m.rate_hardness_N_per_m = rate_N_per_s / m.approach_speed_mps;
+  } else {
+    m.rate_hardness_N_per_m = kNaN;
+  }
+  // extended: largest rate within the window after onset
+  double max_rate_N_per_s = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = std::max<std::size_t>(onset, 1); k < s.size(); ++k) {
+    if (s[k].time_s - s[onset].time_s > options.extended_rate_hardness_window_s) break;
+    const double dt_s = s[k].time_s - s[k - 1].time_s;
+    if (dt_s <= 0.0) continue;
+    max_rate_N_per_s =
+        std::max(max_rate_N_per_s, (normal_force_N(k) - normal_force_N(k - 1)) / dt_s);
+  }
+  m.extended_rate_hardness_N_per_m =
+      std::isfinite(max_rate_N_per_s) ? max_rate_N_per_s / m.approach_speed_mps : kNaN;
+
+  m.time_to_stop_s = kNaN;
+  for (std::size_t k = onset; k < s.size(); ++k) {
+    if (approach_speed_mps(k) <= options.stop_speed_mps) {
+      m.time_to_stop_s = s[k].time_s - s[onset].time_s;
+      break;
+    }
+  }
+
+  int intervals = 0;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const bool in_contact = s[k].tool_contacts > 0;
+    const bool was_in_contact = k > 0 && s[k - 1].tool_contacts > 0;
+    if (in_contact && !was_in_contact) ++intervals;
+  }
+  m.bounces = std::max(0, intervals - 1);
+
+  // spectrum of the normal force over the collision window from onset
+  std::vector<double> force_N;
+  for (std::size_t k = onset; k < s.size(); ++k) {
+    if (s[k].time_s - s[onset].time_s >= options.collision_window_s) break;
+    force_N.push_back(normal_force_N(k));
+  }
+  double sample_rate_hz = 0.0;
+  const std::size_t last = onset + force_N.size() - 1;
+  if (force_N.size() >= 2 && s[last].time_s > s[onset].time_s) {
+    sample_rate_hz = static_cast<double>(force_N.size() - 1) / (s[last].time_s - s[onset].time_s);
+  }
+  const Spectrum spectrum = PowerSpectrum(force_N, sample_rate_hz, options.spectrum);
+  if (spectrum.power.empty()) {
+    m.dominant_frequency_hz = kNaN;
+    m.band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+  } else {
+    m.dominant_frequency_hz = DominantFrequencyHz(spectrum);
+    m.band_energy_fraction = BandEnergyFractions(spectrum, options.band_edges_hz);
+  }
+  return m;
+}
+
+}  // namespace rigidtouch::analysis

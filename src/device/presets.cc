@@ -1,0 +1,50 @@
+#include "device/presets.h"
+
+#include <array>
+#include <string>
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::device {
+
+namespace {
+
+// values as CHAI3D 3.x sets m_maxLinearForce [N], m_maxLinearStiffness [N/m] and
+// m_maxLinearDamping [N/(m/s)] in its device classes
+const std::array<DeviceLimits, 5>& PresetTable() {
+  static const std::array<DeviceLimits, 5> table = {{
+      // CHAI3D CPhantomDevices.cpp, model name "Touch" (3D Systems / Geomagic Touch)
+      {"touch", 3.3, 400.0, 4.0},
+      // CHAI3D CPhantomDevices.cpp, model name "PHANTOM Omni"
+      {"omni", 3.3, 700.0, 5.0},
+      // CHAI3D CFalconDevice.cpp (Novint Falcon)
+      {"falcon", 8.0, 3000.0, 20.0},
+      // CHAI3D CDeltaDevices.cpp, Force Dimension omega.3 defaults
+      {"omega3", 12.0, 5000.0, 30.0},
+      // assumption: a mid-range desktop device. force and stiffness match CHAI3D's virtual
+      // device (CVirtualDevice.cpp: 10 N, 1000 N/m); damping 10 N s/m is our choice, between
+      // the PHANToM family (4-8) and the Falcon (20), since CHAI3D's virtual 100 is not physical
+      {"generic", 10.0, 1000.0, 10.0},
+  }};
+  return table;
+}
+
+}  // namespace
+
+std::span<const DeviceLimits> Presets() {
+  return PresetTable();
+}
+
+const DeviceLimits& FindPreset(std::string_view name) {
+  for (const DeviceLimits& preset : PresetTable()) {
+    if (preset.name == name) return preset;
+  }
+  std::string valid;
+  for (const DeviceLimits& preset : PresetTable()) {
+    if (!valid.empty()) valid += ", ";
+    valid += preset.name;
+  }
+  throw Error("unknown device preset '" + std::string(name) + "'; valid presets: " + valid);
+}
+
+}  // namespace rigidtouch::device

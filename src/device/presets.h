@@ -1,0 +1,20 @@
+// Display limits of common haptic devices, as CHAI3D specifies them for each device model.
+#pragma once
+
+#include <span>
+#include <string_view>
+
+#include "device/device.h"
+
+namespace rigidtouch::device {
+
+/// All presets, in a fixed order: touch, omni, falcon, omega3, generic. Values (max force,
+/// max closed-loop stiffness, max closed-loop damping) are those of CHAI3D 3.x's device classes;
+/// `generic` is an assumption (see presets.cc).
+std::span<const DeviceLimits> Presets();
+
+/// The preset called `name` (exact, lowercase). Throws rigidtouch::Error naming the unknown
+/// preset and listing the valid ones.
+const DeviceLimits& FindPreset(std::string_view name);
+
+}  // namespace rigidtouch::device

@@ -1,0 +1,264 @@
+#include "io/trace_csv.h"
+
+#include <fcntl.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <system_error>
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::io {
+
+namespace {
+
+constexpr std::size_t kColumnCount = 30;
+
+constexpr std::array<std::string_view, kColumnCount> kColumns = {"time_s",
+                                                                 "tool_x_m",
+                                                                 "tool_y_m",
+                                                                 "tool_z_m",
+                                                                 "tool_vx_mps",
+                                                                 "tool_vy_mps",
+                                                                 "tool_vz_mps",
+                                                                 "penalty_fx_N",
+                                                                 "penalty_fy_N",
+                                                                 "penalty_fz_N",
+                                                                 "impulsive_fx_N",
+                                                                 "impulsive_fy_N",
+                                                                 "impulsive_fz_N",
+                                                                 "device_fx_N",
+                                                                 "device_fy_N",
+                                                                 "device_fz_N",
+                                                                 "hand_fx_N",
+                                                                 "hand_fy_N",
+                                                                 "hand_fz_N",
+                                                                 "wall_nx",
+                                                                 "wall_ny",
+                                                                 "wall_nz",
+                                                                 "penetration_m",
+                                                                 "tool_contacts",
+                                                                 "impulses",
+                                                                 "kinetic_energy_before_J",
+                                                                 "kinetic_energy_after_J",
+                                                                 "clipped",
+                                                                 "tap",
+                                                                 "step"};
+
+// integer columns: tool_contacts, impulses, clipped, tap, step
+constexpr bool IsIntegerColumn(std::size_t k) {
+  return k == 23 || k == 24 || k == 27 || k == 28 || k == 29;
+}
+
+std::string SystemReason(int error_number) {
+  return std::generic_category().message(error_number);
+}
+
+void AppendDouble(std::string& out, double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+void AppendInt(std::string& out, long long value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+void AppendVec(std::string& out, const Vec3& v) {
+  for (int i = 0; i < 3; ++i) {
+    out += ',';
+    AppendDouble(out, v[i]);
+  }
+}
+
+void AppendRow(std::string& out, const TraceSample& s) {
+  AppendDouble(out, s.time_s);
+  AppendVec(out, s.tool_position_m);
+  AppendVec(out, s.tool_velocity_mps);
+  AppendVec(out, s.penalty_force_N);
+  AppendVec(out, s.impulsive_force_N);
+  AppendVec(out, s.device_force_N);
+  AppendVec(out, s.hand_force_N);
+  AppendVec(out, s.wall_normal);
+  out += ',';
+  AppendDouble(out, s.penetration_m);
+  out += ',';
+  AppendInt(out, s.tool_contacts);
+  out += ',';
+  AppendInt(out, s.impulses);
+  out += ',';
+  AppendDouble(out, s.kinetic_energy_before_J);
+  out += ',';
+  AppendDouble(out, s.kinetic_energy_after_J);
+  out += ',';
+  out += s.clipped ? '1' : '0';
+  out += ',';
+  AppendInt(out, s.tap);
+  out += ',';
+  AppendInt(out, s.step);
+  out += '\n';
+}
+
+// writes all of `data` to fd; false on error (errno set)
+bool WriteAll(int fd, const std::string& data) {
+  const char* p = data.data();
+  std::size_t left = data.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, p, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+std::string_view Trim(std::string_view s) {
+  while (!s.empty() && (s.back() == '\r' || s.back() == ' ')) s.remove_suffix(1);
+  while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+  return s;
+}
+
+std::vector<std::string_view> SplitCommas(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', begin);
+    if (comma == std::string_view::npos) {
+      fields.push_back(Trim(line.substr(begin)));
+      return fields;
+    }
+    fields.push_back(Trim(line.substr(begin, comma - begin)));
+    begin = comma + 1;
+  }
+}
+
+}  // namespace
+
+std::span<const std::string_view> TraceColumns() {
+  return kColumns;
+}
+
+void WriteTraceCsv(const std::string& path, std::span<const TraceSample> samples) {
+  std::string text;
+  text.reserve(64 + samples.size() * 400);
+  for (std::size_t i = 0; i < kColumnCount; ++i) {
+    if (i > 0) text += ',';
+    text += kColumns[i];
+  }
+  text += '\n';
+  for (const TraceSample& s : samples) AppendRow(text, s);
+
+  // the temporary file sits in the target's directory so rename is atomic (same file system)
+  std::string temp_path = path + ".tmp.XXXXXX";
+  const int fd = ::mkstemp(temp_path.data());
+  if (fd < 0) {
+    throw Error("cannot write trace file '" + path + "': " + SystemReason(errno));
+  }
+  const auto fail = [&](int error_number) {
+    ::close(fd);
+    ::unlink(temp_path.c_str());
+    throw Error("cannot write trace file '" + path + "': " + SystemReason(error_number));
+  };
+  // mkstemp creates 0600; give the trace the usual permissions (subject to umask)
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  if (::fchmod(fd, 0666 & ~mask) != 0) fail(errno);
+  if (!WriteAll(fd, text)) fail(errno);
+  if (::fsync(fd) != 0) fail(errno);
+  if (::close(fd) != 0) {
+    const int error_number = errno;
+    ::unlink(temp_path.c_str());
+    throw Error("cannot write trace file '" + path + "': " + SystemReason(error_number));
+  }
+  if (::rename(temp_path.c_str(), path.c_str()) != 0) {
+    const int error_number = errno;
+    ::unlink(temp_path.c_str());
+    throw Error("cannot write trace file '" + path + "': " + SystemReason(error_number));
+  }
+}
+
+std::vector<TraceSample> ReadTraceCsv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("cannot read trace file '" + path + "': " + SystemReason(errno));
+  std::string line;
+  if (!std::getline(in, line)) throw Error("trace file '" + path + "' is empty (no header row)");
+
+  // column index in the file of each known column
+  std::array<int, kColumnCount> index;
+  index.fill(-1);
+  const std::vector<std::string_view> header = SplitCommas(line);
+  for (std::size_t c = 0; c < header.size(); ++c) {
+    for (std::size_t k = 0; k < kColumnCount; ++k) {
+      if (header[c] == kColumns[k]) index[k] = static_cast<int>(c);
+    }
+  }
+  std::string missing;
+  for (std::size_t k = 0; k < kColumnCount; ++k) {
+    if (index[k] < 0) missing += (missing.empty() ? "" : ", ") + std::string(kColumns[k]);
+  }
+  if (!missing.empty()) {
+    throw Error("trace file '" + path + "' line 1: missing columns: " + missing);
+  }
+
+  std::vector<TraceSample> samples;
+  int line_number = 1;
+  std::array<double, kColumnCount> values{};
+  std::array<long long, kColumnCount> integers{};
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (Trim(line).empty()) continue;
+    const std::vector<std::string_view> fields = SplitCommas(line);
+    for (std::size_t k = 0; k < kColumnCount; ++k) {
+      const std::size_t c = static_cast<std::size_t>(index[k]);
+      const std::string_view field = c < fields.size() ? fields[c] : std::string_view();
+      const char* first = field.data();
+      const char* last = field.data() + field.size();
+      const std::from_chars_result result = IsIntegerColumn(k)
+                                                ? std::from_chars(first, last, integers[k])
+                                                : std::from_chars(first, last, values[k]);
+      if (field.empty() || result.ec != std::errc() || result.ptr != last) {
+        throw Error("trace file '" + path + "' line " + std::to_string(line_number) + ": column '" +
+                    std::string(kColumns[k]) + "' value '" + std::string(field) + "' is not " +
+                    (IsIntegerColumn(k) ? "an integer" : "a number"));
+      }
+    }
+    TraceSample s;
+    std::size_t k = 0;
+    const auto vec = [&](Vec3& v) {
+      v = Vec3(values[k], values[k + 1], values[k + 2]);
+      k += 3;
+    };
+    s.time_s = values[k++];
+    vec(s.tool_position_m);
+    vec(s.tool_velocity_mps);
+    vec(s.penalty_force_N);
+    vec(s.impulsive_force_N);
+    vec(s.device_force_N);
+    vec(s.hand_force_N);
+    vec(s.wall_normal);
+    s.penetration_m = values[k++];
+    s.tool_contacts = static_cast<int>(integers[k++]);
+    s.impulses = static_cast<int>(integers[k++]);
+    s.kinetic_energy_before_J = values[k++];
+    s.kinetic_energy_after_J = values[k++];
+    s.clipped = integers[k++] != 0;
+    s.tap = static_cast<int>(integers[k++]);
+    s.step = static_cast<std::int64_t>(integers[k++]);
+    samples.push_back(s);
+  }
+  return samples;
+}
+
+}  // namespace rigidtouch::io

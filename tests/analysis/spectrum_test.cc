@@ -1,0 +1,102 @@
+#include "analysis/spectrum.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace rigidtouch::analysis {
+namespace {
+
+std::vector<double> Sine(double f_hz, double rate_hz, double duration_s, double amplitude = 1.0,
+                         double offset = 0.0) {
+  const int n = static_cast<int>(std::lround(duration_s * rate_hz));
+  std::vector<double> x(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    x[static_cast<std::size_t>(i)] =
+        offset + amplitude * std::sin(2.0 * std::numbers::pi * f_hz * i / rate_hz + 0.3);
+  }
+  return x;
+}
+
+TEST(SpectrumTest, LengthIsZeroPaddedToAPowerOfTwo) {
+  const Spectrum s = PowerSpectrum(Sine(250.0, 1000.0, 0.1), 1000.0);
+  EXPECT_EQ(s.fft_length, 128);  // 100 samples -> 128
+  EXPECT_EQ(s.power.size(), 65u);
+  EXPECT_DOUBLE_EQ(s.bin_hz, 1000.0 / 128.0);
+  SpectrumOptions longer;
+  longer.min_fft_length = 1000;
+  EXPECT_EQ(PowerSpectrum(Sine(250.0, 1000.0, 0.1), 1000.0, longer).fft_length, 1024);
+}
+
+TEST(SpectrumTest, Sine250HzAt1kHzOver100ms) {
+  const Spectrum s = PowerSpectrum(Sine(250.0, 1000.0, 0.1), 1000.0);
+  // within one bin (7.8 Hz) of 250 Hz
+  EXPECT_NEAR(DominantFrequencyHz(s), 250.0, s.bin_hz);
+  const auto bands = BandEnergyFractions(s);
+  EXPECT_GT(bands[2], 0.9);  // 100-400 Hz
+  EXPECT_NEAR(bands[0] + bands[1] + bands[2] + bands[3], 1.0, 1e-12);
+}
+
+TEST(SpectrumTest, Sine50HzFallsInThe40To100Band) {
+  // 0.5 s gives 2 Hz resolution, so the Hann main lobe (+-4 Hz) stays inside 40-100 Hz
+  const Spectrum s = PowerSpectrum(Sine(50.0, 1000.0, 0.5), 1000.0);
+  EXPECT_NEAR(DominantFrequencyHz(s), 50.0, s.bin_hz);
+  EXPECT_GT(BandEnergyFractions(s)[1], 0.9);
+}
+
+TEST(SpectrumTest, TwoEqualSinesSplitThePower) {
+  // 20 Hz and 600 Hz of equal amplitude at 2 kHz over 0.2 s: half the power each, +-5%
+  std::vector<double> x = Sine(20.0, 2000.0, 0.2);
+  const std::vector<double> y = Sine(600.0, 2000.0, 0.2);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] += y[i];
+  const auto bands = BandEnergyFractions(PowerSpectrum(x, 2000.0));
+  EXPECT_NEAR(bands[0], 0.5, 0.05);
+  EXPECT_NEAR(bands[3], 0.5, 0.05);
+  EXPECT_LT(bands[1] + bands[2], 0.01);
+}
+
+TEST(SpectrumTest, MeanRemovalKeepsAPressingForceOutOfTheSpectrum) {
+  // a 2 N pressing force plus a 0.1 N 250 Hz ripple: with the mean removed the ripple dominates
+  const std::vector<double> x = Sine(250.0, 1000.0, 0.1, 0.1, 2.0);
+  const Spectrum with_mean_removed = PowerSpectrum(x, 1000.0);
+  EXPECT_NEAR(DominantFrequencyHz(with_mean_removed), 250.0, with_mean_removed.bin_hz);
+  EXPECT_GT(BandEnergyFractions(with_mean_removed)[2], 0.9);
+  SpectrumOptions keep;
+  keep.remove_mean = false;
+  const Spectrum raw = PowerSpectrum(x, 1000.0, keep);
+  // the window's leakage of the 2 N offset (Hann first side bin: half of DC) beats the ripple
+  EXPECT_LT(DominantFrequencyHz(raw), 2.0 * raw.bin_hz + 1e-9);
+  // DC bin: (sum of window * 2 N)^2, window sum (N - 1) / 2 = 49.5 for N = 100, +-1% for ripple
+  EXPECT_NEAR(raw.power[0], std::pow(2.0 * 49.5, 2), 0.01 * std::pow(2.0 * 49.5, 2));
+}
+
+TEST(SpectrumTest, ConstantSignalHasNoPowerAboveDc) {
+  const std::vector<double> x(64, 3.0);
+  const Spectrum s = PowerSpectrum(x, 1000.0);
+  EXPECT_EQ(DominantFrequencyHz(s), 0.0);
+  const auto bands = BandEnergyFractions(s);
+  for (double b : bands) EXPECT_EQ(b, 0.0);
+}
+
+TEST(SpectrumTest, BandEdgesAreLowerInclusive) {
+  // hand-built spectrum: bins at 0, 40, 80, ... Hz, unit power each
+  Spectrum s;
+  s.bin_hz = 40.0;
+  s.power.assign(12, 1.0);  // 0 .. 440 Hz
+  const auto bands = BandEnergyFractions(s);
+  // above DC: 40..440 = 11 bins; [0,40): none; [40,100): 40,80; [100,400): 120..360 (7); 400, 440
+  EXPECT_DOUBLE_EQ(bands[0], 0.0);
+  EXPECT_DOUBLE_EQ(bands[1], 2.0 / 11.0);
+  EXPECT_DOUBLE_EQ(bands[2], 7.0 / 11.0);
+  EXPECT_DOUBLE_EQ(bands[3], 2.0 / 11.0);
+}
+
+TEST(SpectrumTest, TooShortSignalGivesAnEmptySpectrum) {
+  EXPECT_TRUE(PowerSpectrum(std::vector<double>{1.0}, 1000.0).power.empty());
+  EXPECT_TRUE(PowerSpectrum(std::vector<double>{1.0, 2.0}, 0.0).power.empty());
+}
+
+}  // namespace
+}  // namespace rigidtouch::analysis
