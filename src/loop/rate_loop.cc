@@ -156,13 +156,12 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
     }
     const std::int64_t deadline_ns = start_ns + deadline_of(slot);
     const timespec sleep_until = ToTimespec(deadline_ns - spin_ns);
-    int status = 0;
-    while ((status = clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &sleep_until, nullptr)) ==
-           EINTR) {
-      // a signal: return promptly if it was a stop request
-      if (StopRequested(stop)) break;
+    // EINTR: a signal arrived; the stop check below returns promptly if it asked for a stop
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &sleep_until, nullptr) == EINTR &&
+           !StopRequested(stop)) {
     }
-    if (status == EINTR) {
+    // a stop requested during the sleep wins over the step that was due
+    if (StopRequested(stop)) {
       stats.stop_requested = true;
       break;
     }
