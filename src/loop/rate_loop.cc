@@ -187,7 +187,8 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
     if (late_ns > 0) {
       ++stats.overruns;
       // late by whole periods: drop those deadlines, keep at most one late tick
-      const std::int64_t whole_periods = late_ns / period_whole_ns;
+      // (never past the end of the run, so ticks + skipped_periods = the scheduled count)
+      const std::int64_t whole_periods = std::min(late_ns / period_whole_ns, max_slots - slot);
       slot += whole_periods;
       stats.skipped_periods += whole_periods;
     }

@@ -16,7 +16,9 @@ namespace {
 
 using testing::PollUntil;
 
-UdpEndpoint Loopback0() { return ParseUdpAddress("udp://127.0.0.1:0", "test"); }
+UdpEndpoint Loopback0() {
+  return ParseUdpAddress("udp://127.0.0.1:0", "test");
+}
 
 // a device that moves along x one millimetre per read and remembers the last command
 class FakeDevice final : public Device {
@@ -67,7 +69,8 @@ void StepUntilReceived(UdpDeviceServer& server, std::uint64_t received) {
   EXPECT_TRUE(PollUntil([&] {
     server.Step();
     return server.counters().received >= received;
-  })) << "received " << server.counters().received << " of " << received;
+  })) << "received "
+      << server.counters().received << " of " << received;
 }
 
 TEST(UdpDeviceServer, ZeroForceAndNoStreamingUntilAClientSpeaks) {

@@ -18,7 +18,9 @@ namespace {
 
 using testing::PollUntil;
 
-UdpEndpoint Loopback0() { return ParseUdpAddress("udp://127.0.0.1:0", "test"); }
+UdpEndpoint Loopback0() {
+  return ParseUdpAddress("udp://127.0.0.1:0", "test");
+}
 
 // a raw socket playing the device server, so tests control every byte that reaches the client
 struct Fixture {
@@ -50,7 +52,8 @@ struct Fixture {
     EXPECT_TRUE(PollUntil([&] {
       state = device->Read();
       return device->counters().received >= received;
-    })) << "received " << device->counters().received << " of " << received;
+    })) << "received "
+        << device->counters().received << " of " << received;
     return state;
   }
 
@@ -108,8 +111,7 @@ TEST(UdpDevice, WriteSendsTheCommand) {
   f.device->Write(command);
   ASSERT_TRUE(PollUntil([&] { return f.server.Receive(buffer, &datagram) == 0; }));
   DeviceCommand received;
-  ASSERT_EQ(DecodeCommand(std::span(buffer.data(), datagram.bytes), &received),
-            DecodeResult::kOk);
+  ASSERT_EQ(DecodeCommand(std::span(buffer.data(), datagram.bytes), &received), DecodeResult::kOk);
   EXPECT_EQ(received.sequence, 12u);
   EXPECT_EQ(received.force_N, command.force_N);
   EXPECT_TRUE(received.clipped);

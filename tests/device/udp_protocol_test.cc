@@ -238,9 +238,9 @@ TEST(UdpProtocol, AnyFlippedBitIsABadChecksum) {
 TEST(UdpProtocol, NonFiniteStateFieldsAreRejected) {
   // 14 f64 fields from offset 24 (time, position, quaternion, velocities)
   for (std::size_t field = 0; field < 14; ++field) {
-    for (const double bad : {std::numeric_limits<double>::quiet_NaN(),
-                             std::numeric_limits<double>::infinity(),
-                             -std::numeric_limits<double>::infinity()}) {
+    for (const double bad :
+         {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+          -std::numeric_limits<double>::infinity()}) {
       std::vector<std::uint8_t> bytes = StateBytes();
       PutF64(bytes, 24 + 8 * field, bad);
       Reseal(bytes);
