@@ -1,5 +1,5 @@
 // UNTESTED EXAMPLE: written against the OpenHaptics HD API documentation; no SDK or device was
-// available to compile or run it. Not built by default (see README.md next to this file).
+// available, so it was never compiled against the SDK nor run. Not built by default (README.md).
 //
 // Bridges a 3D Systems Touch / Phantom (OpenHaptics HD API) to the rigidtouch UDP device
 // protocol: the HD servo scheduler calls UdpDeviceServer::Step once per servo tick (1 kHz), which
