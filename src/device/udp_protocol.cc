@@ -30,7 +30,7 @@ void PutF64(std::uint8_t* out, double value) {
 }
 
 void PutVec3(std::uint8_t* out, const Vec3& value) {
-  for (int i = 0; i < 3; ++i) PutF64(out + 8 * i, value[i]);
+  for (Eigen::Index i = 0; i < 3; ++i) PutF64(out + 8 * i, value[i]);
 }
 
 std::uint16_t GetU16(const std::uint8_t* in) {
@@ -114,8 +114,8 @@ DecodeResult CheckFraming(std::span<const std::uint8_t> datagram, PacketType exp
   return DecodeResult::kOk;
 }
 
-bool AllFinite(const std::uint8_t* first_f64, int count) {
-  for (int i = 0; i < count; ++i) {
+bool AllFinite(const std::uint8_t* first_f64, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) {
     if (!std::isfinite(GetF64(first_f64 + 8 * i))) return false;
   }
   return true;

@@ -20,7 +20,7 @@ constexpr std::int64_t kNsPerS = 1'000'000'000;
 constexpr std::int64_t kHistogramBinNs = 1'000;
 constexpr std::size_t kHistogramBins = 10'000;
 // stack prefaulted when memory is locked, so the first deep call does not page-fault
-constexpr std::size_t kPrefaultStackBytes = 256 * 1024;
+constexpr std::size_t kPrefaultStackBytes = std::size_t{256} * 1024;
 
 std::int64_t NowNs() noexcept {
   timespec now{};
