@@ -18,7 +18,6 @@ UdpEndpoint ParseServer(const UdpDeviceOptions& options) {
 }
 
 UdpEndpoint ParseLocal(const UdpDeviceOptions& options) {
-  ValidateWatchdog(options.watchdog_s, kWhat);
   ValidatePacketLoss(options.test_loss, kWhat);
   const UdpEndpoint local = ParseUdpAddress(options.local, "udp device: local");
   // 0.0.0.0 (any interface) is not loopback either, so it also needs the explicit option
@@ -31,7 +30,7 @@ UdpEndpoint ParseLocal(const UdpDeviceOptions& options) {
 UdpDevice::UdpDevice(const UdpDeviceOptions& options)
     : limits_(options.limits),
       server_(ParseServer(options)),
-      watchdog_ns_(std::llround(options.watchdog_s * 1e9)),
+      watchdog_ns_(WatchdogNs(options.watchdog_s, kWhat)),
       socket_(ParseLocal(options), "udp device: local"),
       loss_(options.test_loss) {
   state_.valid = false;

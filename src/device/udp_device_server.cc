@@ -9,7 +9,6 @@ namespace {
 constexpr std::string_view kWhat = "udp device server";
 
 UdpEndpoint ParseListen(const UdpDeviceServerOptions& options) {
-  ValidateWatchdog(options.watchdog_s, kWhat);
   ValidatePacketLoss(options.test_loss, kWhat);
   const UdpEndpoint listen = ParseUdpAddress(options.listen, "udp device server: listen");
   RequireLoopbackUnlessAllowed(listen, "udp device server: listen", options.allow_non_loopback);
@@ -30,7 +29,7 @@ UdpEndpoint ParsePeer(const UdpDeviceServerOptions& options) {
 
 UdpDeviceServer::UdpDeviceServer(Device& device, const UdpDeviceServerOptions& options)
     : device_(device),
-      watchdog_ns_(std::llround(options.watchdog_s * 1e9)),
+      watchdog_ns_(WatchdogNs(options.watchdog_s, kWhat)),
       fixed_peer_(!options.peer.empty()),
       has_peer_(fixed_peer_),
       peer_(ParsePeer(options)),

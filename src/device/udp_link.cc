@@ -37,6 +37,11 @@ std::int64_t MonotonicNowNs() noexcept {
   return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
 }
 
+std::int64_t WatchdogNs(double watchdog_s, std::string_view what) {
+  ValidateWatchdog(watchdog_s, what);
+  return std::llround(watchdog_s * 1e9);
+}
+
 LossSimulator::LossSimulator(const PacketLoss& loss) : loss_(loss), generator_(loss.seed) {}
 
 bool LossSimulator::Draw(double fraction) {

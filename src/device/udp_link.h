@@ -54,6 +54,9 @@ void ValidatePacketLoss(const PacketLoss& loss, std::string_view what);
 /// Throws Error naming `what` unless watchdog_s is finite and in (0, 10] s.
 void ValidateWatchdog(double watchdog_s, std::string_view what);
 
+/// Validates watchdog_s as ValidateWatchdog does and returns it in nanoseconds.
+std::int64_t WatchdogNs(double watchdog_s, std::string_view what);
+
 /// Monotonic clock in nanoseconds (CLOCK_MONOTONIC), used by both ends' watchdogs.
 std::int64_t MonotonicNowNs() noexcept;
 
