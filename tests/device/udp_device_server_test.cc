@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "device/udp_device.h"
-#include "support/allocation_counter.h"
-#include "support/poll.h"
+#include "loop/test_allocation_counter.h"
+#include "loop/test_poll.h"
 
 namespace rigidtouch::device {
 namespace {

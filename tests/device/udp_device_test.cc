@@ -10,8 +10,8 @@
 #include <thread>
 #include <vector>
 
-#include "support/allocation_counter.h"
-#include "support/poll.h"
+#include "loop/test_allocation_counter.h"
+#include "loop/test_poll.h"
 
 namespace rigidtouch::device {
 namespace {

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "loop/test_poll.h"
 #include "rigidtouch/types.h"
-#include "support/poll.h"
 
 namespace rigidtouch::device {
 namespace {

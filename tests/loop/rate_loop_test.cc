@@ -12,9 +12,9 @@
 #include <thread>
 #include <vector>
 
+#include "loop/test_allocation_counter.h"
 #include "loop/trace_queue.h"
 #include "rigidtouch/types.h"
-#include "support/allocation_counter.h"
 
 namespace rigidtouch::loop {
 namespace {

@@ -8,8 +8,8 @@
 #include <thread>
 #include <vector>
 
+#include "loop/test_poll.h"
 #include "rigidtouch/types.h"
-#include "support/poll.h"
 
 namespace rigidtouch::loop {
 namespace {

@@ -1,5 +1,6 @@
-// Polling helper for tests that wait on sockets or threads: no timing assertion, only a generous
-// upper bound so a broken implementation fails instead of hanging.
+// Polling helper (shared by the loop and UDP device tests) for tests that wait on sockets or
+// threads: no timing assertion, only a generous upper bound so a broken implementation fails
+// instead of hanging.
 #pragma once
 
 #include <chrono>
