@@ -1,0 +1,85 @@
+// UNTESTED EXAMPLE: written against the OpenHaptics HD API documentation; no SDK or device was
+// available, so it was never compiled against the SDK nor run. Not built by default (README.md).
+//
+// Bridges a 3D Systems Touch / Phantom (OpenHaptics HD API) to the rigidtouch UDP device
+// protocol: the HD servo scheduler calls UdpDeviceServer::Step once per servo tick (1 kHz), which
+// reads the device, streams its state, and displays the renderer's newest force.
+#include <HD/hd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <thread>
+
+#include "device/udp_device_server.h"
+#include "loop/stop_signal.h"
+
+namespace {
+
+// the HD API's state, in SI units; call only between hdBeginFrame and hdEndFrame
+class HdDevice final : public rigidtouch::device::Device {
+ public:
+  HdDevice() {
+    HDdouble max_force_N = 0.0;
+    hdGetDoublev(HD_NOMINAL_MAX_CONTINUOUS_FORCE, &max_force_N);
+    limits_ = {"openhaptics", max_force_N, 0.0, 0.0};
+  }
+  rigidtouch::DeviceState Read() override {
+    HDdouble transform[16], velocity_mmps[3], angular_radps[3];
+    HDint buttons = 0;
+    hdGetDoublev(HD_CURRENT_TRANSFORM, transform);  // column-major, translation in mm
+    hdGetDoublev(HD_CURRENT_VELOCITY, velocity_mmps);
+    hdGetDoublev(HD_CURRENT_ANGULAR_VELOCITY, angular_radps);
+    hdGetIntegerv(HD_CURRENT_BUTTONS, &buttons);
+    const Eigen::Map<const Eigen::Matrix4d> pose(transform);
+    rigidtouch::DeviceState state;
+    state.time_s = 1e-9 * static_cast<double>(rigidtouch::device::MonotonicNowNs());
+    state.position_m = pose.block<3, 1>(0, 3) * 1e-3;
+    state.orientation = rigidtouch::Quat(Eigen::Matrix3d(pose.block<3, 3>(0, 0))).normalized();
+    state.velocity_mps = Eigen::Map<const Eigen::Vector3d>(velocity_mmps) * 1e-3;
+    state.angular_velocity_radps = Eigen::Map<const Eigen::Vector3d>(angular_radps);
+    state.buttons = static_cast<std::uint32_t>(buttons);
+    state.valid = !HD_DEVICE_ERROR(hdGetError());
+    return state;
+  }
+  void Write(const rigidtouch::DeviceCommand& command) override {
+    // the hardware's own limit, whatever the renderer asked for
+    const double norm_N = command.force_N.norm();
+    const double scale = norm_N > limits_.max_force_N ? limits_.max_force_N / norm_N : 1.0;
+    const Eigen::Vector3d force_N = command.force_N * scale;
+    hdSetDoublev(HD_CURRENT_FORCE, force_N.data());
+  }
+  const rigidtouch::device::DeviceLimits& limits() const override { return limits_; }
+
+ private:
+  rigidtouch::device::DeviceLimits limits_;
+};
+
+HDCallbackCode HDCALLBACK ServoTick(void* server) {
+  hdBeginFrame(hdGetCurrentDevice());
+  static_cast<rigidtouch::device::UdpDeviceServer*>(server)->Step();
+  hdEndFrame(hdGetCurrentDevice());
+  return HD_CALLBACK_CONTINUE;
+}
+
+}  // namespace
+
+int main() try {
+  const HHD handle = hdInitDevice(HD_DEFAULT_DEVICE);
+  if (HD_DEVICE_ERROR(hdGetError())) return std::fprintf(stderr, "no HD device\n"), 1;
+  hdEnable(HD_FORCE_OUTPUT);
+  HdDevice device;
+  rigidtouch::device::UdpDeviceServer server(device, {});  // udp://127.0.0.1:47000
+  const auto& stop = rigidtouch::loop::InstallStopSignalHandlers();
+  const HDSchedulerHandle tick =
+      hdScheduleAsynchronous(ServoTick, &server, HD_MAX_SCHEDULER_PRIORITY);
+  hdStartScheduler();
+  while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  hdStopScheduler();
+  hdUnschedule(tick);
+  hdDisableDevice(handle);
+  return 0;
+} catch (const std::exception& error) {
+  std::fprintf(stderr, "openhaptics bridge: %s\n", error.what());
+  return 2;
+}

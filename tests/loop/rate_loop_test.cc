@@ -1,0 +1,252 @@
+#include "loop/rate_loop.h"
+
+#include <gtest/gtest.h>
+#include <pthread.h>
+#include <sched.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "loop/test_allocation_counter.h"
+#include "loop/trace_queue.h"
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::loop {
+namespace {
+
+std::string MessageOf(const LoopOptions& options) {
+  try {
+    ValidateLoopOptions(options);
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(RateLoop, ValidationNamesTheField) {
+  for (const double rate : {0.0, 0.5, 20000.5, -1.0, std::nan("")}) {
+    LoopOptions options;
+    options.rate_hz = rate;
+    const std::string message = MessageOf(options);
+    EXPECT_NE(message.find("rate_hz"), std::string::npos) << rate;
+    EXPECT_NE(message.find("[1, 20000] Hz"), std::string::npos) << message;
+  }
+  LoopOptions options;
+  options.rate_hz = 1000.0;
+  options.spin_us = 1000.0;  // a whole period
+  EXPECT_NE(MessageOf(options).find("spin_us"), std::string::npos);
+  options.spin_us = -1.0;
+  EXPECT_NE(MessageOf(options).find("spin_us"), std::string::npos);
+  options.spin_us = 0.0;
+  options.duration_s = -1.0;
+  EXPECT_NE(MessageOf(options).find("duration_s"), std::string::npos);
+  options.duration_s = 1e-5;  // less than one tick
+  EXPECT_NE(MessageOf(options).find("duration_s"), std::string::npos);
+  options.duration_s = 0.0;
+  options.fifo_priority = 0;
+  EXPECT_NE(MessageOf(options).find("fifo_priority"), std::string::npos);
+  options.fifo_priority = 80;
+  EXPECT_EQ(MessageOf(options), "");
+  options.rate_hz = 1.0;
+  EXPECT_EQ(MessageOf(options), "");
+  options.rate_hz = 20000.0;
+  EXPECT_EQ(MessageOf(options), "");
+  options.rate_hz = 0.0;
+  EXPECT_THROW(RateLoop{options}, Error);
+}
+
+TEST(RateLoop, RunsTheScheduledTicksAndReportsConsistentStats) {
+  LoopOptions options;
+  options.rate_hz = 2000.0;
+  options.duration_s = 0.1;  // 200 deadlines
+  RateLoop loop(options);
+  std::vector<std::int64_t> ticks;
+  std::vector<double> times_s;
+  ticks.reserve(200);
+  times_s.reserve(200);
+  const LoopStats stats = loop.Run([&](std::int64_t tick, double t_s) {
+    ticks.push_back(tick);
+    times_s.push_back(t_s);
+    return true;
+  });
+  // every deadline either ran a tick or was skipped after an overrun (a loaded machine)
+  EXPECT_EQ(stats.ticks + stats.skipped_periods, 200);
+  ASSERT_EQ(static_cast<std::int64_t>(ticks.size()), stats.ticks);
+  for (std::size_t i = 0; i < ticks.size(); ++i) {
+    EXPECT_EQ(ticks[i], static_cast<std::int64_t>(i));
+    // t_s is the tick's deadline: slot / rate, slot >= tick; deadlines are rounded to 1 ns
+    EXPECT_GE(times_s[i], static_cast<double>(i) / options.rate_hz - 1e-9);
+    if (i > 0) {
+      EXPECT_GT(times_s[i], times_s[i - 1]);
+    }
+  }
+  EXPECT_EQ(times_s[0], 0.0);
+  EXPECT_EQ(stats.rate_hz, 2000.0);
+  EXPECT_EQ(stats.period_error_samples, static_cast<std::uint64_t>(stats.ticks - 1));
+  EXPECT_LE(stats.period_error_p50_s, stats.period_error_p99_s);
+  EXPECT_LE(stats.period_error_p99_s, stats.period_error_p999_s);
+  EXPECT_LE(stats.period_error_p999_s, stats.period_error_max_s);
+  EXPECT_GE(stats.period_error_mean_s, 0.0);
+  // absolute deadlines: tick k starts no earlier than k periods after the first deadline, so
+  // the achieved rate can never exceed the requested one (up to the 1 ns deadline rounding)
+  EXPECT_GT(stats.achieved_rate_hz, 0.0);
+  EXPECT_LE(stats.achieved_rate_hz, options.rate_hz * (1.0 + 1e-6));
+  EXPECT_GE(stats.elapsed_s, static_cast<double>(stats.ticks - 1) / options.rate_hz - 1e-9);
+  EXPECT_FALSE(stats.stop_requested);
+  EXPECT_TRUE(stats.warnings.empty());
+}
+
+TEST(RateLoop, StepReturningFalseStops) {
+  LoopOptions options;
+  options.rate_hz = 5000.0;
+  RateLoop loop(options);  // no duration: only the step can end it
+  const LoopStats stats = loop.Run([](std::int64_t tick, double) { return tick < 9; });
+  EXPECT_EQ(stats.ticks, 10);
+  EXPECT_FALSE(stats.stop_requested);
+}
+
+TEST(RateLoop, StopFlagsEndTheRun) {
+  LoopOptions options;
+  options.rate_hz = 5000.0;
+  RateLoop loop(options);
+  std::atomic<bool> stop{false};
+  LoopStats stats = loop.Run(
+      [&](std::int64_t tick, double) {
+        if (tick == 5) stop.store(true);
+        return true;
+      },
+      &stop);
+  EXPECT_EQ(stats.ticks, 6);
+  EXPECT_TRUE(stats.stop_requested);
+
+  stats = loop.Run([&](std::int64_t tick, double) {
+    if (tick == 3) loop.RequestStop();
+    return true;
+  });
+  EXPECT_EQ(stats.ticks, 4);
+  EXPECT_TRUE(stats.stop_requested);
+  // sticky until cleared
+  stats = loop.Run([](std::int64_t, double) { return true; });
+  EXPECT_EQ(stats.ticks, 0);
+  loop.ClearStop();
+  stats = loop.Run([](std::int64_t tick, double) { return tick < 2; });
+  EXPECT_EQ(stats.ticks, 3);
+}
+
+TEST(RateLoop, StopFromAnotherThread) {
+  LoopOptions options;
+  options.rate_hz = 1000.0;
+  RateLoop loop(options);
+  std::atomic<std::int64_t> ticks_seen{0};
+  std::thread stopper([&] {
+    while (ticks_seen.load() < 10) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    loop.RequestStop();
+  });
+  const LoopStats stats = loop.Run([&](std::int64_t tick, double) {
+    ticks_seen.store(tick + 1);
+    return true;
+  });
+  stopper.join();
+  EXPECT_TRUE(stats.stop_requested);
+  EXPECT_GE(stats.ticks, 10);
+}
+
+TEST(RateLoop, OverrunsAreCountedAndWholeMissedPeriodsSkipped) {
+  LoopOptions options;
+  options.rate_hz = 1000.0;
+  options.duration_s = 0.02;  // 20 deadlines
+  RateLoop loop(options);
+  const LoopStats stats = loop.Run([](std::int64_t tick, double) {
+    // tick 2 takes >= 3 ms: the next deadline is >= 2 ms behind, so >= 2 periods are dropped
+    if (tick == 2) std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    return true;
+  });
+  EXPECT_GE(stats.overruns, 1);
+  EXPECT_GE(stats.skipped_periods, 2);
+  EXPECT_EQ(stats.ticks + stats.skipped_periods, 20);
+  // the interval around the slow tick is >= 3 ms against a 1 ms period
+  EXPECT_GE(stats.period_error_max_s, 2e-3 - 1e-9);
+}
+
+TEST(RateLoop, SpinKeepsTheSchedule) {
+  LoopOptions options;
+  options.rate_hz = 4000.0;
+  options.duration_s = 0.01;
+  options.spin_us = 50.0;
+  RateLoop loop(options);
+  std::vector<double> times_s;
+  times_s.reserve(40);
+  const LoopStats stats = loop.Run([&](std::int64_t, double t_s) {
+    times_s.push_back(t_s);
+    return true;
+  });
+  EXPECT_EQ(stats.ticks + stats.skipped_periods, 40);
+  EXPECT_GE(stats.wakeup_latency_max_s, 0.0);
+}
+
+TEST(RateLoop, RealtimeRequestsEitherTakeEffectOrWarn) {
+  LoopOptions options;
+  options.rate_hz = 1000.0;
+  options.duration_s = 0.01;
+  options.realtime_priority = true;
+  options.lock_memory = true;
+  RateLoop loop(options);
+  int policy_inside = -1;
+  const LoopStats stats = loop.Run([&](std::int64_t, double) {
+    sched_param param{};
+    pthread_getschedparam(pthread_self(), &policy_inside, &param);
+    return true;
+  });
+  bool fifo_warning = false;
+  bool memory_warning = false;
+  for (const std::string& warning : stats.warnings) {
+    fifo_warning |= warning.find("SCHED_FIFO") != std::string::npos;
+    memory_warning |= warning.find("mlockall") != std::string::npos;
+  }
+  EXPECT_NE(stats.realtime_priority_active, fifo_warning);
+  EXPECT_NE(stats.memory_locked, memory_warning);
+  EXPECT_EQ(policy_inside == SCHED_FIFO, stats.realtime_priority_active);
+  // the policy is restored after the run
+  int policy_after = -1;
+  sched_param param{};
+  pthread_getschedparam(pthread_self(), &policy_after, &param);
+  EXPECT_NE(policy_after, SCHED_FIFO);
+}
+
+TEST(RateLoop, AllocationCounterSeesAllocations) {
+  // the check below is only meaningful if the counter works
+  const std::uint64_t before = rigidtouch::testing::thread_allocations;
+  auto value = std::make_unique<volatile int>(5);
+  EXPECT_EQ(*value, 5);
+  EXPECT_GT(rigidtouch::testing::thread_allocations, before);
+}
+
+TEST(RateLoop, NothingAllocatesBetweenTicks) {
+  LoopOptions options;
+  options.rate_hz = 5000.0;
+  options.duration_s = 0.02;
+  RateLoop loop(options);
+  TraceQueue traces(1024, [](std::span<const TraceSample>) {});
+  std::uint64_t at_first_tick = 0;
+  std::uint64_t at_last_tick = 0;
+  const LoopStats stats = loop.Run([&](std::int64_t tick, double t_s) {
+    TraceSample sample;
+    sample.step = tick;
+    sample.time_s = t_s;
+    traces.Push(sample);
+    if (tick == 0) at_first_tick = rigidtouch::testing::thread_allocations;
+    at_last_tick = rigidtouch::testing::thread_allocations;
+    return true;
+  });
+  ASSERT_GE(stats.ticks, 2);
+  // the loop machinery (sleep, statistics) and Push between the first and last tick
+  EXPECT_EQ(at_last_tick - at_first_tick, 0u);
+}
+
+}  // namespace
+}  // namespace rigidtouch::loop
