@@ -15,23 +15,6 @@ bool PairLess(const Contact& x, const Contact& y) {
   return x.id < y.id;
 }
 
-void WriteQpos(const Model& model, const Data& data, mjData* d) {
-  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
-    const BodyModel& b = model.bodies[i];
-    const BodyState& s = data.bodies[i];
-    const Quat q_W_body = s.q_WB * b.iquat_B.conjugate();
-    const Vec3 origin_W = s.x_W - q_W_body * b.ipos_B;
-    mjtNum* qpos = d->qpos + b.mj_qpos_adr;
-    qpos[0] = origin_W.x();
-    qpos[1] = origin_W.y();
-    qpos[2] = origin_W.z();
-    qpos[3] = q_W_body.w();
-    qpos[4] = q_W_body.x();
-    qpos[5] = q_W_body.y();
-    qpos[6] = q_W_body.z();
-  }
-}
-
 Vec3 ToLocal(const Data& data, int body, const Vec3& p_W) {
   if (body < 0) return p_W;
   const BodyState& s = data.bodies[body];
@@ -88,62 +71,127 @@ void MatchPair(Data& data, int begin, int end) {
 
 }  // namespace
 
-void DetectContacts(const Model& model, Data& data, mjData* d) {
-  const mjModel* m = model.collision.get();
-  WriteQpos(model, data, d);
-  mj_kinematics(m, d);
-  d->ncon = 0;
-  const int full_before = d->warning[mjWARN_CONTACTFULL].number;
-  mj_collision(m, d);
-  if (d->warning[mjWARN_CONTACTFULL].number != full_before) {
+void CollisionScratch::Reserve(const Model& model) {
+  poses.assign(model.geoms.size(), GeomPose{Vec3::Zero(), Mat3::Identity()});
+  broadphase.Reserve(model, std::max(64, 8 * static_cast<int>(model.geoms.size())));
+  mj_contacts.assign(mjMAXCONPAIR, mjContact{});
+  mj = mj_makeData(model.collision.get());
+  if (mj == nullptr) throw Error("could not allocate the collision backend's data");
+}
+
+void CollisionScratch::Reset(const Model& model) {
+  broadphase.Reserve(model, static_cast<int>(broadphase.pairs.size()));
+}
+
+CollisionScratch::~CollisionScratch() {
+  if (mj != nullptr) mj_deleteData(mj);
+}
+
+namespace {
+
+// appends one contact point of geoms (ga, gb), normal from gb towards ga
+void AddContact(const Model& model, Data& data, int ga, int gb, const Vec3& p_W, Vec3 n_W,
+                double depth_m) {
+  if (data.ncontact >= static_cast<int>(data.contacts.size())) {
+    auto& w = data.warnings[static_cast<int>(Warning::kContactFull)];
+    if (w.last_step != data.step) {
+      ++w.count;
+      w.last_step = data.step;
+    }
+    return;
+  }
+  // a is dynamic, and the tool when it takes part (its forces then act along +n)
+  const int tool = model.tool;
+  if (model.geoms[ga].body < 0 ||
+      (model.geoms[gb].body == tool && model.geoms[ga].body != tool)) {
+    std::swap(ga, gb);
+    n_W = -n_W;
+  }
+  Contact& c = data.contacts[data.ncontact++];
+  c.geom_a = ga;
+  c.geom_b = gb;
+  c.body_a = model.geoms[ga].body;
+  c.body_b = model.geoms[gb].body;
+  c.p_W = p_W;
+  c.n_W = n_W;
+  c.depth_m = depth_m;
+  c.p_A = ToLocal(data, c.body_a, p_W);
+  c.p_B = ToLocal(data, c.body_b, p_W);
+  c.normal_force_N = 0.0;
+  c.friction_force_W.setZero();
+  c.impulse_Ns = 0.0;
+  c.group = -1;
+  c.id = -1;
+}
+
+int MjType(GeomType t) {
+  switch (t) {
+    case GeomType::kPlane: return mjGEOM_PLANE;
+    case GeomType::kSphere: return mjGEOM_SPHERE;
+    case GeomType::kCapsule: return mjGEOM_CAPSULE;
+    case GeomType::kBox: return mjGEOM_BOX;
+    case GeomType::kMesh: return mjGEOM_MESH;
+  }
+  return mjGEOM_NONE;
+}
+
+// MuJoCo's own function for one pair (capsules, meshes); it reads only the two geoms' poses
+void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int g1, int g2) {
+  int t1 = MjType(model.geoms[g1].type), t2 = MjType(model.geoms[g2].type);
+  if (t1 > t2) {  // MuJoCo's table is filled for type1 <= type2
+    std::swap(g1, g2);
+    std::swap(t1, t2);
+  }
+  const mjfCollision fn = mjCOLLISIONFUNC[t1][t2];
+  if (fn == nullptr) return;
+  for (const int g : {g1, g2}) {
+    const GeomPose& pose = s.poses[g];
+    const int mg = model.geoms[g].mj_geom;
+    for (int k = 0; k < 3; ++k) {
+      s.mj->geom_xpos[3 * mg + k] = pose.p_W[k];
+      for (int j = 0; j < 3; ++j) s.mj->geom_xmat[9 * mg + 3 * k + j] = pose.R_WG(k, j);
+    }
+  }
+  const int n = fn(model.collision.get(), s.mj, s.mj_contacts.data(), model.geoms[g1].mj_geom,
+                   model.geoms[g2].mj_geom, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const mjContact& mc = s.mj_contacts[i];
+    if (!(mc.dist < 0.0)) continue;
+    // MuJoCo's normal points from geom1 to geom2: ours from b to a, so a = g2
+    AddContact(model, data, g2, g1, Vec3(mc.pos[0], mc.pos[1], mc.pos[2]),
+               Vec3(mc.frame[0], mc.frame[1], mc.frame[2]), -mc.dist);
+  }
+}
+
+}  // namespace
+
+void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
+  GeomPoses(model, data.bodies, s.poses);
+  FindPairs(model, s.poses, s.broadphase);
+  if (s.broadphase.dropped > 0) {
     auto& w = data.warnings[static_cast<int>(Warning::kContactFull)];
     ++w.count;
     w.last_step = data.step;
   }
-  // MuJoCo geom ids equal Model::geoms indices (LoadModel copies them in order)
-  int n = 0;
-  const int capacity = static_cast<int>(data.contacts.size());
-  for (int i = 0; i < d->ncon && n < capacity; ++i) {
-    const mjContact& mc = d->contact[i];
-    if (mc.exclude != 0 || !(mc.dist < 0.0)) continue;
-    // MuJoCo's normal points from geom1 to geom2; ours from b to a, so a = geom2 by default
-    int ga = mc.geom2, gb = mc.geom1;
-    double sign = 1.0;
-    const int tool = model.tool;
-    const bool swap =
-        model.geoms[ga].body < 0 || (model.geoms[gb].body == tool && model.geoms[ga].body != tool);
-    if (swap) {
-      std::swap(ga, gb);
-      sign = -1.0;
+  data.ncontact = 0;
+  for (int k = 0; k < s.broadphase.npair; ++k) {
+    const auto [g1, g2] = s.broadphase.pairs[k];
+    const GeomModel& a = model.geoms[g1];
+    const GeomModel& b = model.geoms[g2];
+    const int begin = data.ncontact;
+    if (HasNarrowPhase(a.type, b.type)) {
+      const int n = Collide(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
+                            s.points.data(), static_cast<int>(s.points.size()));
+      for (int i = 0; i < n; ++i) {
+        // the narrow phase's normal points from geom 2 towards geom 1
+        AddContact(model, data, g1, g2, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
+      }
+    } else {
+      CollideWithMuJoCo(model, data, s, g1, g2);
     }
-    Contact& c = data.contacts[n++];
-    c.geom_a = ga;
-    c.geom_b = gb;
-    c.body_a = model.geoms[ga].body;
-    c.body_b = model.geoms[gb].body;
-    c.p_W = Vec3(mc.pos[0], mc.pos[1], mc.pos[2]);
-    c.n_W = sign * Vec3(mc.frame[0], mc.frame[1], mc.frame[2]);
-    c.depth_m = -mc.dist;
-    c.p_A = ToLocal(data, c.body_a, c.p_W);
-    c.p_B = ToLocal(data, c.body_b, c.p_W);
-    c.normal_force_N = 0.0;
-    c.friction_force_W.setZero();
-    c.impulse_Ns = 0.0;
-    c.group = -1;
-    c.id = -1;
-  }
-  data.ncontact = n;
-  // group by pair (MuJoCo emits a pair's points together, but swaps may interleave) and match
-  std::sort(data.contacts.begin(), data.contacts.begin() + n, PairLess);
-  for (int begin = 0; begin < n;) {
-    int end = begin + 1;
-    while (end < n && data.contacts[end].geom_a == data.contacts[begin].geom_a &&
-           data.contacts[end].geom_b == data.contacts[begin].geom_b) {
-      ++end;
-    }
+    const int end = data.ncontact;
     for (int c = begin; c < end; ++c) data.contacts[c].pair_points = end - begin;
-    MatchPair(data, begin, end);
-    begin = end;
+    if (end > begin) MatchPair(data, begin, end);
   }
 }
 

@@ -1,19 +1,47 @@
-// Collision detection adapter (tick stage 2): MuJoCo's narrow phase at the current poses, turned
-// into rigidtouch contacts with persistent identity across ticks.
+// Collision detection (tick stage 2): broad phase, narrow phase, and contact identity across ticks.
+//
+// Plane, sphere and box pairs use rigidtouch's own narrow phase (narrow_phase.h); capsule and
+// mesh pairs use MuJoCo's per-pair collision functions on the compiled model. MuJoCo's whole
+// mj_collision is not used in the tick: it allocates every call and costs more than the step's
+// budget on a 100-box pile (docs/decisions.md).
 #pragma once
 
+#include <array>
+#include <vector>
+
+#include "geometry/broadphase.h"
+#include "geometry/narrow_phase.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
 struct mjData_;
+struct mjContact_;
 
 namespace rigidtouch::geometry {
 
-/// Detects contacts at the poses in `data.bodies` into data.contacts (first data.ncontact valid),
-/// matching each to last tick's contacts (data.previous) to keep ids, friction anchors and to mark
-/// new contacts. `scratch` is the backend's preallocated mjData. Never allocates or throws; a full
+/// Scratch of the collision stage, sized by Reserve.
+struct CollisionScratch {
+  std::vector<GeomPose> poses;                        // (ngeom) world poses this tick
+  Broadphase broadphase;
+  std::array<ContactPoint, kMaxPairContacts> points{};  // one pair's narrow-phase output
+  std::vector<mjContact_> mj_contacts;                // one pair's MuJoCo output (mjMAXCONPAIR)
+  mjData_* mj = nullptr;                              // MuJoCo data for the fallback functions
+
+  /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
+  void Reserve(const Model& model);
+  /// Puts the persistent sort order back to its initial state.
+  void Reset(const Model& model);
+  CollisionScratch() = default;
+  CollisionScratch(const CollisionScratch&) = delete;
+  CollisionScratch& operator=(const CollisionScratch&) = delete;
+  ~CollisionScratch();
+};
+
+/// Detects contacts at the poses in `data.bodies` into data.contacts (first data.ncontact valid,
+/// the points of one geom pair contiguous), matching each to last tick's contacts (data.previous)
+/// to keep ids and friction anchors and to mark new contacts. Never allocates or throws; a full
 /// contact list counts Warning::kContactFull.
-void DetectContacts(const Model& model, Data& data, mjData_* scratch);
+void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch);
 
 /// Stores this tick's contacts as `previous`, sorted for matching.
 void RememberContacts(Data& data);

@@ -160,8 +160,38 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
                   "' is a plane on a free body; planes must be static (in the worldbody)");
     }
     geom.friction = m->geom_friction[3 * g];
+    geom.size = Vec3(m->geom_size[3 * g], m->geom_size[3 * g + 1], m->geom_size[3 * g + 2]);
+    geom.rbound_m = m->geom_rbound[g];
+    geom.contype = m->geom_contype[g];
+    geom.conaffinity = m->geom_conaffinity[g];
+    // pose relative to the owner: the body's principal frame, or the world for static geoms
+    const Vec3 pos(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]);
+    const Quat quat = MjQuat(m->geom_quat + 4 * g).normalized();
+    if (geom.body >= 0) {
+      const BodyModel& owner = model.bodies[geom.body];
+      geom.pos_B = owner.iquat_B.conjugate() * (pos - owner.ipos_B);
+      geom.quat_B = (owner.iquat_B.conjugate() * quat).normalized();
+    } else {
+      // static: compose the chain of static bodies up to the world (MuJoCo's body_pos/quat)
+      Vec3 p_W = pos;
+      Quat q_W = quat;
+      for (int b = m->geom_bodyid[g]; b != 0; b = m->body_parentid[b]) {
+        const Vec3 bp(m->body_pos[3 * b], m->body_pos[3 * b + 1], m->body_pos[3 * b + 2]);
+        const Quat bq = MjQuat(m->body_quat + 4 * b).normalized();
+        p_W = bp + bq * p_W;
+        q_W = bq * q_W;
+      }
+      geom.pos_B = p_W;
+      geom.quat_B = q_W.normalized();
+    }
     geom.mj_geom = g;
     model.geoms.push_back(geom);
+  }
+
+  if (m->npair > 0 || m->nexclude > 0) {
+    throw Error("scene file '" + path +
+                "': <contact> <pair> and <exclude> elements are not supported; use the geoms' "
+                "contype and conaffinity bits to filter contacts");
   }
 
   // the tool
@@ -197,9 +227,6 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   model.max_group_bodies = options.max_group_bodies > 0
                                ? std::min<int>(options.max_group_bodies, model.bodies.size())
                                : static_cast<int>(model.bodies.size());
-  // the collision backend's contact list is sized from the model
-  raw->nconmax = model.max_contacts;
-  for (int g = 0; g < m->ngeom; ++g) raw->geom_margin[g] = 0.0;
   Configure(model);
   return model;
 }

@@ -1,6 +1,4 @@
 // Data lifecycle and per-tick reports.
-#include <mujoco/mujoco.h>
-
 #include <algorithm>
 
 #include "dynamics/rigid_body.h"
@@ -8,17 +6,6 @@
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
-namespace {
-
-// MuJoCo prints warnings (e.g. a full contact list) to stderr; Tick counts them instead
-void SilentWarning(const char*) {}
-
-}  // namespace
-
-Workspace::~Workspace() {
-  if (collision != nullptr) mj_deleteData(collision);
-}
-
 void WorkspaceDeleter::operator()(Workspace* w) const {
   delete w;
 }
@@ -46,7 +33,6 @@ const char* WarningName(Warning w) {
 }
 
 Data MakeData(const Model& model) {
-  mju_user_warning = SilentWarning;
   Data data;
   const int nbody = static_cast<int>(model.bodies.size());
   const int ncap = model.max_contacts;
@@ -58,8 +44,7 @@ Data MakeData(const Model& model) {
   data.impulses.resize(nbody);
   data.workspace.reset(new Workspace);
   Workspace& ws = *data.workspace;
-  ws.collision = mj_makeData(model.collision.get());
-  if (ws.collision == nullptr) throw Error("could not allocate the collision backend's data");
+  ws.collision.Reserve(model);
   ws.groups.Reserve(nbody, ncap);
   ws.laws.resize(ncap);
   ws.normal_velocity.resize(ncap);
@@ -93,6 +78,7 @@ void ResetData(const Model& model, Data& data) {
   data.tool_contacts = 0;
   data.nimpulse = 0;
   data.warnings.fill(WarningStat{});
+  if (data.workspace) data.workspace->collision.Reset(model);
 }
 
 double KineticEnergy(const Model& model, const Data& data) {

@@ -1,7 +1,5 @@
 // One haptic tick (DESIGN.md): coupling, geometry, phases, penalty, dynamics, impulses,
 // integration, render. Nothing here allocates, locks, does I/O or throws.
-#include <mujoco/mujoco.h>
-
 #include <algorithm>
 #include <cmath>
 
@@ -379,7 +377,9 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   // 4. penalty (explicit parts) and 5. free-motion forces
   for (int i = 0; i < nbody; ++i) {
     const BodyModel& b = model.bodies[i];
-    ws.force_W[i] = b.mass_kg * model.gravity_W;
+    // a tool held through a device is gravity-compensated like the device itself
+    const bool compensated = i == tool && model.device.coupling != Coupling::kNone;
+    ws.force_W[i] = compensated ? Vec3::Zero() : Vec3(b.mass_kg * model.gravity_W);
     ws.torque_W[i] = dynamics::GyroscopicTorque(b, data.bodies[i]);
   }
   ws.force_W[tool] += user.force_N;

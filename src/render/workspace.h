@@ -9,8 +9,7 @@
 #include "contact/impulse_solver.h"
 #include "contact/penalty.h"
 #include "dynamics/group_dynamics.h"
-
-struct mjData_;
+#include "geometry/collision.h"
 
 namespace rigidtouch {
 
@@ -27,7 +26,6 @@ struct Workspace {
   std::vector<double> impulses;                    // (max_contacts)
   std::unique_ptr<contact::ImpulseSolver> impulse_solver;
 
-  ~Workspace();
 };
 
 }  // namespace rigidtouch

@@ -1,0 +1,145 @@
+#include "analysis/tap_experiment.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace rigidtouch::analysis {
+namespace {
+
+// distance from the tool's centre of mass to its surface along -n: where the centre sits when
+// the tool touches the wall
+double ToolReach(const Model& model, const Vec3& n) {
+  double reach = 0.0;
+  for (const GeomModel& g : model.geoms) {
+    if (g.body != model.tool) continue;
+    const Vec3 c = g.pos_B;  // principal frame; the tool starts unrotated in every mode here
+    double r = g.rbound_m;
+    if (g.type == GeomType::kSphere) r = g.size.x();
+    if (g.type == GeomType::kBox) r = (g.quat_B.toRotationMatrix().transpose() * n).cwiseAbs().dot(g.size);
+    reach = std::max(reach, r - c.dot(n));
+  }
+  return reach;
+}
+
+}  // namespace
+
+RenderParams WallRenderParams(int wall) {
+  RenderParams r;
+  r.restitution = 0.0;
+  r.t_collision_s = 0.1;
+  switch (wall) {
+    case 0:
+      r.renderer = RendererKind::kImpulse;
+      break;
+    case 1:
+      r.renderer = RendererKind::kTrain;
+      r.frequency_hz = 250.0;
+      break;
+    case 2:
+      r.renderer = RendererKind::kTrain;
+      r.frequency_hz = 50.0;
+      break;
+    default: {
+      std::ostringstream msg;
+      msg << "unknown wall " << wall << "; valid walls: 0 (single impulse), 1 (train 250 Hz), "
+          << "2 (train 50 Hz)";
+      throw Error(msg.str());
+    }
+  }
+  return r;
+}
+
+TapRun RunTapExperiment(const TapExperimentConfig& config) {
+  if (!(std::isfinite(config.rate_hz) && config.rate_hz >= 100.0 && config.rate_hz <= 20000.0)) {
+    std::ostringstream msg;
+    msg << "rate = " << config.rate_hz << " Hz is out of range: valid 100 to 20000 Hz";
+    throw Error(msg.str());
+  }
+  if (!config.wall_normal.allFinite() || config.wall_normal.norm() < 1e-9) {
+    throw Error("wall normal must be a finite non-zero vector");
+  }
+  TapRun run;
+  run.device = device::FindPreset(config.device_preset);
+  const double h = 1.0 / config.rate_hz;
+
+  LoadOptions load = config.load;
+  load.timestep_s = h;
+  load.contact.stiffness_N_per_m =
+      config.stiffness_N_per_m.value_or(run.device.max_stiffness_N_per_m);
+  const double k = load.contact.stiffness_N_per_m;
+  load.contact.damping_Ns_per_m = config.damping_Ns_per_m.value_or(
+      run.device.max_damping_Ns_per_m > 0.0 ? std::min(k * h, run.device.max_damping_Ns_per_m)
+                                            : k * h);
+  load.device.max_force_N = run.device.max_force_N;
+  if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;
+  if (load.device.coupling == Coupling::kVirtual) {
+    // the coupling is what the device renders: its limits bound the coupling, not the wall
+    load.device.coupling_stiffness_N_per_m = run.device.max_stiffness_N_per_m;
+    load.device.coupling_damping_Ns_per_m =
+        std::min(run.device.max_stiffness_N_per_m * h, run.device.max_damping_Ns_per_m);
+  }
+  Model model = LoadModel(config.scene_path, load);
+
+  device::DeviceModelParams dm = config.device_model;
+  dm.tick_rate_hz = config.rate_hz;
+  device::TapScript script = config.script;
+  const Vec3 n = config.wall_normal.normalized();
+  script.surface_normal = n;
+  script.surface_point_m = config.wall_point_m + ToolReach(model, n) * n;
+  device::SimulatedDevice dev(run.device, config.hand, dm, script);
+
+  BodyModel& tool = model.bodies[model.tool];
+  if (model.device.coupling == Coupling::kDirect) {
+    // the tool is the end effector: its mass in Eq. 1 is the device's apparent mass plus the
+    // hand's (the rotational inertia keeps its shape)
+    const double mass = dm.apparent_mass_kg + config.hand.mass_kg;
+    tool.inertia_kgm2 *= mass / tool.mass_kg;
+    tool.mass_kg = mass;
+  }
+  const DeviceState start = dev.Read();
+  model.initial[model.tool].x_W = start.position_m;
+  model.initial[model.tool].v_W.setZero();
+  model.initial[model.tool].w_W.setZero();
+  model.initial[model.tool].q_WB = Quat::Identity();
+  Configure(model);
+
+  Data data = MakeData(model);
+  const std::int64_t max_ticks = std::llround((dev.duration_s() + 1.0) * config.rate_hz);
+  run.trace.reserve(static_cast<std::size_t>(max_ticks));
+  TickInput input;
+  for (std::int64_t tick = 0; tick < max_ticks && !dev.finished(); ++tick) {
+    input.device = dev.Read();
+    const DeviceCommand command = Tick(model, data, input);
+    dev.Write(command);
+    TraceSample s = MakeTraceSample(model, data, command);
+    // the trace describes the tick as the device lived it: the true handle position at the start
+    // of the tick, and the force held from here to the next sample (zero-order hold)
+    s.step = tick;
+    s.time_s = dev.time_s();
+    s.tap = dev.current_tap();
+    s.tool_position_m = dev.true_position_m();
+    s.tool_velocity_mps = dev.true_velocity_mps();
+    s.hand_force_N = dev.hand_force_N();
+    s.device_force_N = dev.displayed_force_N();
+    s.clipped = dev.last_command_clipped();
+    if (s.clipped) {
+      ++run.clipped_ticks;
+      if (command.impulsive_force_N.squaredNorm() > 0.0) ++run.clipped_impulse_ticks;
+    }
+    run.trace.push_back(s);
+    dev.Advance(1.0 / config.rate_hz);
+  }
+  run.energy_to_user_J = dev.energy_to_user_J();
+  run.warnings = data.warnings;
+
+  TapMetricsOptions options;
+  options.collision_window_s =
+      model.render.renderer == RendererKind::kTrain ? model.render.t_collision_s : 0.1;
+  for (const auto& samples : SplitTaps(run.trace)) {
+    run.taps.push_back(ComputeTapMetrics(samples, options));
+  }
+  run.model = std::move(model);
+  return run;
+}
+
+}  // namespace rigidtouch::analysis

@@ -1,0 +1,44 @@
+// Broad phase: which geom pairs may touch this tick. Sweep and prune along x over axis-aligned
+// boxes, with an insertion sort that is linear when the order barely changes between ticks.
+// Planes are infinite and are paired with every geom that may collide with them.
+#pragma once
+
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "geometry/narrow_phase.h"
+#include "rigidtouch/model.h"
+
+namespace rigidtouch::geometry {
+
+/// Axis-aligned bounding box in the world frame.
+struct Aabb {
+  Vec3 lo = Vec3::Zero();
+  Vec3 hi = Vec3::Zero();
+};
+
+/// Preallocated broad-phase state; the sort order persists across ticks.
+struct Broadphase {
+  std::vector<Aabb> boxes;                 // (ngeom)
+  std::vector<int> order;                  // (non-plane geoms) sorted by boxes[i].lo.x
+  std::vector<int> planes;                 // static plane geoms
+  std::vector<std::pair<int, int>> pairs;  // (capacity) candidate pairs, geom indices
+  int npair = 0;
+  int dropped = 0;                         // candidates beyond capacity this tick
+
+  /// Sizes the buffers for `model`; `pair_capacity` candidate pairs at most.
+  void Reserve(const Model& model, int pair_capacity);
+};
+
+/// World poses of every geom from the body states.
+void GeomPoses(const Model& model, std::span<const BodyState> bodies, std::span<GeomPose> poses);
+
+/// Whether two geoms may collide at all: different owners, not both static, and MuJoCo's filter
+/// (contype1 & conaffinity2) || (contype2 & conaffinity1).
+bool CanCollide(const GeomModel& a, const GeomModel& b);
+
+/// Fills bp.pairs with the candidate pairs for the current poses, in a deterministic order.
+void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp);
+
+}  // namespace rigidtouch::geometry
