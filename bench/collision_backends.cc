@@ -227,8 +227,9 @@ std::array<Vec3, 8> BoxVertices_W(const Vec3& half_size_m, const Pose& pose) {
 // ---------------------------------------------------------------------------------------------
 // backends
 
-/// Appends a contact in the shared convention; drops it when `out` is full or when it does not
-/// penetrate (Bullet keeps points up to its contact-breaking threshold, about 1 mm here).
+/// Appends a contact in the shared convention; drops it when `out` is full (4096 here, far above
+/// any scene's count) or when it does not penetrate (Bullet's manifolds also hold points up to its
+/// breaking threshold apart).
 int Push(std::span<Contact> out, int n, int geom1, int geom2, const Vec3& p_W_m, Vec3 n12_W,
          double depth_m) {
   if (depth_m < 0.0 || n >= static_cast<int>(out.size())) return n;
@@ -777,10 +778,10 @@ void PrintRow(const Scene& scene, const Backend& backend, const std::string& lab
   const int narrow = backend.NarrowPhasePairs();
   const std::string narrow_text = narrow < 0 ? "n/a" : std::to_string(narrow);
   std::printf(
-      "| %s | %s | %.1f | %.1f | %.1f | %.1f | %d (%d-%d) | %d/%d | %s | %s | %s | %s | %s |\n",
-      scene.name.c_str(), (backend.name() + label).c_str(), t.min_ns / 1000.0, t.median_ns / 1000.0,
-      t.p99_ns / 1000.0, t.allocations_per_pass, q.contacts, t.min_contacts, t.max_contacts,
-      q.pairs, scene.expected_pairs, points.c_str(), PointsText(q.box_box).c_str(),
+      "| %s | %s | %.0f | %.0f | %.0f | %.1f | %d (%d-%d) | %d/%d | %s | %s | %s | %s | %s |\n",
+      scene.name.c_str(), (backend.name() + label).c_str(), t.min_ns, t.median_ns, t.p99_ns,
+      t.allocations_per_pass, q.contacts, t.min_contacts, t.max_contacts, q.pairs,
+      scene.expected_pairs, points.c_str(), PointsText(q.box_box).c_str(),
       CornersText(scene, q).c_str(), depth_error, narrow_text.c_str());
 }
 
@@ -804,7 +805,7 @@ void RunTimings(bool quick) {
                                      MakePile(true, 7u)};
   std::vector<Contact> buffer(4096);
   std::printf(
-      "| scene | backend | min us | median us | p99 us | allocs/pass | points (range over passes) "
+      "| scene | backend | min ns | median ns | p99 ns | allocs/pass | points (range over passes) "
       "| pairs "
       "| pts/box-plane | pts/box-box | pairs with 4 corners | max depth error um "
       "| narrow-phase pairs |\n");
@@ -841,7 +842,7 @@ void RunBulletAblation(bool quick) {
   std::vector<Contact> buffer(4096);
   std::printf(
       "\nBullet settings on the pile (steady state; fresh-frame points per box-ground pair)\n"
-      "| broadphase | breaking threshold mm | ground | min us | median us | p99 us | allocs/pass "
+      "| broadphase | breaking threshold mm | ground | min ns | median ns | p99 ns | allocs/pass "
       "| narrow-phase pairs | pts/box-ground fresh |\n|---|---|---|---|---|---|---|---|---|\n");
   for (bool sweep_and_prune : {false, true}) {
     for (double threshold_m : {0.02, 2e-4}) {
@@ -854,11 +855,10 @@ void RunBulletAblation(bool quick) {
         backend.Forget();
         const int n = backend.Detect(scene.nominal, buffer);
         const Quality q = Analyse(scene, std::span<const Contact>(buffer.data(), n));
-        std::printf("| %s | %g | %s | %.1f | %.1f | %.1f | %.1f | %d | %s |\n",
+        std::printf("| %s | %g | %s | %.0f | %.0f | %.0f | %.1f | %d | %s |\n",
                     sweep_and_prune ? "btAxisSweep3" : "btDbvtBroadphase", threshold_m * 1e3,
-                    ground_box ? "box" : "plane", t.min_ns / 1000.0, t.median_ns / 1000.0,
-                    t.p99_ns / 1000.0, t.allocations_per_pass, pairs,
-                    PointsText(q.box_plane).c_str());
+                    ground_box ? "box" : "plane", t.min_ns, t.median_ns, t.p99_ns,
+                    t.allocations_per_pass, pairs, PointsText(q.box_plane).c_str());
       }
     }
   }
