@@ -115,6 +115,7 @@ ImpulseSolver::ImpulseSolver(int max_rows, int max_bodies, const ImpulseSolverOp
   ad_.setZero(max_rows);
   tmp_.setZero(max_rows);
   row_scale_.setZero(max_rows);
+  sqrt_diag_.setZero(max_rows);
   in_set_.setZero(max_rows);
   a_dense_.setZero(max_dense_, max_dense_);
   l_dense_.setZero(max_dense_, max_dense_);
@@ -253,8 +254,10 @@ ImpulseSolverError ImpulseSolver::Pack(const ImpulseProblem& problem) {
     if (row.body_a >= 0) {
       const SolverBody& a = problem.bodies[row.body_a];
       const Vec3 lever = row.r_a_W.cross(row.n_W);
-      packed.jac_a << row.n_W, lever;
-      packed.minv_jt_a << a.inv_mass * row.n_W, a.inv_inertia_W * lever;
+      packed.jac_a.head<3>() = row.n_W;
+      packed.jac_a.tail<3>() = lever;
+      packed.minv_jt_a.head<3>() = a.inv_mass * row.n_W;
+      packed.minv_jt_a.tail<3>() = a.inv_inertia_W * lever;
       diag += packed.jac_a.dot(packed.minv_jt_a);
       b_mps += row.n_W.dot(a.v_W) + lever.dot(a.w_W);
       ++body_row_count_[row.body_a];
@@ -262,8 +265,10 @@ ImpulseSolverError ImpulseSolver::Pack(const ImpulseProblem& problem) {
     if (row.body_b >= 0) {
       const SolverBody& b = problem.bodies[row.body_b];
       const Vec3 lever = row.r_b_W.cross(row.n_W);
-      packed.jac_b << -row.n_W, -lever;
-      packed.minv_jt_b << -b.inv_mass * row.n_W, -(b.inv_inertia_W * lever);
+      packed.jac_b.head<3>() = -row.n_W;
+      packed.jac_b.tail<3>() = -lever;
+      packed.minv_jt_b.head<3>() = -b.inv_mass * row.n_W;
+      packed.minv_jt_b.tail<3>() = -(b.inv_inertia_W * lever);
       diag += packed.jac_b.dot(packed.minv_jt_b);
       b_mps += packed.jac_b.head<3>().dot(b.v_W) + packed.jac_b.tail<3>().dot(b.w_W);
       ++body_row_count_[row.body_b];
@@ -400,7 +405,8 @@ bool ImpulseSolver::SolveDense(std::span<const double> p_warm, ImpulseSolverStat
       for (int k = 0; k < num_free_; ++k) {
         if (z_[k] > 0.0) continue;
         const double p_k = p_[free_[k]];
-        const double step_k = p_k / (p_k - z_[k]);
+        const double denominator = p_k - z_[k];
+        const double step_k = denominator > 0.0 ? p_k / denominator : 0.0;
         if (k_min < 0 || step_k < step) {
           step = step_k;
           k_min = k;
@@ -469,10 +475,10 @@ bool ImpulseSolver::Polish(ImpulseSolverStats& stats) {
     f += in_set_[j];
   }
   if (f == 0) return false;
-  return f <= max_dense_ ? PolishDense(f) : PolishCg(stats);
+  return f <= max_dense_ ? PolishDense(f, stats) : PolishCg(stats);
 }
 
-bool ImpulseSolver::PolishDense(int f) {
+bool ImpulseSolver::PolishDense(int f, ImpulseSolverStats& stats) {
   // 1. a rank-revealing factor A_FF = G G^T (G is f x r): pivoted Cholesky of the Jacobi-scaled
   // block (unit diagonal, so the rank threshold is scale-free), rows scaled back afterwards
   auto& g = l_dense_;
@@ -504,6 +510,7 @@ bool ImpulseSolver::PolishDense(int f) {
   const int max_iterations = 4 * f + 20;
   for (int it = 0;; ++it) {
     if (it >= max_iterations) return false;
+    stats.polish_iterations = it + 1;
     // H = G_K^T G_K, basic solution u of H u = beta through a pivoted Cholesky
     auto& h = h_dense_;
     for (int a = 0; a < r; ++a) {
@@ -543,7 +550,7 @@ bool ImpulseSolver::PolishDense(int f) {
     double step = 1.0;
     for (int i = 0; i < f; ++i) {
       if (working_[i] || x_set_[i] >= 0.0) continue;
-      const double step_i = p_set_[i] / (p_set_[i] - x_set_[i]);
+      const double step_i = p_set_[i] / (p_set_[i] - x_set_[i]);  // x_i < 0 <= p_i
       if (step_i < step) {
         step = step_i;
         blocking = i;
@@ -591,13 +598,16 @@ bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStat
   int max_neighbours = 1;
   for (int j = 0; j < c; ++j) {
     const PackedRow& row = rows_[j];
-    row_scale_[j] = inert_[j] ? 0.0 : 1.0 / std::sqrt(diag_[j]);
+    sqrt_diag_[j] = inert_[j] ? 0.0 : std::sqrt(diag_[j]);
+    row_scale_[j] = inert_[j] ? 0.0 : 1.0 / sqrt_diag_[j];
     int neighbours = 0;
     if (row.body_a >= 0) neighbours += body_row_count_[row.body_a];
     if (row.body_b >= 0) neighbours += body_row_count_[row.body_b];
     max_neighbours = std::max(max_neighbours, neighbours);
   }
   const double step_bar = 1.9 / max_neighbours;
+  const double inv_step_bar = max_neighbours / 1.9;
+  const double* sqrt_diag = sqrt_diag_.data();  // 1 / s: scaled gradient to velocity
   const double tol_mps = options_.tolerance * v_ref_mps_;
   const int max_iterations = options_.max_iterations > 0 ? options_.max_iterations : 20 * c + 200;
 
@@ -625,12 +635,12 @@ bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStat
       double projected;
       if (x_[j] > 0.0) {
         projected = g_[j];
-        reduced_free += std::min(x_[j] / step_bar, g_[j]) * g_[j];
+        reduced_free += std::min(x_[j] * inv_step_bar, g_[j]) * g_[j];
       } else {
         projected = std::min(g_[j], 0.0);
         chopped_sq += projected * projected;
       }
-      projected_max_mps = std::max(projected_max_mps, std::abs(projected) / s[j]);
+      projected_max_mps = std::max(projected_max_mps, std::abs(projected) * sqrt_diag[j]);
     }
     if (projected_max_mps <= tol_mps) {
       if (fresh_gradient) {

@@ -29,38 +29,48 @@
 //
 // Method, in four steps (all buffers are sized in the constructor; Solve never allocates).
 // 1. Pack. Each row keeps its two Jacobian blocks [n; r x n] and the columns M^-1 Jc^T (24
-// doubles),
-//    so A x = Jc (M^-1 Jc^T x) costs O(c) through body space: rows couple only through shared
-//    bodies. A row with A_jj <= kInertRowThreshold * max_k A_kk (e.g. between two infinite-mass
-//    bodies) is inert: nothing can change its velocity, it gets p = 0 and, if it approaches, is
-//    counted in ImpulseSolverStats::unresolved_rows.
-// 2. Active set, small groups (c <= options.dense_max_rows): the primal active-set method of
-//    Lawson and Hanson (NNLS), written for the QP, on A + eps I with
-//    eps = options.regularization * max_k A_kk (1e-10 by default). The regularisation makes the
-//    QP strictly convex, so every free-set Cholesky factor exists (redundant rows would otherwise
-//    give zero pivots), and the method terminates: the objective strictly decreases whenever the
-//    free set changes, so no free set repeats. The Cholesky factor grows by one row per added
-//    index (O(f^2)) and is refactored when indices leave (rare). It costs O(c^3) at worst, which
-//    is why it is limited to small groups.
-//    Active set, large groups (c > options.dense_max_rows): MPRGP (Dostal and Schoberl 2005,
-//    modified proportioning with reduced gradient projections), a conjugate-gradient method for
+//    doubles), so A x = Jc (M^-1 Jc^T x) costs O(c) through body space: rows couple only through
+//    shared bodies. A row with A_jj <= kInertRowThreshold * max_k A_kk (e.g. between two
+//    infinite-mass bodies) is inert: nothing can change its velocity, it gets p = 0 and, if it
+//    approaches, is counted in ImpulseSolverStats::unresolved_rows.
+// 2. Active set. Small groups (c <= options.dense_max_rows, 32 by default): the primal
+//    active-set method of Lawson and Hanson (NNLS), written for the QP, on A + E with
+//    E = options.regularization * diag(A) (1e-10 by default, relative per row so that light and
+//    heavy bodies are regularised alike). E makes the QP strictly convex, so every free-set
+//    Cholesky factor exists (redundant rows would otherwise give zero pivots), and the method
+//    terminates: the objective strictly decreases whenever the free set changes, so no free set
+//    repeats. The factor grows by one row per added index (O(f^2)) and is refactored when indices
+//    leave (rare). It costs O(c^3) at worst, hence the size limit.
+//    Large groups (c > options.dense_max_rows): MPRGP (Dostal and Schoberl 2005, modified
+//    proportioning with reduced gradient projections), a conjugate-gradient method for
 //    bound-constrained QPs that adds and drops many bounds per iteration. It runs on the
 //    Jacobi-scaled problem (unknowns q_j = sqrt(A_jj) p_j, unit diagonal; the bounds p >= 0 are
-//    unchanged) without regularisation, needs only the O(c) products of step 1, and stops when
-//    the projected gradient (a velocity) is below options.tolerance * v_ref, with v_ref the
-//    largest |b_j|. Rejected alternatives: a dense factorisation of a 400-row group costs ~2e7
-//    flops per solve; projected Gauss-Seidel converges linearly with a rate that degrades with
-//    stack height and mass ratio, too slowly for the accuracy the minimum-norm polish needs.
-// 3. Minimum-norm polish. With F = {j : w_j <= options.polish_threshold * v_ref} (w is the same on
-//    all of S, so F contains the support of p'), solve A_FF x = -b_F for its minimum-norm
-//    solution: dense path, a diagonally pivoted Cholesky A_FF = G G^T truncated at
-//    kRankThreshold * max diag (rank r, G is f x r), then x = G (G^T G)^-1 beta with G beta = -b_F;
-//    matrix-free path, conjugate gradients from x = 0, whose iterates stay in range(A_FF). If
-//    x >= 0 and no row outside F approaches, x is in S and its norm is at most |p'| (p' solves the
-//    same system), so x = p'. Otherwise (degenerate contact sets) the step-2 answer is kept: a
-//    valid plastic impulse, not necessarily of minimum norm (stats.min_norm = false).
-// 4. Check. If some row still approaches faster than options.failure_tolerance * v_ref after p*,
-//    the answer is rejected (error code, p_out = 0).
+//    unchanged) without regularisation, needs only the O(c) products of step 1, and stops when the
+//    projected gradient (a velocity) is below options.tolerance * v_ref, with v_ref the largest
+//    |b_j|. Rejected alternatives: a dense factorisation of a 400-row group costs ~2e7 flops per
+//    solve; projected Gauss-Seidel converges linearly with a rate that degrades with stack height
+//    and mass ratio, too slowly for the accuracy the minimum-norm polish needs.
+// 3. Minimum-norm polish. Let F = {j : w_j <= options.polish_threshold * v_ref} after step 2. w is
+//    the same for every plastic impulse, so F contains the support of p', and p' is the
+//    minimum-norm solution of {A_FF p = -b_F, p >= 0} (rows outside F carry no impulse).
+//    - If F has at most dense_max_rows rows (always on the dense path): a diagonally pivoted
+//      Cholesky of the Jacobi-scaled A_FF, truncated at kRankThreshold, gives A_FF = G G^T with G
+//      f x r of full column rank, and the constraint becomes G^T p = beta (G_1 beta = -b_F). A
+//      primal active-set method for min 1/2 |p|^2 subject to G^T p = beta, p >= 0 starts from the
+//      step-2 answer (feasible); each subproblem on the rows K outside its working set has the
+//      solution x = G_K u with (G_K^T G_K) u = beta, and the bound multipliers are -(G_W u). Its
+//      first subproblem is the unconstrained minimum-norm solution, which is the answer whenever
+//      it is >= 0 (in particular when the reference answer is >= 0).
+//    - Otherwise (matrix-free path, large F): conjugate gradients on A_FF x = -b_F from x = 0,
+//      whose iterates stay in range(A_FF), so the limit is the minimum-norm solution. If it is
+//      >= 0 it is p'. If not (p' then has zeros inside F: a degenerate, highly redundant contact
+//      set) the step-2 answer is kept: a valid plastic impulse, not necessarily of minimum norm.
+//    Either candidate is accepted only if it is >= 0, no row approaches by more than
+//    10 * options.tolerance * v_ref and rows with impulse have |w_j| below that; stats.min_norm
+//    tells whether the polish was accepted.
+// 4. Check. p* . w* > 0 is corrected by the line-search factor above. If some row still
+//    approaches faster than options.failure_tolerance * v_ref after p*, the answer is rejected
+//    (error code, p_out = 0).
 //
 // Errors. Solve never throws. Exceeded capacities, bad indices, non-finite input, a bad scale, a
 // missed iteration limit or a failed check return an error code in the stats and p_out = 0, the
@@ -100,22 +110,23 @@ const char* ToString(ImpulseSolverError error);
 /// What one solve did. Plain data, written by Solve without allocating.
 struct ImpulseSolverStats {
   ImpulseSolverError error = ImpulseSolverError::kNone;  ///< kNone when p_out holds the answer.
-  bool converged = false;     ///< The active-set method met its stopping test.
-  bool matrix_free = false;   ///< The matrix-free path (MPRGP) was used instead of the dense one.
-  bool min_norm = false;      ///< The minimum-norm polish was accepted (see the file comment).
-  int iterations = 0;         ///< Free-set changes (dense path) or MPRGP iterations.
-  int polish_iterations = 0;  ///< Conjugate-gradient iterations of the polish (matrix-free path).
-  int inert_rows = 0;         ///< Rows with no effective mass; they get p = 0.
-  int unresolved_rows = 0;    ///< Inert rows that approach; no impulse can stop them.
+  bool converged = false;    ///< The active-set method met its stopping test.
+  bool matrix_free = false;  ///< The matrix-free path (MPRGP) was used instead of the dense one.
+  bool min_norm = false;     ///< The minimum-norm polish was accepted (see the file comment).
+  int iterations = 0;        ///< Free-set changes (dense path) or MPRGP iterations.
+  int polish_iterations =
+      0;                    ///< Active-set (dense) or conjugate-gradient iterations of the polish.
+  int inert_rows = 0;       ///< Rows with no effective mass; they get p = 0.
+  int unresolved_rows = 0;  ///< Inert rows that approach; no impulse can stop them.
   double max_approach_mps = 0.0;  ///< Largest approach speed -w_j left after p* (0 if none).
 };
 
-/// Tuning of ImpulseSolver. Tolerances are relative: to the largest Delassus diagonal
+/// Tuning of ImpulseSolver. Tolerances are relative: to each row's Delassus diagonal
 /// (regularization) or to v_ref, the largest |relative normal velocity| of the group (the rest).
 struct ImpulseSolverOptions {
   /// Groups with at most this many rows use the dense active-set path, larger ones MPRGP.
   int dense_max_rows = 32;
-  /// eps / max_k A_kk of the dense path's regularisation A + eps I.
+  /// Relative regularisation of the dense path, A + regularization * diag(A).
   double regularization = 1e-10;
   /// Stopping tolerance of the active-set methods, as a velocity relative to v_ref.
   double tolerance = 1e-10;
@@ -174,7 +185,7 @@ class ImpulseSolver {
   bool SolveDense(std::span<const double> p_warm, ImpulseSolverStats& stats);
   bool SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats);
   bool Polish(ImpulseSolverStats& stats);
-  bool PolishDense(int f);
+  bool PolishDense(int f, ImpulseSolverStats& stats);
   bool PolishCg(ImpulseSolverStats& stats);
   bool AcceptPolish();
   void DenseRefactor();
@@ -205,6 +216,7 @@ class ImpulseSolver {
   Eigen::VectorXd w_mps_;                 // A p + b
   Eigen::VectorXd x_, g_, d_, ad_, tmp_;  // method-specific work vectors
   Eigen::VectorXd row_scale_;             // 1 / sqrt(A_jj) of MPRGP's Jacobi scaling
+  Eigen::VectorXd sqrt_diag_;             // sqrt(A_jj)
   Eigen::VectorXi in_set_;                // 1 for rows of the polish's free set F
   int last_num_rows_ = 0;
 
