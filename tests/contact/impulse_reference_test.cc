@@ -1,0 +1,172 @@
+#include "contact/impulse_reference.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "contact/impulse_examples.h"
+#include "contact/impulse_math.h"
+
+namespace rigidtouch::contact {
+namespace {
+
+// applies p to the example's bodies and returns Jc v afterwards
+Eigen::VectorXd ApplyAndMeasure(ImpulseExample& example, const Eigen::VectorXd& p) {
+  ApplyImpulses(example.bodies, example.rows, std::span<const double>(p.data(), p.size()));
+  Eigen::VectorXd w(p.size());
+  JcV(example.problem(), w);
+  return w;
+}
+
+class ReferenceRestitution : public ::testing::TestWithParam<double> {};
+
+TEST_P(ReferenceRestitution, SphereOnPlaneFollowsNewton) {
+  const double e = GetParam();
+  const double mass_kg = 2.0;
+  const double v_n_mps = -1.5;
+  ImpulseExample example = SpherePlane(mass_kg, 0.1, Vec3(0.2, 0.0, v_n_mps));
+  const Eigen::VectorXd p = ReferenceImpulse(example.problem(), e, 1);
+  ASSERT_EQ(p.size(), 1);
+  // Eq. 5 for one row: p = -(1 + e) m v_n, then v = -e v_n (Eq. 4); tolerance 1e-12 relative
+  EXPECT_NEAR(p[0], -(1.0 + e) * mass_kg * v_n_mps, 1e-12 * mass_kg);
+  const Eigen::VectorXd w = ApplyAndMeasure(example, p);
+  EXPECT_NEAR(w[0], -e * v_n_mps, 1e-12);
+  EXPECT_DOUBLE_EQ(example.bodies[0].v_W.x(), 0.2);  // frictionless: tangential untouched
+}
+
+INSTANTIATE_TEST_SUITE_P(Restitution, ReferenceRestitution, ::testing::Values(0.0, 0.5, 1.0));
+
+TEST(ReferenceImpulse, TrainRemovesEqualSharesOfTheApproach) {
+  // Eq. 8 with no other forces: after impulse i of N the approach speed is v0 (N - i) / N
+  constexpr int kImpulses = 5;
+  const double v0_mps = -0.8;
+  ImpulseExample example = SpherePlane(0.3, 0.01, Vec3(0, 0, v0_mps));
+  for (int i = 1; i <= kImpulses; ++i) {
+    const Eigen::VectorXd p = ReferenceImpulse(example.problem(), 0.0, kImpulses - i + 1);
+    const Eigen::VectorXd w = ApplyAndMeasure(example, p);
+    // tolerance: rounding, 1e-12 m/s
+    EXPECT_NEAR(w[0], v0_mps * (kImpulses - i) / kImpulses, 1e-12) << "impulse " << i;
+  }
+}
+
+TEST(ReferenceImpulse, BoxLandingFlatStopsEveryCorner) {
+  // redundant rows (rank 3): the pseudo-inverse picks the minimum-norm impulse, which lies in
+  // range(Jc) = span{1, r_x, r_y}: p_j = m |v_z| / 4 + c_x r_x,j + c_y r_y,j with
+  // c_y = -I w_x / (4 h^2) and c_x = I w_y / (4 h^2) (torques about x and y cancel w)
+  const double h = 0.05;
+  const double mass_kg = 1.0;
+  const Vec3 w0(2.0, -1.0, 0.0);
+  ImpulseExample box = BoxOnPlane(h, mass_kg, Vec3(0, 0, -1.0), w0);
+  const double inertia = mass_kg / 3.0 * 2.0 * h * h;
+  const Eigen::VectorXd p = ReferenceImpulse(box.problem(), 0.0, 1);
+  for (int j = 0; j < 4; ++j) {
+    const Vec3& r = box.rows[j].r_a_W;
+    const double expected = mass_kg / 4.0 + inertia * w0.y() / (4 * h * h) * r.x() -
+                            inertia * w0.x() / (4 * h * h) * r.y();
+    // tolerance: 1e-10 N s, a rank-revealing QR of a rank-3 matrix
+    EXPECT_NEAR(p[j], expected, 1e-10) << "corner " << j;
+  }
+  const Eigen::VectorXd w = ApplyAndMeasure(box, p);
+  EXPECT_LT(w.cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_LT(box.bodies[0].w_W.norm(), 1e-9);
+  EXPECT_LT(std::abs(box.bodies[0].v_W.z()), 1e-10);
+}
+
+TEST(ReferenceImpulse, HeadOnPlasticGivesCommonVelocity) {
+  const double m_a = 2.0, v_a = -1.0, m_b = 0.5, v_b = 3.0;
+  ImpulseExample example = HeadOn(m_a, v_a, m_b, v_b);
+  const Eigen::VectorXd p = ReferenceImpulse(example.problem(), 0.0, 1);
+  ApplyAndMeasure(example, p);
+  const double common = (m_a * v_a + m_b * v_b) / (m_a + m_b);
+  // tolerance: rounding, 1e-12 m/s
+  EXPECT_NEAR(example.bodies[0].v_W.x(), common, 1e-12);
+  EXPECT_NEAR(example.bodies[1].v_W.x(), common, 1e-12);
+}
+
+TEST(ReferenceImpulse, StruckStackStopsEverything) {
+  // a tool hits a stack of three boxes on the floor, e = 0: the floor stops the whole stack
+  ImpulseExample stack = StackWithTool(3, 0.05, 1.0, 0.5, -2.0);
+  const Eigen::VectorXd p = ReferenceImpulse(stack.problem(), 0.0, 1);
+  ApplyAndMeasure(stack, p);
+  for (const SolverBody& body : stack.bodies) {
+    // tolerance: 1e-10 m/s and rad/s against a 2 m/s strike
+    EXPECT_LT(body.v_W.norm(), 1e-10);
+    EXPECT_LT(body.w_W.norm(), 1e-9);
+  }
+  EXPECT_GT(p.minCoeff(), 0.0);  // every row pushes here
+}
+
+TEST(ReferenceImpulse, SeparatingRowGetsAnAdhesiveImpulse) {
+  // a sphere (rows at its centre, no spin) against the floor (n1 = z, approaching at 1 m/s) and
+  // a slope (n2 = (1,0,1)/sqrt2, separating at 1/sqrt2 m/s). Eq. 5 zeroes both relative
+  // velocities: v+ = 0, so m (-2, 0, 1) = p1 n1 + p2 n2, p2 = -2 sqrt2 m < 0, p1 = 3 m.
+  const double mass_kg = 0.5;
+  ImpulseExample example = SpherePlane(mass_kg, 0.1, Vec3(2.0, 0.0, -1.0));
+  example.rows[0].r_a_W = Vec3::Zero();
+  SolverRow slope = example.rows[0];
+  slope.n_W = Vec3(1, 0, 1).normalized();
+  example.rows.push_back(slope);
+  const Eigen::VectorXd p = ReferenceImpulse(example.problem(), 0.0, 1);
+  // tolerance: rounding, 1e-12 N s
+  EXPECT_NEAR(p[0], 3.0 * mass_kg, 1e-12);
+  EXPECT_NEAR(p[1], -2.0 * std::sqrt(2.0) * mass_kg, 1e-12);
+  EXPECT_LT(p[1], 0.0);
+}
+
+TEST(ReferenceImpulse, NeverAddsKineticEnergy) {
+  // finding: the reference never increases kinetic energy, even when it pulls, because
+  // w = A p + b = 0 on every row makes dKE = -(s - s^2/2) p^T A p <= 0 for s = 1 + e in [1, 2]
+  std::mt19937_64 rng(17);
+  int with_adhesion = 0;
+  double worst = 0.0;
+  for (int trial = 0; trial < 1000; ++trial) {
+    const ImpulseExample example = RandomGroup(rng);
+    for (const double e : {0.0, 1.0}) {
+      ImpulseExample after = example;
+      const Eigen::VectorXd p = ReferenceImpulse(example.problem(), e, 1);
+      if (p.minCoeff() < 0.0) ++with_adhesion;
+      const double ke0 = KineticEnergy(example.bodies);
+      Eigen::VectorXd b(p.size());
+      JcV(example.problem(), b);
+      ApplyAndMeasure(after, p);
+      const double ke1 = KineticEnergy(after.bodies);
+      // tolerance: rounding of velocity changes of order impulse / mass,
+      // 1e-12 (KE0 + v_ref sum |p|) (e = 1 conserves energy in exact arithmetic)
+      const double energy_scale = ke0 + b.cwiseAbs().maxCoeff() * p.cwiseAbs().sum();
+      worst = std::max(worst, (ke1 - ke0) / energy_scale);
+      ASSERT_LE(ke1, ke0 + 1e-12 * energy_scale) << "trial " << trial << " e " << e;
+    }
+  }
+  std::printf("adhesive answers: %d of 2000; worst relative energy gain %.3g\n", with_adhesion,
+              worst);
+  // the random groups do exercise adhesive answers
+  EXPECT_GT(with_adhesion, 100);
+}
+
+TEST(ReferenceImpulse, RejectsBadParameters) {
+  const ImpulseExample example = SpherePlane(1.0, 0.1, -Vec3::UnitZ());
+  EXPECT_THROW(ReferenceImpulse(example.problem(), -0.1, 1), Error);
+  EXPECT_THROW(ReferenceImpulse(example.problem(), 1.5, 1), Error);
+  EXPECT_THROW(ReferenceImpulse(example.problem(), std::nan(""), 1), Error);
+  EXPECT_THROW(ReferenceImpulse(example.problem(), 0.0, 0), Error);
+  ImpulseExample bad = example;
+  bad.rows[0].body_a = 3;
+  try {
+    ReferenceImpulse(bad.problem(), 0.0, 1);
+    FAIL() << "expected rigidtouch::Error";
+  } catch (const Error& error) {
+    // the message names the row, the value and the valid range
+    EXPECT_NE(std::string(error.what()).find("row 0"), std::string::npos);
+    EXPECT_NE(std::string(error.what()).find("body_a = 3"), std::string::npos);
+    EXPECT_NE(std::string(error.what()).find("[-1, 0]"), std::string::npos);
+  }
+  bad = example;
+  bad.bodies[0].v_W.x() = std::nan("");
+  EXPECT_THROW(ReferenceImpulse(bad.problem(), 0.0, 1), Error);
+}
+
+}  // namespace
+}  // namespace rigidtouch::contact
