@@ -46,7 +46,12 @@ struct GeomModel {
   std::string name;
   GeomType type = GeomType::kSphere;
   int body = -1;
-  double friction = 0.0;  // MJCF sliding friction coefficient
+  double friction = 0.0;             // MJCF sliding friction coefficient
+  Vec3 size = Vec3::Zero();          // MuJoCo size: radius, (radius, half-length), half-extents
+  double rbound_m = 0.0;             // radius of a bounding sphere about the geom centre
+  Vec3 pos_B = Vec3::Zero();         // centre in the body's principal frame (world if static)
+  Quat quat_B = Quat::Identity();    // orientation in the body's principal frame
+  int contype = 1, conaffinity = 1;  // MJCF collision filter bits
   int mj_geom = -1;
 };
 

@@ -6,6 +6,8 @@
 // budget on a 100-box pile (docs/decisions.md).
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <array>
 #include <vector>
 
@@ -14,18 +16,15 @@
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
-struct mjData_;
-struct mjContact_;
-
 namespace rigidtouch::geometry {
 
 /// Scratch of the collision stage, sized by Reserve.
 struct CollisionScratch {
-  std::vector<GeomPose> poses;                        // (ngeom) world poses this tick
+  std::vector<GeomPose> poses;  // (ngeom) world poses this tick
   Broadphase broadphase;
   std::array<ContactPoint, kMaxPairContacts> points{};  // one pair's narrow-phase output
-  std::vector<mjContact_> mj_contacts;                // one pair's MuJoCo output (mjMAXCONPAIR)
-  mjData_* mj = nullptr;                              // MuJoCo data for the fallback functions
+  std::vector<mjContact> mj_contacts;                   // one pair's MuJoCo output (mjMAXCONPAIR)
+  mjData* mj = nullptr;                                 // MuJoCo data for the fallback functions
 
   /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
   void Reserve(const Model& model);

@@ -14,7 +14,7 @@
 namespace rigidtouch {
 
 struct Workspace {
-  mjData_* collision = nullptr;  // MuJoCo scratch for the narrow phase
+  geometry::CollisionScratch collision;  // broad and narrow phase scratch
   contact::Groups groups;
   std::vector<contact::PenaltyLaw> laws;    // (max_contacts)
   std::vector<double> normal_velocity;      // (max_contacts) relative normal velocity
@@ -25,7 +25,6 @@ struct Workspace {
   std::vector<contact::SolverRow> solver_rows;     // (max_contacts)
   std::vector<double> impulses;                    // (max_contacts)
   std::unique_ptr<contact::ImpulseSolver> impulse_solver;
-
 };
 
 }  // namespace rigidtouch
