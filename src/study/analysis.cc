@@ -113,7 +113,7 @@ StudyReport AnalyzeLogs(const std::vector<LogInput>& logs) {
   }
 
   for (std::size_t t = 0; t < protocol.tests.size(); ++t) {
-    const Test& test = protocol.tests[t];
+    const StudyTest& test = protocol.tests[t];
     TestResult result;
     result.name = test.name;
     result.conditions = {protocol.conditions[test.conditions[0]].label,

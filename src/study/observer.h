@@ -96,8 +96,8 @@ double NearestTemplateProbabilityCorrect(double distance, double series_variance
 /// percepts are `a` (condition 0) and `b` (condition 1): the average over series positions of
 /// lapse / 2 + (1 - lapse) (swap (1 - P) + (1 - swap) P). Tap-to-tap variability of the stimulus
 /// and differences between participants are not included (the simulation includes both).
-double PredictPercentCorrect(const ObserverParams& params, const Test& test, const PerceptVector& a,
-                             const PerceptVector& b);
+double PredictPercentCorrect(const ObserverParams& params, const StudyTest& test,
+                             const PerceptVector& a, const PerceptVector& b);
 
 /// Mean perceptual point of `condition` over `taps` taps rendered with seeds derived from `seed`.
 PerceptVector MeanPerceptVector(const ObserverParams& params, StimulusSource& source,

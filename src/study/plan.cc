@@ -22,7 +22,7 @@ void Shuffle(std::vector<T>& items, Rng& rng) {
   }
 }
 
-std::vector<int> SeriesConditions(const Test& test, SeriesOrder order, Rng& rng) {
+std::vector<int> SeriesConditions(const StudyTest& test, SeriesOrder order, Rng& rng) {
   std::vector<int> conditions(test.series);
   if (order == SeriesOrder::kIndependent) {
     for (int& c : conditions) c = rng.Bernoulli(0.5) ? 1 : 0;
@@ -49,7 +49,7 @@ std::vector<Step> MakePlan(const Protocol& protocol, std::uint64_t seed) {
   std::vector<Step> plan;
   for (std::size_t position = 0; position < test_order.size(); ++position) {
     const int t = test_order[position];
-    const Test& test = protocol.tests[t];
+    const StudyTest& test = protocol.tests[t];
     for (int c = 0; c < 2; ++c) {
       Step step;
       step.kind = StepKind::kFamiliarization;

@@ -280,10 +280,10 @@ int FindCondition(const std::vector<Condition>& conditions, const std::string& l
   return -1;
 }
 
-Test ParseTest(const Context& ctx, const json& value, const std::string& path,
-               const std::vector<Condition>& conditions, const Test& defaults) {
+StudyTest ParseTest(const Context& ctx, const json& value, const std::string& path,
+                    const std::vector<Condition>& conditions, const StudyTest& defaults) {
   const ObjectReader in(ctx, value, path, kTestKeys, "a test");
-  Test t = defaults;
+  StudyTest t = defaults;
   t.name = in.RequiredString("name");
   if (!IsCleanText(t.name)) ctx.Fail(in.Path("name"), "must not start or end with spaces");
   t.instructions = in.String("instructions").value_or("");
@@ -429,7 +429,7 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
   p.description = in.String("description").value_or("");
   p.instructions = in.String("instructions").value_or("");
 
-  Test defaults;
+  StudyTest defaults;
   defaults.familiarization_taps = in.Integer("familiarization_taps", 3, 1, kMaxTaps);
   defaults.series = in.Integer("series", 20, 1, kMaxSeries);
   defaults.taps_per_series = in.Integer("taps_per_series", 3, 1, kMaxTaps);
@@ -492,7 +492,7 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
   }
   for (std::size_t i = 0; i < ts.size(); ++i) {
     const std::string path = "tests[" + std::to_string(i) + "]";
-    Test t = ParseTest(ctx, ts[i], path, p.conditions, defaults);
+    StudyTest t = ParseTest(ctx, ts[i], path, p.conditions, defaults);
     for (const auto& other : p.tests) {
       if (Lower(other.name) == Lower(t.name)) {
         ctx.Fail(path + ".name", "duplicate test name " + Quote(t.name));

@@ -45,7 +45,7 @@ struct Condition {
 };
 
 /// One discrimination test between two conditions.
-struct Test {
+struct StudyTest {
   std::string name;                 ///< e.g. "test 1"; unique within the protocol
   std::array<int, 2> conditions{};  ///< indices into Protocol::conditions, distinct
   std::array<std::string, 2> keys;  ///< what the participant types for each condition
@@ -80,7 +80,7 @@ struct Protocol {
   std::string description;            ///< free text for the experimenter
   std::string instructions;           ///< shown to the participant at the start of a session
   std::vector<Condition> conditions;  ///< every wall the tests refer to
-  std::vector<Test> tests;            ///< at least one
+  std::vector<StudyTest> tests;       ///< at least one
   Randomization randomization;
 
   /// Canonical JSON: every default filled in, per-test values resolved, keys sorted, no

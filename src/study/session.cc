@@ -59,7 +59,7 @@ int GetInt(const json& record, const char* key, std::string_view source, std::si
 }
 
 json StepRecord(const char* type, const Protocol& protocol, const Step& step) {
-  const Test& test = protocol.tests[step.test];
+  const StudyTest& test = protocol.tests[step.test];
   const Condition& condition = ConditionOf(protocol, step);
   json r = json::object();
   r["type"] = type;
@@ -74,9 +74,9 @@ json StepRecord(const char* type, const Protocol& protocol, const Step& step) {
 }
 
 std::string TestIntro(const Protocol& protocol, const Step& step) {
-  const Test& test = protocol.tests[step.test];
+  const StudyTest& test = protocol.tests[step.test];
   std::ostringstream out;
-  out << "\n== Test " << step.test_position + 1 << " of " << protocol.tests.size() << ": "
+  out << "\n== StudyTest " << step.test_position + 1 << " of " << protocol.tests.size() << ": "
       << test.name << " ==\n";
   for (int c = 0; c < 2; ++c) {
     out << "  key " << test.keys[c] << " = " << protocol.conditions[test.conditions[c]].label
@@ -97,7 +97,8 @@ void TerminalResponder::Show(std::string_view text) {
   out_.flush();
 }
 
-std::optional<int> ParseAnswer(const Protocol& protocol, const Test& test, std::string_view text) {
+std::optional<int> ParseAnswer(const Protocol& protocol, const StudyTest& test,
+                               std::string_view text) {
   const std::string answer = Lower(Trim(text));
   if (answer.empty()) return std::nullopt;
   for (int c = 0; c < 2; ++c) {
@@ -110,7 +111,7 @@ std::optional<int> ParseAnswer(const Protocol& protocol, const Test& test, std::
 }
 
 std::optional<int> TerminalResponder::Ask(const Protocol& protocol, const Step& step) {
-  const Test& test = protocol.tests[step.test];
+  const StudyTest& test = protocol.tests[step.test];
   const std::string& label0 = protocol.conditions[test.conditions[0]].label;
   const std::string& label1 = protocol.conditions[test.conditions[1]].label;
   for (;;) {
@@ -318,7 +319,7 @@ SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,
   int shown_test = -1;
   for (int k = state.next_step; k < steps; ++k) {
     const Step& step = state.plan[k];
-    const Test& test = protocol.tests[step.test];
+    const StudyTest& test = protocol.tests[step.test];
     const Condition& condition = ConditionOf(protocol, step);
     if (step.test_position != shown_test) {
       responder.Show(TestIntro(protocol, step));

@@ -50,7 +50,8 @@ class TerminalResponder : public Responder {
 };
 
 /// Interprets one typed answer for `test`: 0 or 1, or nothing if it is neither a key nor a label.
-std::optional<int> ParseAnswer(const Protocol& protocol, const Test& test, std::string_view text);
+std::optional<int> ParseAnswer(const Protocol& protocol, const StudyTest& test,
+                               std::string_view text);
 
 /// Who runs a session and how.
 struct SessionConfig {

@@ -78,13 +78,15 @@ std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSo
     throw Error("sample taps: " + std::to_string(sample_taps) + "; valid: >= 1");
   }
   std::vector<TestPrediction> predictions;
-  for (const Test& test : protocol.tests) {
+  for (const StudyTest& test : protocol.tests) {
     std::array<PerceptVector, 2> means;
     for (int c = 0; c < 2; ++c) {
-      // one stream per condition: a wall gets the same sampled taps in every test
-      const auto index = static_cast<std::uint64_t>(test.conditions[c]);
-      means[c] = MeanPerceptVector(observer, source, protocol.conditions[test.conditions[c]],
-                                   sample_taps, DeriveSeed(seed, {kPredictionStream, index}));
+      // the stream depends on the configuration only: equal configurations get the same taps,
+      // so two labels for one wall are predicted at exactly chance
+      const Condition& condition = protocol.conditions[test.conditions[c]];
+      const std::uint64_t config_hash = Fnv1a64(condition.ToJson().dump());
+      means[c] = MeanPerceptVector(observer, source, condition, sample_taps,
+                                   DeriveSeed(seed, {kPredictionStream, config_hash}));
     }
     TestPrediction p;
     p.name = test.name;

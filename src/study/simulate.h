@@ -63,7 +63,8 @@ struct TestPrediction {
 };
 
 /// Predicts every test of `protocol`: mean percepts from `sample_taps` taps per condition (seeds
-/// derived from `seed`), then PredictPercentCorrect.
+/// derived from `seed` and the condition's configuration, so equal configurations share taps),
+/// then PredictPercentCorrect.
 std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
                                             const ObserverParams& observer, std::uint64_t seed,
                                             int sample_taps);
