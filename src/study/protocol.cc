@@ -184,6 +184,7 @@ Condition ParseCondition(const Context& ctx, const std::string& label, const jso
              "a condition label must be non-empty, without control characters or "
              "leading/trailing spaces");
   }
+  if (Lower(label) == "quit") ctx.Fail(path, "\"quit\" is reserved for stopping a session");
   if (!value.is_object()) {
     ctx.Fail(path, "expected a renderer configuration (a JSON object), got " + TypeName(value));
   }

@@ -157,7 +157,9 @@ std::string UtcNow() {
   return buffer;
 }
 
-SessionState InspectSession(const Protocol& protocol, const SessionConfig& config,
+namespace {
+
+SessionState InspectRecords(const Protocol& protocol, const SessionConfig& config,
                             const std::vector<nlohmann::json>& records, std::string_view source) {
   const std::string src(source);
   if (records.empty() || records[0].value("type", "") != "session_start") {
@@ -246,6 +248,18 @@ SessionState InspectSession(const Protocol& protocol, const SessionConfig& confi
                 " is missing but later steps are done)");
   }
   return state;
+}
+
+}  // namespace
+
+SessionState InspectSession(const Protocol& protocol, const SessionConfig& config,
+                            const std::vector<nlohmann::json>& records, std::string_view source) {
+  try {
+    return InspectRecords(protocol, config, records, source);
+  } catch (const json::exception& e) {
+    // a field of the wrong type: the log was edited or written by something else
+    throw Error(std::string(source) + ": malformed record (" + e.what() + ")");
+  }
 }
 
 SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,

@@ -167,6 +167,11 @@ TEST(AnalysisTest, RefusesMixedProtocolsAndDuplicateParticipants) {
   LogInput doubled = MakeLog(p, "P01", {Series(2, 2)});
   doubled.records.push_back(doubled.records[1]);
   EXPECT_THROW(AnalyzeLogs({doubled}), Error);
+  LogInput wrong_type = MakeLog(p, "P01", {Series(2, 2)});
+  wrong_type.records[1]["test"] = "first";
+  EXPECT_THROW(AnalyzeLogs({wrong_type}), Error);
+  wrong_type.records[0]["protocol_hash"] = 5;
+  EXPECT_THROW(AnalyzeLogs({wrong_type}), Error);
   EXPECT_THROW(AnalyzeLogs({}), Error);
 }
 

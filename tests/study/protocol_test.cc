@@ -233,6 +233,11 @@ TEST(ProtocolTest, MalformedStructureNamesTheField) {
   }
   {
     json d = Minimal();
+    d["conditions"]["Quit"] = {{"renderer", "penalty"}};
+    EXPECT_NE(ErrorOf(d).find("reserved"), std::string::npos) << ErrorOf(d);
+  }
+  {
+    json d = Minimal();
     d["conditions"]["b"].erase("frequency_hz");
     EXPECT_NE(ErrorOf(d).find("missing required field \"frequency_hz\""), std::string::npos);
   }

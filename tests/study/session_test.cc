@@ -262,6 +262,10 @@ TEST(SessionTest, RefusesLogsThatContradictThePlan) {
   doubled.push_back(OfType(sink.records, "answer").front());
   EXPECT_NE(RefusalOf(p, resume, doubled).find("two answers for step"), std::string::npos);
 
+  std::vector<json> wrong_type = sink.records;
+  wrong_type[0]["participant"] = 7;
+  EXPECT_NE(RefusalOf(p, resume, wrong_type).find("malformed record"), std::string::npos);
+
   std::vector<json> gap = sink.records;
   std::erase_if(gap,
                 [](const json& r) { return r["type"] == "familiarization" && r["step"] == 0; });
