@@ -1,0 +1,323 @@
+// `rigidtouch study run|simulate|analyze|predict`: perception-study sessions for people, virtual
+// cohorts of simulated participants, analysis of logs, and the observer model's predictions.
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "rigidtouch/command.h"
+#include "rigidtouch/types.h"
+#include "study/analysis.h"
+#include "study/log.h"
+#include "study/observer.h"
+#include "study/protocol.h"
+#include "study/session.h"
+#include "study/simulate.h"
+#include "study/stimulus.h"
+
+#ifndef RIGIDTOUCH_VERSION
+#define RIGIDTOUCH_VERSION "unknown"
+#endif
+
+namespace rigidtouch::study {
+
+// Placeholders until the engine integration defines these factories (declared in
+// src/study/stimulus.h). They are weak: a definition in any object file linked into the
+// executable replaces them. A definition inside a static library is only picked up if that
+// library member is linked for another reason, so delete these placeholders when the real
+// factories exist.
+[[gnu::weak]] std::unique_ptr<StimulusSource> MakeTapStimulusSource(
+    const TapSourceOptions& /*options*/) {
+  throw Error(
+      "the engine's tap stimulus source is not wired into this build yet "
+      "(rigidtouch::study::MakeTapStimulusSource); study simulate and study predict need it");
+}
+
+[[gnu::weak]] std::unique_ptr<WallPresenter> MakeDeviceWallPresenter(
+    const PresenterOptions& /*options*/) {
+  throw Error(
+      "the device wall presenter is not wired into this build yet "
+      "(rigidtouch::study::MakeDeviceWallPresenter); use --presenter text for a dry run");
+}
+
+}  // namespace rigidtouch::study
+
+namespace rigidtouch::cli {
+
+namespace {
+
+using nlohmann::json;
+namespace st = rigidtouch::study;
+
+constexpr char kSoftwareVersion[] = RIGIDTOUCH_VERSION;
+
+struct RunOptions {
+  std::string protocol;
+  std::string participant;
+  std::string log;
+  bool resume = false;
+  std::uint64_t seed = 0;
+  CLI::Option* seed_option = nullptr;
+  std::string presenter = "device";
+  std::string scene;
+  std::string device;
+  bool json = false;
+};
+
+struct SimulateOptions {
+  std::string protocol;
+  int participants = 0;
+  std::uint64_t seed = 0;
+  std::string log_dir;
+  bool resume = false;
+  std::string observer;
+  std::string scene;
+  std::string device;
+  bool json = false;
+};
+
+struct AnalyzeOptions {
+  std::vector<std::string> logs;
+  bool json = false;
+};
+
+struct PredictOptions {
+  std::string protocol;
+  std::string observer;
+  std::uint64_t seed = 1;
+  int taps = 20;
+  std::string scene;
+  std::string device;
+  bool json = false;
+};
+
+std::string StatusName(st::SessionStatus status) {
+  switch (status) {
+    case st::SessionStatus::kComplete:
+      return "complete";
+    case st::SessionStatus::kAlreadyComplete:
+      return "already_complete";
+    case st::SessionStatus::kStopped:
+      return "stopped";
+  }
+  return "unknown";
+}
+
+st::ObserverParams LoadObserver(const std::string& path) {
+  if (path.empty()) return {};
+  std::ifstream file(path);
+  if (!file) throw Error(path + ": cannot open the observer parameter file");
+  json document;
+  try {
+    document = json::parse(file);
+  } catch (const json::parse_error& e) {
+    throw Error(path + ": not valid JSON (" + e.what() + ")");
+  }
+  return st::ParseObserverParams(document, path);
+}
+
+void Run(const RunOptions& o) {
+  const st::Protocol protocol = st::LoadProtocol(o.protocol);
+  // with --json, stdout carries only the final JSON object
+  std::ostream& screen = o.json ? std::cerr : std::cout;
+  std::unique_ptr<st::WallPresenter> presenter;
+  if (o.presenter == "text") {
+    presenter = std::make_unique<st::TextPresenter>(screen);
+    screen << "Dry run with the text presenter: it names the rendered wall, so do not use it with "
+              "a participant.\n";
+  } else {
+    presenter = st::MakeDeviceWallPresenter(st::PresenterOptions{o.scene, o.device});
+  }
+  st::SessionConfig config;
+  config.participant = o.participant;
+  if (o.seed_option != nullptr && o.seed_option->count() > 0) config.seed = o.seed;
+  config.resume = o.resume;
+  config.software_version = kSoftwareVersion;
+  config.mode = "person";
+  config.start_extra["presenter"] = presenter->Describe();
+  st::TerminalResponder responder(std::cin, screen);
+  const st::SessionOutcome outcome =
+      st::RunLoggedSession(protocol, config, o.log, *presenter, responder);
+  if (o.json) {
+    json j = {{"status", StatusName(outcome.status)},
+              {"participant", o.participant},
+              {"seed", outcome.seed},
+              {"resumed", outcome.resumed},
+              {"answers_before", outcome.answers_before},
+              {"answers_recorded", outcome.answers_recorded},
+              {"answers_total", outcome.answers_total},
+              {"next_step", outcome.next_step},
+              {"torn_tail_bytes_dropped", outcome.torn_tail_bytes}};
+    std::cout << j.dump() << "\n";
+  } else if (outcome.torn_tail_bytes > 0) {
+    std::cout << "(a torn last line of " << outcome.torn_tail_bytes
+              << " bytes from an interrupted write was removed from the log)\n";
+  }
+}
+
+void Simulate(const SimulateOptions& o) {
+  const st::Protocol protocol = st::LoadProtocol(o.protocol);
+  st::CohortConfig config;
+  config.participants = o.participants;
+  config.seed = o.seed;
+  config.resume = o.resume;
+  config.observer = LoadObserver(o.observer);
+  config.software_version = kSoftwareVersion;
+  if (!o.log_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(o.log_dir, error);
+    if (error)
+      throw Error(o.log_dir + ": cannot create the log directory (" + error.message() + ")");
+    config.log_dir = o.log_dir;
+  }
+  st::TapSourceOptions source_options;
+  source_options.scene = o.scene;
+  source_options.device = o.device;
+  const std::unique_ptr<st::StimulusSource> source = st::MakeTapStimulusSource(source_options);
+  const std::vector<st::ParticipantRun> runs = st::SimulateCohort(protocol, *source, config);
+  std::vector<st::LogInput> logs;
+  for (const auto& run : runs) {
+    logs.push_back({run.log_path.empty() ? run.id : run.log_path, run.records});
+  }
+  const st::StudyReport report = st::AnalyzeLogs(logs);
+  if (o.json) {
+    json j = st::ReportToJson(report);
+    j["simulation"] = {{"participants", o.participants},
+                       {"seed", o.seed},
+                       {"observer", config.observer.ToJson()},
+                       {"stimulus_source", source->Describe()},
+                       {"logs_written", !config.log_dir.empty()}};
+    std::cout << j.dump() << "\n";
+  } else {
+    std::cout << "Simulated " << o.participants << " participant(s) with seed " << o.seed << " ("
+              << source->Describe() << ")\n"
+              << st::ReportToText(report);
+  }
+}
+
+void Analyze(const AnalyzeOptions& o) {
+  std::vector<st::LogInput> logs;
+  for (const std::string& path : o.logs) {
+    st::LogContents contents = st::ReadLog(path);  // read-only: a torn tail is ignored
+    if (contents.records.empty()) throw Error(path + ": no such log or empty log");
+    logs.push_back({path, std::move(contents.records)});
+  }
+  const st::StudyReport report = st::AnalyzeLogs(logs);
+  if (o.json) {
+    std::cout << st::ReportToJson(report).dump() << "\n";
+  } else {
+    std::cout << st::ReportToText(report);
+  }
+}
+
+void Predict(const PredictOptions& o) {
+  const st::Protocol protocol = st::LoadProtocol(o.protocol);
+  const st::ObserverParams observer = LoadObserver(o.observer);
+  st::TapSourceOptions source_options;
+  source_options.scene = o.scene;
+  source_options.device = o.device;
+  const std::unique_ptr<st::StimulusSource> source = st::MakeTapStimulusSource(source_options);
+  const auto predictions = st::PredictProtocol(protocol, *source, observer, o.seed, o.taps);
+  if (o.json) {
+    json tests = json::array();
+    for (const auto& p : predictions) {
+      tests.push_back({{"name", p.name},
+                       {"distance_jnd", p.distance_jnd},
+                       {"predicted_percent_correct", p.percent_correct}});
+    }
+    std::cout << json{{"tests", tests},
+                      {"observer", observer.ToJson()},
+                      {"stimulus_source", source->Describe()},
+                      {"sample_taps", o.taps},
+                      {"seed", o.seed}}
+                     .dump()
+              << "\n";
+  } else {
+    std::cout << "Nominal observer, " << o.taps << " sampled taps per wall (" << source->Describe()
+              << ")\n";
+    for (const auto& p : predictions) {
+      std::cout << "  " << p.name << ": walls " << p.distance_jnd << " JND apart, predicted "
+                << p.percent_correct << "% correct\n";
+    }
+  }
+}
+
+void AddStudyCommand(CLI::App& root) {
+  CLI::App* study = root.add_subcommand(
+      "study", "Perception studies: run sessions, simulate cohorts, analyse logs");
+  study->require_subcommand(1);
+
+  auto run_options = std::make_shared<RunOptions>();
+  CLI::App* run = study->add_subcommand(
+      "run",
+      "Run (or resume) one participant's session at the terminal; answers are read one "
+      "per line from stdin, end of input stops cleanly");
+  run->add_option("--protocol", run_options->protocol, "Protocol JSON file")->required();
+  run->add_option("--participant", run_options->participant, "Participant ID ([A-Za-z0-9._-])")
+      ->required();
+  run->add_option("--log", run_options->log, "Session log (JSON lines), created if missing")
+      ->required();
+  run->add_flag("--resume", run_options->resume, "Continue the session recorded in --log");
+  run_options->seed_option =
+      run->add_option("--seed", run_options->seed,
+                      "Session seed (default: the protocol's, else random; recorded in the log)");
+  run->add_option("--presenter", run_options->presenter,
+                  "device: render on the device; text: dry run that prints the wall")
+      ->check(CLI::IsMember({"device", "text"}))
+      ->capture_default_str();
+  run->add_option("--scene", run_options->scene, "Scene for the device presenter");
+  run->add_option("--device", run_options->device, "Device preset or address");
+  run->add_flag("--json", run_options->json,
+                "Prompts on stderr, one JSON summary object on stdout");
+  run->callback([run_options] { Run(*run_options); });
+
+  auto sim_options = std::make_shared<SimulateOptions>();
+  CLI::App* simulate = study->add_subcommand(
+      "simulate", "Run a virtual cohort of simulated participants and analyse it");
+  simulate->add_option("--protocol", sim_options->protocol, "Protocol JSON file")->required();
+  simulate->add_option("--participants", sim_options->participants, "Cohort size")
+      ->required()
+      ->check(CLI::Range(1, 1000000));
+  simulate->add_option("--seed", sim_options->seed, "Cohort seed")->required();
+  simulate->add_option("--log-dir", sim_options->log_dir,
+                       "Write one log per participant here (created if missing)");
+  simulate->add_flag("--resume", sim_options->resume, "Continue the logs in --log-dir");
+  simulate->add_option("--observer", sim_options->observer,
+                       "JSON file overriding observer parameters (docs/study.md)");
+  simulate->add_option("--scene", sim_options->scene, "Scene for the tap experiment");
+  simulate->add_option("--device", sim_options->device, "Device preset for the tap experiment");
+  simulate->add_flag("--json", sim_options->json, "Print one JSON object");
+  simulate->callback([sim_options] { Simulate(*sim_options); });
+
+  auto analyze_options = std::make_shared<AnalyzeOptions>();
+  CLI::App* analyze = study->add_subcommand("analyze", "Analyse session logs of one protocol");
+  analyze->add_option("logs", analyze_options->logs, "Session logs")->required();
+  analyze->add_flag("--json", analyze_options->json, "Print one JSON object");
+  analyze->callback([analyze_options] { Analyze(*analyze_options); });
+
+  auto predict_options = std::make_shared<PredictOptions>();
+  CLI::App* predict = study->add_subcommand(
+      "predict", "Predicted percent correct of the nominal observer for each test");
+  predict->add_option("--protocol", predict_options->protocol, "Protocol JSON file")->required();
+  predict->add_option("--observer", predict_options->observer, "Observer parameter JSON file");
+  predict->add_option("--seed", predict_options->seed, "Seed of the sampled taps")
+      ->capture_default_str();
+  predict->add_option("--taps", predict_options->taps, "Sampled taps per wall")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  predict->add_option("--scene", predict_options->scene, "Scene for the tap experiment");
+  predict->add_option("--device", predict_options->device, "Device preset");
+  predict->add_flag("--json", predict_options->json, "Print one JSON object");
+  predict->callback([predict_options] { Predict(*predict_options); });
+}
+
+const CommandRegistrar registrar(&AddStudyCommand);
+
+}  // namespace
+
+}  // namespace rigidtouch::cli

@@ -1,0 +1,373 @@
+#include "study/observer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+
+#include "rigidtouch/types.h"
+#include "study/random.h"
+#include "study/statistics.h"
+
+namespace rigidtouch::study {
+
+namespace {
+
+using nlohmann::json;
+
+// stream tags: every random decision of a participant has its own derived seed
+enum Stream : std::uint64_t {
+  kFamiliarizationTaps = 11,
+  kFamiliarizationNoise = 12,
+  kEncoding = 13,
+  kDrift = 14,
+  kSeriesTaps = 15,
+  kSeriesNoise = 16,
+  kLapse = 17,
+  kSwap = 18,
+  kIndividual = 19,
+};
+
+struct ParamSpec {
+  const char* name;
+  double ObserverParams::*member;
+  double lo;
+  bool lo_open;  // lo excluded
+  double hi;
+};
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+const ParamSpec kParamSpecs[] = {
+    {"intensity_jnd_dB", &ObserverParams::intensity_jnd_dB, 0.0, true, kInf},
+    {"frequency_weber_fraction", &ObserverParams::frequency_weber_fraction, 0.0, true, kInf},
+    {"pacinian_best_frequency_hz", &ObserverParams::pacinian_best_frequency_hz, 0.0, true, kInf},
+    {"pacinian_low_slope_dB_per_octave", &ObserverParams::pacinian_low_slope_dB_per_octave, 0.0,
+     false, kInf},
+    {"pacinian_high_slope_dB_per_octave", &ObserverParams::pacinian_high_slope_dB_per_octave, 0.0,
+     false, kInf},
+    {"non_pacinian_corner_hz", &ObserverParams::non_pacinian_corner_hz, 0.0, true, kInf},
+    {"non_pacinian_high_slope_dB_per_octave",
+     &ObserverParams::non_pacinian_high_slope_dB_per_octave, 0.0, false, kInf},
+    {"vibration_threshold_rms_N", &ObserverParams::vibration_threshold_rms_N, 0.0, true, kInf},
+    {"pitch_salience_dB", &ObserverParams::pitch_salience_dB, 0.0, true, kInf},
+    {"onset_floor_N", &ObserverParams::onset_floor_N, 0.0, true, kInf},
+    {"memory_encoding_sd_jnd", &ObserverParams::memory_encoding_sd_jnd, 0.0, false, kInf},
+    {"memory_drift_sd_jnd_per_series", &ObserverParams::memory_drift_sd_jnd_per_series, 0.0, false,
+     kInf},
+    {"label_swap_probability", &ObserverParams::label_swap_probability, 0.0, false, 1.0},
+    {"lapse_rate", &ObserverParams::lapse_rate, 0.0, false, 1.0},
+    {"individual_jnd_log_sd", &ObserverParams::individual_jnd_log_sd, 0.0, false, kInf},
+};
+
+std::string FormatNumber(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", value);
+  return buffer;
+}
+
+std::string RangeText(const ParamSpec& spec) {
+  std::string text = spec.lo_open ? "> " : ">= ";
+  text += FormatNumber(spec.lo);
+  if (std::isfinite(spec.hi)) text += " and <= " + FormatNumber(spec.hi);
+  return text;
+}
+
+void Require(bool ok, const std::string& message) {
+  if (!ok) throw Error(message);
+}
+
+// Simpson weights for n (even) intervals of width h
+std::vector<double> SimpsonWeights(int n, double h) {
+  std::vector<double> w(n + 1);
+  for (int i = 0; i <= n; ++i) w[i] = (i == 0 || i == n) ? 1.0 : (i % 2 == 1 ? 4.0 : 2.0);
+  for (double& x : w) x *= h / 3.0;
+  return w;
+}
+
+}  // namespace
+
+nlohmann::json ObserverParams::ToJson() const {
+  json j = json::object();
+  for (const ParamSpec& spec : kParamSpecs) j[spec.name] = this->*spec.member;
+  return j;
+}
+
+ObserverParams ParseObserverParams(const nlohmann::json& document, std::string_view source) {
+  const std::string src(source);
+  if (!document.is_object()) throw Error(src + ": expected a JSON object of observer parameters");
+  ObserverParams params;
+  std::string valid;
+  for (const ParamSpec& spec : kParamSpecs)
+    valid += (valid.empty() ? "" : ", ") + std::string(spec.name);
+  for (const auto& [key, value] : document.items()) {
+    const ParamSpec* spec = nullptr;
+    for (const ParamSpec& s : kParamSpecs) {
+      if (key == s.name) spec = &s;
+    }
+    if (spec == nullptr) {
+      throw Error(src + ": unknown observer parameter \"" + key + "\"; valid parameters: " + valid);
+    }
+    if (!value.is_number()) throw Error(src + ": " + key + ": expected a number");
+    const double v = value.get<double>();
+    const bool in_range =
+        std::isfinite(v) && (spec->lo_open ? v > spec->lo : v >= spec->lo) && v <= spec->hi;
+    if (!in_range) {
+      throw Error(src + ": " + key + ": " + FormatNumber(v) +
+                  " is out of range; valid: " + RangeText(*spec));
+    }
+    params.*(spec->member) = v;
+  }
+  if (params.non_pacinian_corner_hz >= params.pacinian_best_frequency_hz) {
+    throw Error(src + ": non_pacinian_corner_hz (" + FormatNumber(params.non_pacinian_corner_hz) +
+                ") must be below pacinian_best_frequency_hz (" +
+                FormatNumber(params.pacinian_best_frequency_hz) + ")");
+  }
+  return params;
+}
+
+double PacinianGain_dB(const ObserverParams& p, double frequency_hz) {
+  const double octaves = std::log2(frequency_hz / p.pacinian_best_frequency_hz);
+  return octaves < 0.0 ? p.pacinian_low_slope_dB_per_octave * octaves
+                       : -p.pacinian_high_slope_dB_per_octave * octaves;
+}
+
+double NonPacinianGain_dB(const ObserverParams& p, double frequency_hz) {
+  // flat below the corner, where it equals the P channel (the channels cross there)
+  const double level_dB = PacinianGain_dB(p, p.non_pacinian_corner_hz);
+  if (frequency_hz <= p.non_pacinian_corner_hz) return level_dB;
+  return level_dB - p.non_pacinian_high_slope_dB_per_octave *
+                        std::log2(frequency_hz / p.non_pacinian_corner_hz);
+}
+
+std::array<double, kPerceptBands> PerceptBandCentres_hz() {
+  // band limits 10 Hz (bottom of NP I) and 800 Hz (top of the P channel's range)
+  return {std::sqrt(10.0 * 40.0), std::sqrt(40.0 * 100.0), std::sqrt(100.0 * 400.0),
+          std::sqrt(400.0 * 800.0)};
+}
+
+PerceptVector ToPerceptVector(const ObserverParams& p, const TapPercept& percept) {
+  auto ok = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  Require(
+      ok(percept.peak_force_N) && ok(percept.vibration_rms_N) && ok(percept.dominant_frequency_hz),
+      "stimulus source returned a tap percept with a negative or non-finite force or "
+      "frequency");
+  double fraction_sum = 0.0;
+  for (double f : percept.band_energy_fraction) {
+    Require(ok(f), "stimulus source returned a negative or non-finite band energy fraction");
+    fraction_sum += f;
+  }
+
+  PerceptVector v{};
+  const double onset_N = std::max(percept.peak_force_N, p.onset_floor_N);
+  v[0] = 20.0 * std::log10(onset_N) / p.intensity_jnd_dB;
+
+  double sl_p_dB = 0.0;
+  double sl_np_dB = 0.0;
+  if (percept.vibration_rms_N > 0.0 && fraction_sum > 0.0) {
+    const auto centres = PerceptBandCentres_hz();
+    double gain_p = 0.0;
+    double gain_np = 0.0;
+    for (int b = 0; b < kPerceptBands; ++b) {
+      const double share = percept.band_energy_fraction[b] / fraction_sum;
+      gain_p += share * std::pow(10.0, PacinianGain_dB(p, centres[b]) / 10.0);
+      gain_np += share * std::pow(10.0, NonPacinianGain_dB(p, centres[b]) / 10.0);
+    }
+    const double level_dB =
+        20.0 * std::log10(percept.vibration_rms_N / p.vibration_threshold_rms_N);
+    // below threshold a channel reads 0 dB SL whatever the stimulus
+    sl_p_dB = std::max(0.0, level_dB + 10.0 * std::log10(gain_p));
+    sl_np_dB = std::max(0.0, level_dB + 10.0 * std::log10(gain_np));
+  }
+  v[1] = sl_p_dB / p.intensity_jnd_dB;
+  v[2] = sl_np_dB / p.intensity_jnd_dB;
+
+  if (percept.dominant_frequency_hz > 0.0) {
+    const double salience = std::clamp(std::max(sl_p_dB, sl_np_dB) / p.pitch_salience_dB, 0.0, 1.0);
+    v[3] = salience * std::log(percept.dominant_frequency_hz / p.pacinian_best_frequency_hz) /
+           std::log1p(p.frequency_weber_fraction);
+  }
+  return v;
+}
+
+double PerceptDistance(const PerceptVector& a, const PerceptVector& b) {
+  double s = 0.0;
+  for (int i = 0; i < kPerceptDimensions; ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
+  return std::sqrt(s);
+}
+
+double NearestTemplateProbabilityCorrect(double distance, double series_variance,
+                                         double template_variance, int dimensions) {
+  if (!(distance > 0.0)) return 0.5;  // identical walls: symmetric, exactly chance
+  const double beta = std::sqrt(4.0 * series_variance + 2.0 * template_variance);
+  const double alpha = std::sqrt(2.0 * template_variance);
+  const double c = beta > 0.0 ? distance / beta : kInf;
+  if (alpha == 0.0) return NormalCdf(c);
+  const double t = distance / alpha;
+  if (dimensions <= 1) return NormalCdf(c) * NormalCdf(t) + NormalCdf(-c) * NormalCdf(-t);
+
+  // u = P1 / alpha ~ N(t, 1) along the difference, r = |P_perp| / alpha ~ chi(k), k = dims - 1
+  const int k = dimensions - 1;
+  // 200 x 100 Simpson intervals: within 1e-7 of a 1200 x 600 grid over the range of use
+  constexpr int kU = 200;
+  constexpr int kR = 100;
+  constexpr double kSpan = 9.0;
+  const double hu = 2.0 * kSpan / kU;
+  const double r_max = std::sqrt(static_cast<double>(k)) + kSpan;
+  const double hr = r_max / kR;
+  const std::vector<double> wu = SimpsonWeights(kU, hu);
+  const std::vector<double> wr = SimpsonWeights(kR, hr);
+  const double log_norm = (k / 2.0 - 1.0) * std::log(2.0) + std::lgamma(k / 2.0);
+  std::vector<double> r_weight(kR + 1);
+  std::vector<double> r_value(kR + 1);
+  for (int j = 0; j <= kR; ++j) {
+    const double r = j * hr;
+    r_value[j] = r;
+    const double density = r > 0.0 ? std::exp((k - 1) * std::log(r) - 0.5 * r * r - log_norm)
+                                   : (k == 1 ? 1.0 / std::exp(log_norm) : 0.0);
+    r_weight[j] = wr[j] * density;
+  }
+  double total = 0.0;
+  double weight_sum = 0.0;
+  for (int i = 0; i <= kU; ++i) {
+    const double z = -kSpan + i * hu;
+    const double u = t + z;
+    const double wz = wu[i] * std::exp(-0.5 * z * z) / std::sqrt(2.0 * std::numbers::pi);
+    double inner = 0.0;
+    double inner_weight = 0.0;
+    for (int j = 0; j <= kR; ++j) {
+      const double norm = std::hypot(u, r_value[j]);
+      const double cosine = norm > 0.0 ? u / norm : 0.0;
+      inner += r_weight[j] * NormalCdf(c * cosine);
+      inner_weight += r_weight[j];
+    }
+    total += wz * inner;
+    weight_sum += wz * inner_weight;
+  }
+  // normalising by the quadrature's own mass keeps the result a true average of values in [0, 1]
+  return total / weight_sum;
+}
+
+double PredictPercentCorrect(const ObserverParams& params, const StudyTest& test,
+                             const PerceptVector& a, const PerceptVector& b) {
+  const double distance = PerceptDistance(a, b);
+  const double series_variance = 1.0 / test.taps_per_series;
+  const double q = params.label_swap_probability;
+  const double lapse = params.lapse_rate;
+  double sum = 0.0;
+  for (int s = 0; s < test.series; ++s) {
+    const double template_variance =
+        1.0 / test.familiarization_taps +
+        params.memory_encoding_sd_jnd * params.memory_encoding_sd_jnd +
+        (s + 1) * params.memory_drift_sd_jnd_per_series * params.memory_drift_sd_jnd_per_series;
+    const double pc = NearestTemplateProbabilityCorrect(distance, series_variance,
+                                                        template_variance, kPerceptDimensions);
+    sum += 0.5 * lapse + (1.0 - lapse) * (q * (1.0 - pc) + (1.0 - q) * pc);
+  }
+  return 100.0 * sum / test.series;
+}
+
+PerceptVector MeanPerceptVector(const ObserverParams& params, StimulusSource& source,
+                                const Condition& condition, int taps, std::uint64_t seed) {
+  PerceptVector mean{};
+  for (int j = 0; j < taps; ++j) {
+    const PerceptVector v = ToPerceptVector(
+        params, source.RenderTap(condition, DeriveSeed(seed, {static_cast<std::uint64_t>(j)})));
+    for (int i = 0; i < kPerceptDimensions; ++i) mean[i] += v[i] / taps;
+  }
+  return mean;
+}
+
+SimulatedParticipant::SimulatedParticipant(const Protocol& protocol, const ObserverParams& params,
+                                           StimulusSource& source, std::uint64_t seed)
+    : protocol_(protocol), params_(params), source_(source), seed_(seed) {
+  Rng rng(DeriveSeed(seed_, {kIndividual}));
+  jnd_factor_ = std::exp(params_.individual_jnd_log_sd * rng.Normal());
+}
+
+void SimulatedParticipant::Present(const Condition& /*condition*/, int /*taps*/) {
+  // the simulated hand taps when the observer is asked (or builds its memory); nothing to render
+}
+
+std::string SimulatedParticipant::Describe() const {
+  return "simulated participant: " + source_.Describe();
+}
+
+void SimulatedParticipant::Show(std::string_view /*text*/) {}
+
+std::optional<int> SimulatedParticipant::Ask(const Protocol& /*protocol*/, const Step& step) {
+  return Decide(step);
+}
+
+bool SimulatedParticipant::labels_swapped(int test) const {
+  Rng rng(DeriveSeed(seed_, {kSwap, static_cast<std::uint64_t>(test)}));
+  return rng.Bernoulli(params_.label_swap_probability);
+}
+
+PerceptVector SimulatedParticipant::FeltMean(const Condition& condition, int taps,
+                                             std::uint64_t tap_stream, std::uint64_t noise_stream) {
+  PerceptVector mean{};
+  for (int j = 0; j < taps; ++j) {
+    const auto jj = static_cast<std::uint64_t>(j);
+    const TapPercept percept = source_.RenderTap(condition, DeriveSeed(tap_stream, {jj}));
+    const PerceptVector v = ToPerceptVector(params_, percept);
+    Rng noise(DeriveSeed(noise_stream, {jj}));
+    // a participant with a larger JND has the same noise on a compressed scale
+    for (int i = 0; i < kPerceptDimensions; ++i) {
+      mean[i] += (v[i] / jnd_factor_ + noise.Normal()) / taps;
+    }
+  }
+  return mean;
+}
+
+const SimulatedParticipant::Memory& SimulatedParticipant::MemoryOf(int test) {
+  auto found = memories_.find(test);
+  if (found != memories_.end()) return found->second;
+  const StudyTest& t = protocol_.tests[test];
+  const auto tt = static_cast<std::uint64_t>(test);
+  Memory memory;
+  for (int c = 0; c < 2; ++c) {
+    const auto cc = static_cast<std::uint64_t>(c);
+    const Condition& condition = protocol_.conditions[t.conditions[c]];
+    memory.templates[c] = FeltMean(condition, t.familiarization_taps,
+                                   DeriveSeed(seed_, {kFamiliarizationTaps, tt, cc}),
+                                   DeriveSeed(seed_, {kFamiliarizationNoise, tt, cc}));
+    Rng encoding(DeriveSeed(seed_, {kEncoding, tt, cc}));
+    for (double& x : memory.templates[c]) x += params_.memory_encoding_sd_jnd * encoding.Normal();
+  }
+  memory.drift.resize(t.series);
+  for (int c = 0; c < 2; ++c) {
+    Rng drift(DeriveSeed(seed_, {kDrift, tt, static_cast<std::uint64_t>(c)}));
+    PerceptVector walk{};
+    for (int s = 0; s < t.series; ++s) {
+      for (double& x : walk) x += params_.memory_drift_sd_jnd_per_series * drift.Normal();
+      memory.drift[s][c] = walk;
+    }
+  }
+  return memories_.emplace(test, std::move(memory)).first->second;
+}
+
+int SimulatedParticipant::Decide(const Step& step) {
+  const StudyTest& t = protocol_.tests[step.test];
+  const auto tt = static_cast<std::uint64_t>(step.test);
+  const auto ss = static_cast<std::uint64_t>(step.series);
+  const Condition& condition = protocol_.conditions[t.conditions[step.condition]];
+  const PerceptVector felt =
+      FeltMean(condition, step.taps, DeriveSeed(seed_, {kSeriesTaps, tt, ss}),
+               DeriveSeed(seed_, {kSeriesNoise, tt, ss}));
+  Rng lapse(DeriveSeed(seed_, {kLapse, tt, ss}));
+  if (lapse.Bernoulli(params_.lapse_rate)) return static_cast<int>(lapse.Below(2));
+
+  const Memory& memory = MemoryOf(step.test);
+  std::array<double, 2> distance{};
+  for (int c = 0; c < 2; ++c) {
+    PerceptVector m = memory.templates[c];
+    for (int i = 0; i < kPerceptDimensions; ++i) m[i] += memory.drift[step.series][c][i];
+    distance[c] = PerceptDistance(felt, m);
+  }
+  const int nearer = distance[1] < distance[0] ? 1 : 0;
+  return labels_swapped(step.test) ? 1 - nearer : nearer;
+}
+
+}  // namespace rigidtouch::study

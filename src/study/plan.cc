@@ -1,0 +1,82 @@
+#include "study/plan.h"
+
+#include <numeric>
+#include <utility>
+
+#include "study/random.h"
+
+namespace rigidtouch::study {
+
+namespace {
+
+// stream tags keep the random decisions of a session independent of each other
+constexpr std::uint64_t kTestOrderStream = 1;
+constexpr std::uint64_t kSeriesOrderStream = 2;
+
+template <typename T>
+void Shuffle(std::vector<T>& items, Rng& rng) {
+  // Fisher-Yates, from the back
+  for (std::size_t i = items.size(); i > 1; --i) {
+    const std::size_t j = rng.Below(i);
+    std::swap(items[i - 1], items[j]);
+  }
+}
+
+std::vector<int> SeriesConditions(const StudyTest& test, SeriesOrder order, Rng& rng) {
+  std::vector<int> conditions(test.series);
+  if (order == SeriesOrder::kIndependent) {
+    for (int& c : conditions) c = rng.Bernoulli(0.5) ? 1 : 0;
+    return conditions;
+  }
+  const int half = test.series / 2;
+  int ones = half;
+  if (test.series % 2 == 1 && rng.Bernoulli(0.5)) ++ones;
+  for (int i = 0; i < test.series; ++i) conditions[i] = i < ones ? 1 : 0;
+  Shuffle(conditions, rng);
+  return conditions;
+}
+
+}  // namespace
+
+std::vector<Step> MakePlan(const Protocol& protocol, std::uint64_t seed) {
+  std::vector<int> test_order(protocol.tests.size());
+  std::iota(test_order.begin(), test_order.end(), 0);
+  if (protocol.randomization.test_order == TestOrder::kShuffled) {
+    Rng rng(DeriveSeed(seed, {kTestOrderStream}));
+    Shuffle(test_order, rng);
+  }
+
+  std::vector<Step> plan;
+  for (std::size_t position = 0; position < test_order.size(); ++position) {
+    const int t = test_order[position];
+    const StudyTest& test = protocol.tests[t];
+    for (int c = 0; c < 2; ++c) {
+      Step step;
+      step.kind = StepKind::kFamiliarization;
+      step.index = static_cast<int>(plan.size());
+      step.test = t;
+      step.test_position = static_cast<int>(position);
+      step.condition = c;
+      step.taps = test.familiarization_taps;
+      plan.push_back(step);
+    }
+    // each test's series order has its own stream: reordering tests does not change it
+    Rng rng(DeriveSeed(seed, {kSeriesOrderStream, static_cast<std::uint64_t>(t)}));
+    const std::vector<int> conditions =
+        SeriesConditions(test, protocol.randomization.series_order, rng);
+    for (int s = 0; s < test.series; ++s) {
+      Step step;
+      step.kind = StepKind::kSeries;
+      step.index = static_cast<int>(plan.size());
+      step.test = t;
+      step.test_position = static_cast<int>(position);
+      step.series = s;
+      step.condition = conditions[s];
+      step.taps = test.taps_per_series;
+      plan.push_back(step);
+    }
+  }
+  return plan;
+}
+
+}  // namespace rigidtouch::study

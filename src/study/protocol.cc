@@ -1,0 +1,538 @@
+#include "study/protocol.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::study {
+
+namespace {
+
+using nlohmann::json;
+
+constexpr std::string_view kFormat = "rigidtouch-study-protocol";
+constexpr int kFormatVersion = 1;
+constexpr double kMaxCollisionWindow_s = 0.1;  // METHOD.md II.a: shorter than reaction time
+constexpr int kMaxTaps = 100;
+constexpr int kMaxSeries = 1000;
+constexpr int kMaxTests = 100;
+constexpr std::size_t kMaxKeyLength = 16;
+
+std::string Quote(std::string_view s) {
+  // built with append: GCC 12 reports a false -Wrestrict on "literal" + std::string
+  std::string out;
+  out.reserve(s.size() + 2);
+  out.push_back('"');
+  out.append(s);
+  out.push_back('"');
+  return out;
+}
+
+std::string FormatNumber(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", value);
+  return buffer;
+}
+
+std::string Join(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (i > 0) out += ", ";
+    out += items[i];
+  }
+  return out;
+}
+
+std::string Lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string TypeName(const json& value) {
+  if (value.is_null()) return "null";
+  if (value.is_boolean()) return "a boolean";
+  if (value.is_number()) return "a number";
+  if (value.is_string()) return "a string";
+  if (value.is_array()) return "an array";
+  return "an object";
+}
+
+// every problem is reported as "<source>: <field path>: <what is wrong>"
+class Context {
+ public:
+  explicit Context(std::string_view source) : source_(source) {}
+
+  [[noreturn]] void Fail(const std::string& path, const std::string& message) const {
+    const std::string where = path.empty() ? std::string() : path + ": ";
+    throw Error(source_ + ": " + where + message);
+  }
+
+ private:
+  std::string source_;
+};
+
+// strict reader for one JSON object: unknown keys are errors that list the valid ones
+class ObjectReader {
+ public:
+  ObjectReader(const Context& context, const json& value, std::string path,
+               const std::vector<std::string>& valid_keys, std::string_view what)
+      : context_(context), value_(value), path_(std::move(path)) {
+    if (!value.is_object()) {
+      context_.Fail(path_,
+                    "expected " + std::string(what) + " (a JSON object), got " + TypeName(value));
+    }
+    for (const auto& [key, unused] : value.items()) {
+      if (std::find(valid_keys.begin(), valid_keys.end(), key) == valid_keys.end()) {
+        context_.Fail(path_, "unknown field " + Quote(key) + "; valid fields: " + Join(valid_keys));
+      }
+    }
+  }
+
+  bool Has(const std::string& key) const { return value_.contains(key); }
+  const json& Get(const std::string& key) const { return value_.at(key); }
+  std::string Path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  std::optional<std::string> String(const std::string& key) const {
+    if (!Has(key)) return std::nullopt;
+    const json& v = Get(key);
+    if (!v.is_string()) context_.Fail(Path(key), "expected a string, got " + TypeName(v));
+    return v.get<std::string>();
+  }
+
+  std::string RequiredString(const std::string& key) const {
+    auto s = String(key);
+    if (!s) context_.Fail(path_, "missing required field " + Quote(key));
+    if (s->empty()) context_.Fail(Path(key), "must not be empty");
+    return *s;
+  }
+
+  int Integer(const std::string& key, int fallback, int lo, int hi) const {
+    if (!Has(key)) return fallback;
+    const json& v = Get(key);
+    const std::string range = "valid: integers " + std::to_string(lo) + " to " + std::to_string(hi);
+    if (!v.is_number_integer()) {
+      context_.Fail(Path(key), "expected an integer, got " + v.dump() + "; " + range);
+    }
+    const auto i = v.get<std::int64_t>();
+    if (i < lo || i > hi)
+      context_.Fail(Path(key), std::to_string(i) + " is out of range; " + range);
+    return static_cast<int>(i);
+  }
+
+  std::optional<double> Number(const std::string& key) const {
+    if (!Has(key)) return std::nullopt;
+    const json& v = Get(key);
+    if (!v.is_number()) context_.Fail(Path(key), "expected a number, got " + TypeName(v));
+    const double d = v.get<double>();
+    if (!std::isfinite(d)) context_.Fail(Path(key), "must be finite");
+    return d;
+  }
+
+ private:
+  const Context& context_;
+  const json& value_;
+  std::string path_;
+};
+
+const std::vector<std::string> kTopKeys = {
+    "format",          "format_version",       "name",         "description",
+    "instructions",    "conditions",           "tests",        "series",
+    "taps_per_series", "familiarization_taps", "randomization"};
+const std::vector<std::string> kTestKeys = {"name",           "conditions",           "keys",
+                                            "instructions",   "familiarization_taps", "series",
+                                            "taps_per_series"};
+const std::vector<std::string> kRandomizationKeys = {"series_order", "test_order", "seed"};
+const std::vector<std::string> kAllConditionKeys = {
+    "renderer",         "restitution", "t_collision_s", "frequency_hz",      "stiffness_N_per_m",
+    "damping_Ns_per_m", "scene",       "device",        "approach_speed_mps"};
+const std::vector<std::string> kRendererNames = {"penalty", "impulse", "train"};
+
+std::vector<std::string> ConditionKeysFor(Renderer renderer) {
+  std::vector<std::string> keys = {"renderer", "stiffness_N_per_m", "damping_Ns_per_m", "scene",
+                                   "device",   "approach_speed_mps"};
+  if (renderer != Renderer::kPenalty) keys.push_back("restitution");
+  if (renderer == Renderer::kTrain) {
+    keys.push_back("t_collision_s");
+    keys.push_back("frequency_hz");
+  }
+  return keys;
+}
+
+bool IsCleanText(std::string_view s) {
+  if (s.empty()) return false;
+  if (std::isspace(static_cast<unsigned char>(s.front())) ||
+      std::isspace(static_cast<unsigned char>(s.back()))) {
+    return false;
+  }
+  return std::none_of(s.begin(), s.end(),
+                      [](char c) { return std::iscntrl(static_cast<unsigned char>(c)) != 0; });
+}
+
+Condition ParseCondition(const Context& ctx, const std::string& label, const json& value,
+                         const std::string& path) {
+  Condition c;
+  c.label = label;
+  if (!IsCleanText(label)) {
+    ctx.Fail(path,
+             "a condition label must be non-empty, without control characters or "
+             "leading/trailing spaces");
+  }
+  if (Lower(label) == "quit") ctx.Fail(path, "\"quit\" is reserved for stopping a session");
+  if (!value.is_object()) {
+    ctx.Fail(path, "expected a renderer configuration (a JSON object), got " + TypeName(value));
+  }
+  if (!value.contains("renderer")) {
+    ctx.Fail(path, "missing required field \"renderer\"; valid renderers: " + Join(kRendererNames));
+  }
+  const json& r = value.at("renderer");
+  if (!r.is_string()) {
+    ctx.Fail(path + ".renderer", "expected a string, got " + TypeName(r) +
+                                     "; valid renderers: " + Join(kRendererNames));
+  }
+  const std::string name = r.get<std::string>();
+  if (name == "penalty") {
+    c.renderer = Renderer::kPenalty;
+  } else if (name == "impulse") {
+    c.renderer = Renderer::kImpulse;
+  } else if (name == "train") {
+    c.renderer = Renderer::kTrain;
+  } else {
+    ctx.Fail(path + ".renderer",
+             "unknown renderer " + Quote(name) + "; valid renderers: " + Join(kRendererNames));
+  }
+
+  // parameters of another renderer are errors rather than silently ignored settings
+  const std::vector<std::string> valid = ConditionKeysFor(c.renderer);
+  for (const auto& [key, unused] : value.items()) {
+    if (std::find(valid.begin(), valid.end(), key) != valid.end()) continue;
+    const bool known = std::find(kAllConditionKeys.begin(), kAllConditionKeys.end(), key) !=
+                       kAllConditionKeys.end();
+    ctx.Fail(path, (known ? "parameter " + Quote(key) + " does not apply to renderer " + name
+                          : "unknown parameter " + Quote(key)) +
+                       "; valid parameters for renderer " + name + ": " + Join(valid));
+  }
+  const ObjectReader in(ctx, value, path, valid, "a renderer configuration");
+
+  if (auto e = in.Number("restitution")) {
+    if (c.renderer == Renderer::kTrain && *e != 0.0) {
+      ctx.Fail(in.Path("restitution"), FormatNumber(*e) +
+                                           " is not allowed; a train is only consistent with "
+                                           "perfectly plastic collisions (Eq. 8): valid: 0");
+    }
+    if (*e < 0.0 || *e > 1.0) {
+      ctx.Fail(in.Path("restitution"),
+               FormatNumber(*e) + " is out of range; valid: 0 to 1 (Eq. 4)");
+    }
+    c.restitution = *e;
+  }
+  if (c.renderer == Renderer::kTrain) {
+    c.t_collision_s = in.Number("t_collision_s").value_or(kMaxCollisionWindow_s);
+    if (!(c.t_collision_s > 0.0 && c.t_collision_s <= kMaxCollisionWindow_s)) {
+      ctx.Fail(in.Path("t_collision_s"), FormatNumber(c.t_collision_s) +
+                                             " s is out of range; valid: > 0 and <= 0.1 s (II.a)");
+    }
+    auto f = in.Number("frequency_hz");
+    if (!f) ctx.Fail(path, "missing required field \"frequency_hz\" for renderer train");
+    c.frequency_hz = *f;
+    const double f_min_hz = 1.0 / c.t_collision_s;
+    // a relative tolerance so that e.g. t_c = 0.1, f = 10 is accepted despite rounding
+    if (!(c.frequency_hz > 0.0) || c.frequency_hz * c.t_collision_s < 1.0 - 1e-9) {
+      ctx.Fail(in.Path("frequency_hz"),
+               FormatNumber(c.frequency_hz) +
+                   " Hz is out of range; valid: >= 1 / t_collision_s = " + FormatNumber(f_min_hz) +
+                   " Hz (II.b; the upper bound 1/h is checked by the "
+                   "engine)");
+    }
+  }
+  if (auto k = in.Number("stiffness_N_per_m")) {
+    if (!(*k > 0.0)) ctx.Fail(in.Path("stiffness_N_per_m"), FormatNumber(*k) + " N/m; valid: > 0");
+    c.stiffness_N_per_m = k;
+  }
+  if (auto b = in.Number("damping_Ns_per_m")) {
+    if (*b < 0.0) ctx.Fail(in.Path("damping_Ns_per_m"), FormatNumber(*b) + " Ns/m; valid: >= 0");
+    c.damping_Ns_per_m = b;
+  }
+  if (auto v = in.Number("approach_speed_mps")) {
+    if (!(*v > 0.0)) {
+      ctx.Fail(in.Path("approach_speed_mps"), FormatNumber(*v) + " m/s; valid: > 0");
+    }
+    c.approach_speed_mps = v;
+  }
+  for (const char* key : {"scene", "device"}) {
+    if (auto s = in.String(key)) {
+      if (s->empty()) ctx.Fail(in.Path(key), "must not be empty (omit it for the default)");
+      (std::string(key) == "scene" ? c.scene : c.device) = *s;
+    }
+  }
+  return c;
+}
+
+int FindCondition(const std::vector<Condition>& conditions, const std::string& label) {
+  for (std::size_t i = 0; i < conditions.size(); ++i) {
+    if (conditions[i].label == label) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+StudyTest ParseTest(const Context& ctx, const json& value, const std::string& path,
+                    const std::vector<Condition>& conditions, const StudyTest& defaults) {
+  const ObjectReader in(ctx, value, path, kTestKeys, "a test");
+  StudyTest t = defaults;
+  t.name = in.RequiredString("name");
+  if (!IsCleanText(t.name)) ctx.Fail(in.Path("name"), "must not start or end with spaces");
+  t.instructions = in.String("instructions").value_or("");
+  t.familiarization_taps =
+      in.Integer("familiarization_taps", defaults.familiarization_taps, 1, kMaxTaps);
+  t.series = in.Integer("series", defaults.series, 1, kMaxSeries);
+  t.taps_per_series = in.Integer("taps_per_series", defaults.taps_per_series, 1, kMaxTaps);
+
+  std::vector<std::string> labels;
+  for (const auto& c : conditions) labels.push_back(Quote(c.label));
+  if (!in.Has("conditions")) {
+    ctx.Fail(path, "missing required field \"conditions\" (two condition labels)");
+  }
+  const json& cs = in.Get("conditions");
+  if (!cs.is_array() || cs.size() != 2) {
+    ctx.Fail(in.Path("conditions"),
+             "expected an array of exactly two condition labels, got " + cs.dump());
+  }
+  for (int i = 0; i < 2; ++i) {
+    const std::string item_path = in.Path("conditions") + "[" + std::to_string(i) + "]";
+    if (!cs[i].is_string()) ctx.Fail(item_path, "expected a condition label (a string)");
+    const int index = FindCondition(conditions, cs[i].get<std::string>());
+    if (index < 0) {
+      ctx.Fail(item_path,
+               "unknown condition " + cs[i].dump() + "; defined conditions: " + Join(labels));
+    }
+    t.conditions[i] = index;
+  }
+  if (t.conditions[0] == t.conditions[1]) {
+    ctx.Fail(in.Path("conditions"),
+             "the two conditions must differ (to test identical walls, "
+             "define two labels with the same configuration)");
+  }
+
+  t.keys = {"1", "2"};
+  if (in.Has("keys")) {
+    const json& ks = in.Get("keys");
+    if (!ks.is_array() || ks.size() != 2) {
+      ctx.Fail(in.Path("keys"), "expected an array of exactly two answer keys, got " + ks.dump());
+    }
+    for (int i = 0; i < 2; ++i) {
+      if (!ks[i].is_string()) {
+        ctx.Fail(in.Path("keys") + "[" + std::to_string(i) + "]", "expected a string");
+      }
+      t.keys[i] = ks[i].get<std::string>();
+    }
+  }
+  for (int i = 0; i < 2; ++i) {
+    const std::string key_path = in.Path("keys") + "[" + std::to_string(i) + "]";
+    const std::string& key = t.keys[i];
+    const bool has_space = std::any_of(key.begin(), key.end(), [](char c) {
+      return std::isspace(static_cast<unsigned char>(c)) ||
+             std::iscntrl(static_cast<unsigned char>(c));
+    });
+    if (key.empty() || key.size() > kMaxKeyLength || has_space) {
+      ctx.Fail(key_path, Quote(key) +
+                             " is not a valid key; valid: 1 to 16 characters without "
+                             "spaces");
+    }
+    if (Lower(key) == "quit") ctx.Fail(key_path, "\"quit\" is reserved for stopping a session");
+    const std::string& other_label = conditions[t.conditions[1 - i]].label;
+    if (Lower(key) == Lower(other_label)) {
+      ctx.Fail(key_path, "key " + Quote(key) + " is the label of the other condition");
+    }
+  }
+  if (Lower(t.keys[0]) == Lower(t.keys[1])) {
+    ctx.Fail(in.Path("keys"), "the two keys must differ (compared without case)");
+  }
+  return t;
+}
+
+}  // namespace
+
+std::string_view RendererName(Renderer renderer) {
+  switch (renderer) {
+    case Renderer::kPenalty:
+      return "penalty";
+    case Renderer::kImpulse:
+      return "impulse";
+    case Renderer::kTrain:
+      return "train";
+  }
+  return "penalty";
+}
+
+nlohmann::json Condition::ToJson() const {
+  json j = json::object();
+  j["renderer"] = std::string(RendererName(renderer));
+  if (renderer != Renderer::kPenalty) j["restitution"] = restitution;
+  if (renderer == Renderer::kTrain) {
+    j["t_collision_s"] = t_collision_s;
+    j["frequency_hz"] = frequency_hz;
+  }
+  if (stiffness_N_per_m) j["stiffness_N_per_m"] = *stiffness_N_per_m;
+  if (damping_Ns_per_m) j["damping_Ns_per_m"] = *damping_Ns_per_m;
+  if (scene) j["scene"] = *scene;
+  if (device) j["device"] = *device;
+  if (approach_speed_mps) j["approach_speed_mps"] = *approach_speed_mps;
+  return j;
+}
+
+nlohmann::json Protocol::ToJson() const {
+  json j = json::object();
+  j["format"] = std::string(kFormat);
+  j["format_version"] = kFormatVersion;
+  j["name"] = name;
+  j["description"] = description;
+  j["instructions"] = instructions;
+  json cs = json::object();
+  for (const auto& c : conditions) cs[c.label] = c.ToJson();
+  j["conditions"] = cs;
+  json r = json::object();
+  r["series_order"] =
+      randomization.series_order == SeriesOrder::kBalanced ? "balanced" : "independent";
+  r["test_order"] = randomization.test_order == TestOrder::kFixed ? "fixed" : "shuffled";
+  if (randomization.seed) r["seed"] = *randomization.seed;
+  j["randomization"] = r;
+  json ts = json::array();
+  for (const auto& t : tests) {
+    json tj = json::object();
+    tj["name"] = t.name;
+    tj["conditions"] = {conditions[t.conditions[0]].label, conditions[t.conditions[1]].label};
+    tj["keys"] = {t.keys[0], t.keys[1]};
+    tj["instructions"] = t.instructions;
+    tj["familiarization_taps"] = t.familiarization_taps;
+    tj["series"] = t.series;
+    tj["taps_per_series"] = t.taps_per_series;
+    ts.push_back(tj);
+  }
+  j["tests"] = ts;
+  return j;
+}
+
+Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) {
+  const Context ctx(source);
+  const ObjectReader in(ctx, document, "", kTopKeys, "a protocol");
+  Protocol p;
+  if (auto format = in.String("format"); format && *format != kFormat) {
+    ctx.Fail("format", Quote(*format) + " is not a study protocol; valid: " + Quote(kFormat));
+  }
+  in.Integer("format_version", kFormatVersion, kFormatVersion, kFormatVersion);
+  p.name = in.RequiredString("name");
+  p.description = in.String("description").value_or("");
+  p.instructions = in.String("instructions").value_or("");
+
+  StudyTest defaults;
+  defaults.familiarization_taps = in.Integer("familiarization_taps", 3, 1, kMaxTaps);
+  defaults.series = in.Integer("series", 20, 1, kMaxSeries);
+  defaults.taps_per_series = in.Integer("taps_per_series", 3, 1, kMaxTaps);
+
+  if (in.Has("randomization")) {
+    const ObjectReader r(ctx, in.Get("randomization"), "randomization", kRandomizationKeys,
+                         "randomization settings");
+    if (auto order = r.String("series_order")) {
+      if (*order == "balanced") {
+        p.randomization.series_order = SeriesOrder::kBalanced;
+      } else if (*order == "independent") {
+        p.randomization.series_order = SeriesOrder::kIndependent;
+      } else {
+        ctx.Fail(r.Path("series_order"),
+                 "unknown order " + Quote(*order) + "; valid: \"balanced\", \"independent\"");
+      }
+    }
+    if (auto order = r.String("test_order")) {
+      if (*order == "fixed") {
+        p.randomization.test_order = TestOrder::kFixed;
+      } else if (*order == "shuffled") {
+        p.randomization.test_order = TestOrder::kShuffled;
+      } else {
+        ctx.Fail(r.Path("test_order"),
+                 "unknown order " + Quote(*order) + "; valid: \"fixed\", \"shuffled\"");
+      }
+    }
+    if (r.Has("seed")) {
+      const json& s = r.Get("seed");
+      if (!s.is_number_unsigned()) {
+        ctx.Fail(r.Path("seed"), "expected a non-negative integer below 2^64, got " + s.dump());
+      }
+      p.randomization.seed = s.get<std::uint64_t>();
+    }
+  }
+
+  if (!in.Has("conditions")) ctx.Fail("", "missing required field \"conditions\"");
+  const json& cs = in.Get("conditions");
+  if (!cs.is_object() || cs.empty()) {
+    ctx.Fail("conditions",
+             "expected a non-empty object mapping labels to renderer "
+             "configurations");
+  }
+  for (const auto& [label, value] : cs.items()) {
+    const std::string path = "conditions[" + Quote(label) + "]";
+    Condition c = ParseCondition(ctx, label, value, path);
+    for (const auto& other : p.conditions) {
+      if (Lower(other.label) == Lower(label)) {
+        ctx.Fail(path, "label differs from " + Quote(other.label) +
+                           " only in case; answers are matched without case");
+      }
+    }
+    p.conditions.push_back(std::move(c));
+  }
+
+  if (!in.Has("tests")) ctx.Fail("", "missing required field \"tests\"");
+  const json& ts = in.Get("tests");
+  if (!ts.is_array() || ts.empty() || ts.size() > static_cast<std::size_t>(kMaxTests)) {
+    ctx.Fail("tests", "expected an array of 1 to 100 tests");
+  }
+  for (std::size_t i = 0; i < ts.size(); ++i) {
+    const std::string path = "tests[" + std::to_string(i) + "]";
+    StudyTest t = ParseTest(ctx, ts[i], path, p.conditions, defaults);
+    for (const auto& other : p.tests) {
+      if (Lower(other.name) == Lower(t.name)) {
+        ctx.Fail(path + ".name", "duplicate test name " + Quote(t.name));
+      }
+    }
+    p.tests.push_back(std::move(t));
+  }
+  return p;
+}
+
+Protocol LoadProtocol(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw Error(path + ": cannot open the protocol file");
+  std::stringstream buffer;
+  buffer << file.rdbuf();
+  if (file.bad()) throw Error(path + ": cannot read the protocol file");
+  json document;
+  try {
+    document = json::parse(buffer.str());
+  } catch (const json::parse_error& e) {
+    throw Error(path + ": not valid JSON (" + e.what() + ")");
+  }
+  return ParseProtocol(document, path);
+}
+
+std::uint64_t Fnv1a64(std::string_view bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;  // FNV offset basis
+  for (char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 0x100000001b3ULL;  // FNV prime
+  }
+  return h;
+}
+
+std::string ProtocolHash(const Protocol& protocol) {
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx",
+                static_cast<unsigned long long>(Fnv1a64(protocol.ToJson().dump())));
+  return std::string("fnv1a64:") + hex;
+}
+
+}  // namespace rigidtouch::study

@@ -1,0 +1,106 @@
+// Perception-study protocols: which walls (renderer configurations) each test compares, how many
+// taps and series, how the order is randomized and what the participant is told. Protocols are
+// JSON files (docs/study.md); they are parsed once, validated with messages naming the file, the
+// field and the valid range, and identified by a hash of their canonical JSON.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace rigidtouch::study {
+
+/// How the wall of one condition is rendered (shared METHOD.md).
+enum class Renderer {
+  kPenalty,  ///< penalty feedback only, no impulses
+  kImpulse,  ///< one collision impulse at contact onset, Eq. 5 (the [IAP] model)
+  kTrain,    ///< a train of impulses over the collision window, Eq. 6-9
+};
+
+/// The protocol spelling of a renderer: "penalty", "impulse" or "train".
+std::string_view RendererName(Renderer renderer);
+
+/// One rendered wall: a renderer configuration and the label participants know it by. Optional
+/// fields left empty mean "the engine's default" and are omitted from the canonical JSON.
+struct Condition {
+  std::string label;                         ///< e.g. "wall 1"; unique within the protocol
+  Renderer renderer = Renderer::kPenalty;    ///< rendering method
+  double restitution = 0.0;                  ///< e in Eq. 4/5; impulse: [0, 1], train: 0 (Eq. 8)
+  double t_collision_s = 0.0;                ///< train only: window t_c in (0, 0.1] s (II.a)
+  double frequency_hz = 0.0;                 ///< train only: f >= 1 / t_c (II.b, Eq. 7)
+  std::optional<double> stiffness_N_per_m;   ///< penalty spring stiffness, > 0
+  std::optional<double> damping_Ns_per_m;    ///< penalty damping, >= 0
+  std::optional<std::string> scene;          ///< MJCF scene, as written in the protocol
+  std::optional<std::string> device;         ///< device preset name, e.g. "touch"
+  std::optional<double> approach_speed_mps;  ///< hand approach speed for simulated taps, > 0
+
+  /// The canonical JSON of the renderer configuration (the object stored in the protocol's
+  /// "conditions" map, without the label). Logs record it as the condition rendered.
+  nlohmann::json ToJson() const;
+};
+
+/// One discrimination test between two conditions.
+struct StudyTest {
+  std::string name;                 ///< e.g. "test 1"; unique within the protocol
+  std::array<int, 2> conditions{};  ///< indices into Protocol::conditions, distinct
+  std::array<std::string, 2> keys;  ///< what the participant types for each condition
+  std::string instructions;         ///< shown before the test's familiarization
+  int familiarization_taps = 3;     ///< taps on each condition before the series
+  int series = 20;                  ///< number of series (each renders one condition)
+  int taps_per_series = 3;          ///< taps in each series
+};
+
+/// How the series of each test are assigned to conditions.
+enum class SeriesOrder {
+  kBalanced,     ///< series / 2 of each condition (odd: one extra by coin flip), shuffled
+  kIndependent,  ///< a fair coin per series
+};
+
+/// Order in which the tests are run.
+enum class TestOrder {
+  kFixed,     ///< as listed in the protocol
+  kShuffled,  ///< a permutation drawn from the session seed
+};
+
+/// Randomization settings. The order of a session is a pure function of the session seed.
+struct Randomization {
+  SeriesOrder series_order = SeriesOrder::kBalanced;
+  TestOrder test_order = TestOrder::kFixed;
+  std::optional<std::uint64_t> seed;  ///< used when the command line gives none
+};
+
+/// A whole study protocol.
+struct Protocol {
+  std::string name;                   ///< short identifier, e.g. "walls"
+  std::string description;            ///< free text for the experimenter
+  std::string instructions;           ///< shown to the participant at the start of a session
+  std::vector<Condition> conditions;  ///< every wall the tests refer to
+  std::vector<StudyTest> tests;       ///< at least one
+  Randomization randomization;
+
+  /// Canonical JSON: every default filled in, per-test values resolved, keys sorted, no
+  /// whitespace when dumped. Two files that mean the same protocol have the same canonical JSON.
+  nlohmann::json ToJson() const;
+};
+
+/// Builds a protocol from parsed JSON. `source` names the input (usually the file path) in error
+/// messages. Throws rigidtouch::Error naming the field and the valid values on any problem.
+Protocol ParseProtocol(const nlohmann::json& document, std::string_view source);
+
+/// Reads and parses a protocol file. Throws rigidtouch::Error if the file cannot be read, is not
+/// JSON, or is not a valid protocol.
+Protocol LoadProtocol(const std::string& path);
+
+/// FNV-1a 64-bit hash of a byte string.
+std::uint64_t Fnv1a64(std::string_view bytes);
+
+/// Identity of a protocol: "fnv1a64:" followed by 16 lowercase hex digits of the FNV-1a 64 hash of
+/// `protocol.ToJson().dump()` (compact, sorted keys, UTF-8).
+std::string ProtocolHash(const Protocol& protocol);
+
+}  // namespace rigidtouch::study

@@ -1,0 +1,422 @@
+#include "study/session.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <ctime>
+#include <istream>
+#include <ostream>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::study {
+
+namespace {
+
+using nlohmann::json;
+
+std::string Lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string_view Trim(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+  return s;
+}
+
+std::string Quote(std::string_view s) {
+  // built with append: GCC 12 reports a false -Wrestrict on "literal" + std::string
+  std::string out;
+  out.reserve(s.size() + 2);
+  out.push_back('"');
+  out.append(s);
+  out.push_back('"');
+  return out;
+}
+
+const Condition& ConditionOf(const Protocol& protocol, const Step& step) {
+  return protocol.conditions[protocol.tests[step.test].conditions[step.condition]];
+}
+
+// a seed nobody chose: only used when neither the command line nor the protocol gives one
+std::uint64_t FreshSeed() {
+  std::random_device device;
+  return (static_cast<std::uint64_t>(device()) << 32) ^ device();
+}
+
+int GetInt(const json& record, const char* key, std::string_view source, std::size_t line) {
+  if (!record.contains(key) || !record[key].is_number_integer()) {
+    throw Error(std::string(source) + ": record " + std::to_string(line + 1) + " (" +
+                record.value("type", "") + ") has no integer \"" + key + "\"");
+  }
+  return record[key].get<int>();
+}
+
+json StepRecord(const char* type, const Protocol& protocol, const Step& step) {
+  const StudyTest& test = protocol.tests[step.test];
+  const Condition& condition = ConditionOf(protocol, step);
+  json r = json::object();
+  r["type"] = type;
+  r["time_utc"] = UtcNow();
+  r["step"] = step.index;
+  r["test"] = step.test;
+  r["test_name"] = test.name;
+  if (step.kind == StepKind::kSeries) r["series"] = step.series;
+  r["condition"] = step.condition;
+  r["label"] = condition.label;
+  return r;
+}
+
+std::string TestIntro(const Protocol& protocol, const Step& step) {
+  const StudyTest& test = protocol.tests[step.test];
+  std::ostringstream out;
+  out << "\n== StudyTest " << step.test_position + 1 << " of " << protocol.tests.size() << ": "
+      << test.name << " ==\n";
+  for (int c = 0; c < 2; ++c) {
+    out << "  key " << test.keys[c] << " = " << protocol.conditions[test.conditions[c]].label
+        << "\n";
+  }
+  out << "Familiarization: tap each wall " << test.familiarization_taps << " times. Then "
+      << test.series << " series of " << test.taps_per_series
+      << " taps: after each series, name the wall.\n";
+  if (!test.instructions.empty()) out << test.instructions << "\n";
+  return out.str();
+}
+
+}  // namespace
+
+void TerminalResponder::Show(std::string_view text) {
+  out_ << text;
+  if (!text.empty() && text.back() != '\n') out_ << "\n";
+  out_.flush();
+}
+
+std::optional<int> ParseAnswer(const Protocol& protocol, const StudyTest& test,
+                               std::string_view text) {
+  const std::string answer = Lower(Trim(text));
+  if (answer.empty()) return std::nullopt;
+  for (int c = 0; c < 2; ++c) {
+    if (answer == Lower(test.keys[c]) ||
+        answer == Lower(protocol.conditions[test.conditions[c]].label)) {
+      return c;
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<int> TerminalResponder::Ask(const Protocol& protocol, const Step& step) {
+  const StudyTest& test = protocol.tests[step.test];
+  const std::string& label0 = protocol.conditions[test.conditions[0]].label;
+  const std::string& label1 = protocol.conditions[test.conditions[1]].label;
+  for (;;) {
+    out_ << "Which wall was it? Type " << test.keys[0] << " for " << label0 << " or "
+         << test.keys[1] << " for " << label1 << ": ";
+    out_.flush();
+    std::string line;
+    if (!std::getline(in_, line)) {
+      out_ << "\n";
+      stop_reason_ = "end of input";
+      return std::nullopt;
+    }
+    if (Lower(Trim(line)) == "quit") {
+      stop_reason_ = "quit";
+      return std::nullopt;
+    }
+    if (auto answer = ParseAnswer(protocol, test, line)) return answer;
+    out_ << Quote(Trim(line)) << " is not an answer: type " << test.keys[0] << " or "
+         << test.keys[1] << " (or the wall's name), or quit to stop.\n";
+  }
+}
+
+void CheckParticipantId(std::string_view id) {
+  const bool ok = !id.empty() && id.size() <= 64 && std::all_of(id.begin(), id.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+  });
+  if (!ok) {
+    throw Error("participant " + Quote(id) +
+                " is not a valid ID; valid: 1 to 64 characters among A-Z a-z 0-9 . _ -");
+  }
+}
+
+std::string UtcNow() {
+  const auto now = std::chrono::system_clock::now();
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
+  const auto ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char buffer[40];
+  const std::size_t n = std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%S", &utc);
+  std::snprintf(buffer + n, sizeof buffer - n, ".%03dZ", static_cast<int>(ms));
+  return buffer;
+}
+
+namespace {
+
+SessionState InspectRecords(const Protocol& protocol, const SessionConfig& config,
+                            const std::vector<nlohmann::json>& records, std::string_view source) {
+  const std::string src(source);
+  if (records.empty() || records[0].value("type", "") != "session_start") {
+    throw Error(src + ": does not start with a session_start record");
+  }
+  const json& start = records[0];
+  const std::string hash = ProtocolHash(protocol);
+  const std::string log_hash = start.value("protocol_hash", "");
+  if (log_hash != hash) {
+    throw Error(src + ": refusing to resume: the log was written for protocol " +
+                Quote(start.value("protocol_name", "?")) + " (" + log_hash + "), not for " +
+                Quote(protocol.name) + " (" + hash + ")");
+  }
+  const std::string log_participant = start.value("participant", "");
+  if (log_participant != config.participant) {
+    throw Error(src + ": refusing to resume: the log belongs to participant " +
+                Quote(log_participant) + ", not " + Quote(config.participant));
+  }
+  const std::string log_mode = start.value("mode", "");
+  if (log_mode != config.mode) {
+    throw Error(src + ": refusing to resume: the log was written by a " + log_mode +
+                " session, not a " + config.mode + " one");
+  }
+  for (const std::string& field : config.resume_checked_fields) {
+    const json expected = config.start_extra.is_object() && config.start_extra.contains(field)
+                              ? config.start_extra[field]
+                              : json();
+    const json found = start.contains(field) ? start[field] : json();
+    if (expected != found) {
+      throw Error(src + ": refusing to resume: the log was written with a different " + field +
+                  " (log: " + found.dump() + ", now: " + expected.dump() + ")");
+    }
+  }
+  if (!start.contains("seed") || !start["seed"].is_number_unsigned()) {
+    throw Error(src + ": the session_start record has no seed");
+  }
+  SessionState state;
+  state.seed = start["seed"].get<std::uint64_t>();
+  if (config.seed && *config.seed != state.seed) {
+    throw Error(src + ": refusing to resume: the log's session seed is " +
+                std::to_string(state.seed) + ", not " + std::to_string(*config.seed) +
+                " (omit --seed to resume with the log's seed)");
+  }
+  state.plan = MakePlan(protocol, state.seed);
+
+  std::vector<bool> done(state.plan.size(), false);
+  for (std::size_t i = 1; i < records.size(); ++i) {
+    const json& r = records[i];
+    const std::string type = r.value("type", "");
+    if (type == "session_start") {
+      throw Error(src + ": record " + std::to_string(i + 1) + " starts a second session");
+    }
+    if (type == "session_end") state.ended = true;
+    if (type != "familiarization" && type != "series" && type != "answer") continue;
+    const int k = GetInt(r, "step", source, i);
+    if (k < 0 || k >= static_cast<int>(state.plan.size())) {
+      throw Error(src + ": record " + std::to_string(i + 1) + " refers to step " +
+                  std::to_string(k) + ", outside the plan of " + std::to_string(state.plan.size()) +
+                  " steps");
+    }
+    const Step& step = state.plan[k];
+    const bool kind_ok = (type == "familiarization") == (step.kind == StepKind::kFamiliarization);
+    const bool series_ok =
+        step.kind != StepKind::kSeries || GetInt(r, "series", source, i) == step.series;
+    if (!kind_ok || GetInt(r, "test", source, i) != step.test ||
+        GetInt(r, "condition", source, i) != step.condition || !series_ok) {
+      throw Error(src + ": record " + std::to_string(i + 1) + " does not match step " +
+                  std::to_string(k) + " of the plan for seed " + std::to_string(state.seed) +
+                  "; the log was not written by this protocol's plan");
+    }
+    if (type == "series") continue;  // presented but maybe unanswered: not done
+    if (type == "answer") {
+      if (done[k]) {
+        throw Error(src + ": two answers for step " + std::to_string(k) + " (record " +
+                    std::to_string(i + 1) + ")");
+      }
+      ++state.answers;
+    }
+    done[k] = true;
+  }
+  // steps are done in order, so the done ones must be a prefix of the plan
+  const auto first_open = std::find(done.begin(), done.end(), false);
+  state.next_step = static_cast<int>(first_open - done.begin());
+  if (std::find(first_open, done.end(), true) != done.end()) {
+    throw Error(src + ": steps are recorded out of order (step " + std::to_string(state.next_step) +
+                " is missing but later steps are done)");
+  }
+  return state;
+}
+
+}  // namespace
+
+SessionState InspectSession(const Protocol& protocol, const SessionConfig& config,
+                            const std::vector<nlohmann::json>& records, std::string_view source) {
+  try {
+    return InspectRecords(protocol, config, records, source);
+  } catch (const json::exception& e) {
+    // a field of the wrong type: the log was edited or written by something else
+    throw Error(std::string(source) + ": malformed record (" + e.what() + ")");
+  }
+}
+
+SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,
+                          const std::vector<nlohmann::json>& existing, std::string_view source,
+                          RecordSink& sink, WallPresenter& presenter, Responder& responder,
+                          std::size_t torn_tail_bytes) {
+  CheckParticipantId(config.participant);
+  SessionOutcome outcome;
+  outcome.torn_tail_bytes = torn_tail_bytes;
+  SessionState state;
+  std::set<int> presented;  // series steps already presented (a repeat is marked as such)
+  if (existing.empty()) {
+    state.seed = config.seed ? *config.seed : protocol.randomization.seed.value_or(FreshSeed());
+    state.plan = MakePlan(protocol, state.seed);
+    json start = config.start_extra.is_object() ? config.start_extra : json::object();
+    start["type"] = "session_start";
+    start["format"] = std::string(kLogFormat);
+    start["format_version"] = kLogFormatVersion;
+    start["time_utc"] = UtcNow();
+    start["software_version"] = config.software_version;
+    start["protocol_name"] = protocol.name;
+    start["protocol_hash"] = ProtocolHash(protocol);
+    start["protocol_hash_method"] = "FNV-1a 64 of the canonical protocol JSON";
+    start["protocol"] = protocol.ToJson();
+    start["participant"] = config.participant;
+    start["mode"] = config.mode;
+    start["seed"] = state.seed;
+    start["steps"] = state.plan.size();
+    sink.Append(start, /*durable=*/true);
+    responder.Show("Protocol " + Quote(protocol.name) + ", participant " + config.participant +
+                   ", " + std::to_string(protocol.tests.size()) + " test(s).");
+    if (!protocol.instructions.empty()) responder.Show(protocol.instructions);
+  } else {
+    if (!config.resume) {
+      throw Error(std::string(source) + ": the log already holds a session (" +
+                  std::to_string(existing.size()) +
+                  " records); pass --resume to continue it, or choose another log");
+    }
+    state = InspectSession(protocol, config, existing, source);
+    outcome.resumed = true;
+    for (const json& r : existing) {
+      if (r.value("type", "") == "series") presented.insert(r.value("step", -1));
+    }
+  }
+  outcome.seed = state.seed;
+  outcome.answers_before = state.answers;
+  outcome.next_step = state.next_step;
+  for (const Step& s : state.plan) outcome.answers_total += s.kind == StepKind::kSeries ? 1 : 0;
+
+  const int steps = static_cast<int>(state.plan.size());
+  if (outcome.resumed) {
+    if (state.next_step >= steps && state.ended) {
+      outcome.status = SessionStatus::kAlreadyComplete;
+      responder.Show("The session of participant " + config.participant + " is already complete.");
+      return outcome;
+    }
+    json resume = json::object();
+    resume["type"] = "resume";
+    resume["time_utc"] = UtcNow();
+    resume["software_version"] = config.software_version;
+    resume["next_step"] = state.next_step;
+    resume["answers_so_far"] = state.answers;
+    resume["torn_tail_bytes_dropped"] = torn_tail_bytes;
+    sink.Append(resume, /*durable=*/true);
+    responder.Show("Resuming participant " + config.participant + " at step " +
+                   std::to_string(state.next_step + 1) + " of " + std::to_string(steps) + " (" +
+                   std::to_string(state.answers) + " answers recorded).");
+    if (!protocol.instructions.empty()) responder.Show(protocol.instructions);
+  }
+
+  int shown_test = -1;
+  for (int k = state.next_step; k < steps; ++k) {
+    const Step& step = state.plan[k];
+    const StudyTest& test = protocol.tests[step.test];
+    const Condition& condition = ConditionOf(protocol, step);
+    if (step.test_position != shown_test) {
+      responder.Show(TestIntro(protocol, step));
+      shown_test = step.test_position;
+    }
+    if (step.kind == StepKind::kFamiliarization) {
+      responder.Show("Familiarization: tap " + condition.label + " (key " +
+                     test.keys[step.condition] + ") " + std::to_string(step.taps) + " times.");
+      presenter.Present(condition, step.taps);
+      json r = StepRecord("familiarization", protocol, step);
+      r["key"] = test.keys[step.condition];
+      r["taps"] = step.taps;
+      r["rendered"] = condition.ToJson();
+      sink.Append(r, /*durable=*/false);
+      continue;
+    }
+    responder.Show("Series " + std::to_string(step.series + 1) + " of " +
+                   std::to_string(test.series) + ": tap the wall " + std::to_string(step.taps) +
+                   " times.");
+    presenter.Present(condition, step.taps);
+    json series = StepRecord("series", protocol, step);
+    series["taps"] = step.taps;
+    series["rendered"] = condition.ToJson();
+    if (presented.count(k) > 0) series["repeated"] = true;
+    sink.Append(series, /*durable=*/false);
+
+    const auto asked = std::chrono::steady_clock::now();
+    const std::optional<int> answer = responder.Ask(protocol, step);
+    const double response_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
+    if (!answer) {
+      json stop = json::object();
+      stop["type"] = "stop";
+      stop["time_utc"] = UtcNow();
+      stop["reason"] = responder.StopReason();
+      stop["next_step"] = k;
+      sink.Append(stop, /*durable=*/true);
+      outcome.status = SessionStatus::kStopped;
+      outcome.next_step = k;
+      responder.Show("Session stopped after " +
+                     std::to_string(outcome.answers_before + outcome.answers_recorded) + " of " +
+                     std::to_string(outcome.answers_total) +
+                     " answers; it can be continued with --resume.");
+      return outcome;
+    }
+    json a = StepRecord("answer", protocol, step);
+    a["answer"] = *answer;
+    a["answer_label"] = protocol.conditions[test.conditions[*answer]].label;
+    a["correct"] = *answer == step.condition;
+    a["response_time_s"] = response_time_s;
+    sink.Append(a, /*durable=*/true);
+    ++outcome.answers_recorded;
+  }
+  json end = json::object();
+  end["type"] = "session_end";
+  end["time_utc"] = UtcNow();
+  end["answers"] = outcome.answers_before + outcome.answers_recorded;
+  sink.Append(end, /*durable=*/true);
+  outcome.status = SessionStatus::kComplete;
+  outcome.next_step = steps;
+  responder.Show("Session complete: " + std::to_string(outcome.answers_total) +
+                 " answers recorded. Thank you.");
+  return outcome;
+}
+
+SessionOutcome RunLoggedSession(const Protocol& protocol, const SessionConfig& config,
+                                const std::string& log_path, WallPresenter& presenter,
+                                Responder& responder) {
+  CheckParticipantId(config.participant);
+  auto log = LogFile::Open(log_path);
+  const std::vector<json>& existing = log->contents().records;
+  if (!existing.empty()) {
+    if (!config.resume) {
+      throw Error(log_path + ": the log already holds a session (" +
+                  std::to_string(existing.size()) +
+                  " records); pass --resume to continue it, or choose another log");
+    }
+    // every check passes before the file is changed in any way
+    InspectSession(protocol, config, existing, log_path);
+  }
+  const std::size_t torn = log->contents().torn_tail_bytes;
+  log->DropTornTail();
+  return RunSession(protocol, config, existing, log_path, *log, presenter, responder, torn);
+}
+
+}  // namespace rigidtouch::study

@@ -1,0 +1,108 @@
+// The narrow interfaces between the study toolkit and the engine: "render one tap of a condition
+// and report what the hand felt" (StimulusSource, for simulated participants) and "render a wall
+// for a person to tap" (WallPresenter, for real sessions). The engine side implements them; the
+// study code only depends on these declarations.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <iosfwd>
+#include <memory>
+#include <string>
+
+#include "study/protocol.h"
+
+namespace rigidtouch::study {
+
+/// Number of frequency bands in TapPercept::band_energy_fraction.
+inline constexpr int kPerceptBands = 4;
+
+/// Band edges in Hz: [0, 40), [40, 100), [100, 400), [400, inf).
+inline constexpr std::array<double, kPerceptBands - 1> kPerceptBandEdges_hz = {40.0, 100.0, 400.0};
+
+/// What the hand felt during one tap, summarised from the force the device applied to the hand
+/// (normal component, world frame) from contact onset to the end of the collision window (at
+/// least 100 ms after onset for walls without a window, so every renderer is summarised over the
+/// same span).
+struct TapPercept {
+  /// Largest force magnitude on the hand during the span [N].
+  double peak_force_N = 0.0;
+  /// Rate hardness (Lawrence et al., IEEE T-RA 2000): initial rate of change of the contact force
+  /// divided by the approach speed at onset [N/s per m/s = N/m].
+  double rate_hardness_N_per_m = 0.0;
+  /// Frequency of the largest peak of the vibration spectrum [Hz]; 0 when there is no vibration.
+  double dominant_frequency_hz = 0.0;
+  /// Fraction of the vibration energy in each band (kPerceptBandEdges_hz); sums to 1 when
+  /// vibration_rms_N > 0.
+  std::array<double, kPerceptBands> band_energy_fraction{};
+  /// RMS over the span of the vibratory part of the force: the force minus its low-pass (< 20 Hz)
+  /// component, i.e. the transient the skin senses as vibration [N].
+  double vibration_rms_N = 0.0;
+  /// Hand speed towards the wall just before contact, as drawn for this tap [m/s].
+  double approach_speed_mps = 0.0;
+};
+
+/// Renders single taps offline (simulated hand + device + engine) for simulated participants.
+class StimulusSource {
+ public:
+  virtual ~StimulusSource() = default;
+  /// Renders one tap of `condition` and reports what the hand felt. The tap's variability (hand
+  /// speed spread, etc.) is drawn from `tap_seed` only: the same seed gives the same percept.
+  /// Throws rigidtouch::Error if the condition cannot be rendered.
+  virtual TapPercept RenderTap(const Condition& condition, std::uint64_t tap_seed) = 0;
+  /// One-line description recorded in simulated session logs (what renders the taps).
+  virtual std::string Describe() const = 0;
+};
+
+/// Renders walls for a person to tap during `study run`.
+class WallPresenter {
+ public:
+  virtual ~WallPresenter() = default;
+  /// Switches the rendered wall to `condition` and returns once the participant has made `taps`
+  /// taps on it (a device presenter waits for them; a text presenter returns at once).
+  virtual void Present(const Condition& condition, int taps) = 0;
+  /// One-line description recorded in the session log (which device, which scene).
+  virtual std::string Describe() const = 0;
+};
+
+/// A presenter that renders nothing and prints "rendering wall X for N taps" to a stream: for dry
+/// runs and scripted tests of the session flow. It reveals the condition, so never use it with a
+/// participant.
+class TextPresenter : public WallPresenter {
+ public:
+  /// Prints to `out`, which must outlive the presenter.
+  explicit TextPresenter(std::ostream& out) : out_(out) {}
+  void Present(const Condition& condition, int taps) override;
+  std::string Describe() const override;
+
+ private:
+  std::ostream& out_;
+};
+
+/// Options for the engine-backed tap source used by `study simulate`.
+struct TapSourceOptions {
+  std::string scene;   ///< MJCF scene path; empty: the engine's default tap scene
+  std::string device;  ///< device preset; empty: the engine's default
+  /// Mean hand approach speed when a condition does not set one [m/s]; 0: the engine's default.
+  double approach_speed_mps = 0.0;
+  /// Relative standard deviation of the hand approach speed across taps; < 0: engine default.
+  double approach_speed_relative_sd = -1.0;
+};
+
+/// Options for the device-backed presenter used by `study run`.
+struct PresenterOptions {
+  std::string scene;   ///< MJCF scene path; empty: the engine's default wall scene
+  std::string device;  ///< device preset or address; empty: the engine's default
+};
+
+/// Builds the tap source backed by the real tap experiment (simulated device + engine + tap
+/// metrics). NOT IMPLEMENTED in src/study: the engine integration defines it. Throws
+/// rigidtouch::Error on bad options.
+std::unique_ptr<StimulusSource> MakeTapStimulusSource(const TapSourceOptions& options);
+
+/// Builds the presenter that renders walls on a (simulated or networked) device for a person.
+/// NOT IMPLEMENTED in src/study: the engine integration defines it. Throws rigidtouch::Error on
+/// bad options or when the device cannot be opened.
+std::unique_ptr<WallPresenter> MakeDeviceWallPresenter(const PresenterOptions& options);
+
+}  // namespace rigidtouch::study

@@ -1,0 +1,140 @@
+#include "study/log.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "rigidtouch/types.h"
+#include "study/test_files.h"
+
+namespace rigidtouch::study {
+namespace {
+
+using nlohmann::json;
+using testing::ReadFile;
+using testing::ScratchDir;
+using testing::WriteFile;
+
+json Start() {
+  return {{"type", "session_start"}, {"format", kLogFormat}, {"format_version", kLogFormatVersion}};
+}
+
+std::string Lines(std::initializer_list<json> records) {
+  std::string out;
+  for (const json& r : records) out += RecordLine(r);
+  return out;
+}
+
+std::string ErrorOf(const std::string& bytes) {
+  try {
+    ParseLog(bytes, "log.jsonl");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(LogTest, ParsesCompleteLines) {
+  const std::string bytes = Lines({Start(), {{"type", "answer"}, {"step", 2}}});
+  const LogContents c = ParseLog(bytes, "log.jsonl");
+  ASSERT_EQ(c.records.size(), 2u);
+  EXPECT_EQ(c.records[1]["step"], 2);
+  EXPECT_EQ(c.valid_bytes, bytes.size());
+  EXPECT_EQ(c.torn_tail_bytes, 0u);
+  EXPECT_TRUE(ParseLog("", "empty").records.empty());
+}
+
+TEST(LogTest, UnterminatedRecordAfterCompleteOnesIsATornTail) {
+  const std::string whole = Lines({Start(), {{"type", "series"}}});
+  const std::string torn = R"({"type":"answer","st)";
+  const LogContents c = ParseLog(whole + torn, "log.jsonl");
+  EXPECT_EQ(c.records.size(), 2u);
+  EXPECT_EQ(c.valid_bytes, whole.size());
+  EXPECT_EQ(c.torn_tail_bytes, torn.size());
+}
+
+TEST(LogTest, RefusesWhatIsNotAStudyLog) {
+  EXPECT_NE(ErrorOf("hello world\n").find("line 1 is not JSON"), std::string::npos);
+  EXPECT_NE(ErrorOf(Lines({Start()}) + "not json\n").find("line 2 is not JSON"), std::string::npos);
+  EXPECT_NE(ErrorOf(Lines({Start()}) + "[1,2]\n").find("line 2 is not a study record"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(Lines({{{"type", "answer"}}})).find("line 1 is not the session_start"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("no line end at all").find("no complete line"), std::string::npos);
+  EXPECT_NE(ErrorOf(Lines({Start()}) + "garbage").find("neither a record"), std::string::npos);
+  json future = Start();
+  future["format_version"] = 99;
+  EXPECT_NE(ErrorOf(Lines({future})).find("version 99 is not supported"), std::string::npos);
+  EXPECT_NE(ErrorOf(Lines({Start()}) + "\n").find("line 2 is not JSON"), std::string::npos);
+}
+
+TEST(LogTest, AppendedRecordsReadBackInOrder) {
+  ScratchDir dir;
+  const std::string path = dir.File("a.jsonl");
+  {
+    auto log = LogFile::Open(path);
+    EXPECT_TRUE(log->contents().records.empty());
+    log->Append(Start(), true);
+    log->Append({{"type", "answer"}, {"step", 1}}, true);
+    log->Append({{"type", "answer"}, {"step", 2}, {"text", "caf\xc3\xa9"}}, false);
+  }
+  const LogContents c = ReadLog(path);
+  ASSERT_EQ(c.records.size(), 3u);
+  EXPECT_EQ(c.records[2]["step"], 2);
+  EXPECT_EQ(c.records[2]["text"], "caf\xc3\xa9");
+  EXPECT_EQ(ReadFile(path), Lines({Start(),
+                                   {{"type", "answer"}, {"step", 1}},
+                                   {{"type", "answer"}, {"step", 2}, {"text", "caf\xc3\xa9"}}}));
+}
+
+TEST(LogTest, DropTornTailTruncatesExactlyTheTornBytes) {
+  ScratchDir dir;
+  const std::string path = dir.File("torn.jsonl");
+  const std::string whole = Lines({Start(), {{"type", "answer"}, {"step", 1}}});
+  WriteFile(path, whole + R"({"type":"ans)");
+  auto log = LogFile::Open(path);
+  EXPECT_EQ(log->contents().torn_tail_bytes, 12u);
+  log->DropTornTail();
+  EXPECT_EQ(ReadFile(path), whole);
+  log->Append({{"type", "answer"}, {"step", 2}}, true);
+  EXPECT_EQ(ReadLog(path).records.size(), 3u);
+}
+
+TEST(LogTest, OpenRefusesNonJsonLinesWithoutTouchingIt) {
+  ScratchDir dir;
+  const std::string path = dir.File("notes.txt");
+  const std::string bytes = "these are my notes\nnot a log\n{\"partial";
+  WriteFile(path, bytes);
+  const auto before = std::filesystem::last_write_time(path);
+  EXPECT_THROW(LogFile::Open(path), Error);
+  EXPECT_EQ(ReadFile(path), bytes);
+  EXPECT_EQ(std::filesystem::last_write_time(path), before);
+}
+
+TEST(LogTest, SecondWriterIsRefused) {
+  ScratchDir dir;
+  const std::string path = dir.File("busy.jsonl");
+  auto first = LogFile::Open(path);
+  try {
+    LogFile::Open(path);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("in use by another running session"), std::string::npos);
+  }
+}
+
+TEST(LogTest, DirectoryIsRefused) {
+  ScratchDir dir;
+  EXPECT_THROW(LogFile::Open(dir.path()), Error);
+  EXPECT_THROW(ReadLog(dir.path()), Error);
+}
+
+TEST(LogTest, MissingFileReadsAsEmpty) {
+  ScratchDir dir;
+  EXPECT_TRUE(ReadLog(dir.File("none.jsonl")).records.empty());
+  EXPECT_FALSE(std::filesystem::exists(dir.File("none.jsonl")));
+}
+
+}  // namespace
+}  // namespace rigidtouch::study

@@ -1,0 +1,331 @@
+#include "study/observer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "rigidtouch/types.h"
+#include "study/plan.h"
+#include "study/random.h"
+#include "study/statistics.h"
+#include "study/toy_stimulus.h"
+
+namespace rigidtouch::study {
+namespace {
+
+using nlohmann::json;
+using testing::ToyStimulusSource;
+
+Condition Penalty(double stiffness_N_per_m) {
+  Condition c;
+  c.label = "penalty";
+  c.renderer = Renderer::kPenalty;
+  c.stiffness_N_per_m = stiffness_N_per_m;
+  return c;
+}
+
+Condition Impulse(double restitution) {
+  Condition c;
+  c.label = "impulse";
+  c.renderer = Renderer::kImpulse;
+  c.restitution = restitution;
+  return c;
+}
+
+Condition Train(double frequency_hz) {
+  Condition c;
+  c.label = "train";
+  c.renderer = Renderer::kTrain;
+  c.t_collision_s = 0.1;
+  c.frequency_hz = frequency_hz;
+  return c;
+}
+
+StudyTest MethodTest() {
+  StudyTest t;
+  t.name = "t";
+  t.conditions = {0, 1};
+  return t;  // 3 familiarization taps, 20 series of 3 taps
+}
+
+TEST(ObserverTest, ChannelSensitivityFollowsTheFourChannelShapes) {
+  const ObserverParams p;
+  // exact by construction: 12 dB per octave around 250 Hz, NP flat below 40 Hz at P(40 Hz)
+  EXPECT_DOUBLE_EQ(PacinianGain_dB(p, 250.0), 0.0);
+  EXPECT_NEAR(PacinianGain_dB(p, 125.0), -12.0, 1e-12);
+  EXPECT_NEAR(PacinianGain_dB(p, 500.0), -12.0, 1e-12);
+  const double p40 = -12.0 * std::log2(250.0 / 40.0);
+  EXPECT_NEAR(NonPacinianGain_dB(p, 40.0), p40, 1e-12);
+  EXPECT_NEAR(NonPacinianGain_dB(p, 20.0), p40, 1e-12);
+  EXPECT_NEAR(NonPacinianGain_dB(p, 80.0), p40 - 12.0, 1e-12);
+  // NP is the more sensitive channel below 40 Hz, P above
+  EXPECT_GT(NonPacinianGain_dB(p, 20.0), PacinianGain_dB(p, 20.0));
+  EXPECT_LT(NonPacinianGain_dB(p, 100.0), PacinianGain_dB(p, 100.0));
+  const auto centres = PerceptBandCentres_hz();
+  EXPECT_NEAR(centres[0], 20.0, 1e-12);
+  EXPECT_NEAR(centres[2], 200.0, 1e-12);
+}
+
+TEST(ObserverTest, PerceptVectorClosedForm) {
+  const ObserverParams p;
+  TapPercept tap;
+  tap.peak_force_N = 10.0;
+  tap.vibration_rms_N = 10.0 * p.vibration_threshold_rms_N;  // 20 dB above threshold
+  tap.band_energy_fraction = {0.0, 0.0, 1.0, 0.0};           // all at 200 Hz
+  tap.dominant_frequency_hz = 200.0;
+  const PerceptVector v = ToPerceptVector(p, tap);
+  EXPECT_NEAR(v[0], 20.0 / 2.3, 1e-12);
+  const double sl_p = 20.0 - 12.0 * std::log2(250.0 / 200.0);
+  EXPECT_NEAR(v[1], sl_p / 2.3, 1e-12);
+  // NP at 200 Hz is far below threshold here: 0 dB SL
+  EXPECT_EQ(v[2], 0.0);
+  // salient (SL >= 10 dB): full pitch cue
+  EXPECT_NEAR(v[3], std::log(200.0 / 250.0) / std::log(1.2), 1e-12);
+
+  TapPercept silent;
+  silent.peak_force_N = 0.001;  // below the onset floor
+  silent.dominant_frequency_hz = 100.0;
+  const PerceptVector s = ToPerceptVector(p, silent);
+  EXPECT_NEAR(s[0], 20.0 * std::log10(0.01) / 2.3, 1e-12);
+  EXPECT_EQ(s[1], 0.0);
+  EXPECT_EQ(s[2], 0.0);
+  EXPECT_EQ(s[3], 0.0);  // an imperceptible vibration has no pitch
+
+  TapPercept bad = tap;
+  bad.peak_force_N = std::nan("");
+  EXPECT_THROW(ToPerceptVector(p, bad), Error);
+}
+
+TEST(ObserverTest, ProbabilityCorrectSpecialCases) {
+  EXPECT_EQ(NearestTemplateProbabilityCorrect(0.0, 0.3, 0.7, 4), 0.5);
+  // exact templates: Phi(d / (2 sigma))
+  EXPECT_NEAR(NearestTemplateProbabilityCorrect(1.5, 0.25, 0.0, 4), NormalCdf(1.5 / 1.0), 1e-15);
+  // one axis: closed form
+  const double c = 1.0 / std::sqrt(4 * 0.5 + 2 * 0.5);
+  const double t = 1.0 / std::sqrt(2 * 0.5);
+  EXPECT_NEAR(NearestTemplateProbabilityCorrect(1.0, 0.5, 0.5, 1),
+              NormalCdf(c) * NormalCdf(t) + NormalCdf(-c) * NormalCdf(-t), 1e-15);
+  // quadrature is continuous with the exact-template limit (tolerance: 1e-3 for vm = 1e-6)
+  EXPECT_NEAR(NearestTemplateProbabilityCorrect(1.5, 0.25, 1e-6, 4), NormalCdf(1.5), 1e-3);
+}
+
+// direct Monte Carlo of the nearest-template rule with `dims` axes
+double MonteCarloProbabilityCorrect(double distance, double vs, double vm, int dims, int trials,
+                                    std::uint64_t seed) {
+  Rng rng(seed);
+  int correct = 0;
+  for (int i = 0; i < trials; ++i) {
+    double da = 0.0;
+    double db = 0.0;
+    for (int k = 0; k < dims; ++k) {
+      const double x = std::sqrt(vs) * rng.Normal();  // wall A at the origin was presented
+      const double a = std::sqrt(vm) * rng.Normal();
+      const double b = (k == 0 ? distance : 0.0) + std::sqrt(vm) * rng.Normal();
+      da += (x - a) * (x - a);
+      db += (x - b) * (x - b);
+    }
+    correct += da < db ? 1 : 0;
+  }
+  return static_cast<double>(correct) / trials;
+}
+
+TEST(ObserverTest, QuadratureMatchesMonteCarlo) {
+  // 200000 trials: SE <= 0.0011; tolerance 4 SE = 0.0045
+  struct Case {
+    double distance, vs, vm;
+    int dims;
+  };
+  for (const Case& c : {Case{1.0, 1.0 / 3.0, 0.6, 4}, Case{2.5, 1.0 / 3.0, 1.5, 4},
+                        Case{0.7, 0.2, 0.3, 2}, Case{3.0, 1.0, 2.0, 3}}) {
+    const double q = NearestTemplateProbabilityCorrect(c.distance, c.vs, c.vm, c.dims);
+    const double mc = MonteCarloProbabilityCorrect(c.distance, c.vs, c.vm, c.dims, 200000, 17);
+    EXPECT_NEAR(q, mc, 0.0045) << c.distance << " " << c.vm << " " << c.dims;
+  }
+}
+
+TEST(ObserverTest, ProbabilityCorrectNeverFallsAsWallsMoveApart) {
+  for (double vm : {0.0, 0.1, 0.6, 2.0}) {
+    double previous = 0.5;
+    for (double d = 0.0; d <= 10.0; d += 0.1) {
+      const double pc = NearestTemplateProbabilityCorrect(d, 1.0 / 3.0, vm, kPerceptDimensions);
+      EXPECT_GE(pc, previous - 1e-12) << "vm " << vm << " d " << d;  // round-off only
+      EXPECT_LE(pc, 1.0);
+      previous = pc;
+    }
+    EXPECT_GT(previous, 0.99);
+  }
+}
+
+TEST(ObserverTest, PredictionBoundaries) {
+  ObserverParams p;
+  const StudyTest t = MethodTest();
+  const PerceptVector a = {0.0, 0.0, 0.0, 0.0};
+  const PerceptVector b = {2.0, 0.0, 0.0, 0.0};
+  EXPECT_DOUBLE_EQ(PredictPercentCorrect(p, t, a, a), 50.0);
+  p.lapse_rate = 0.0;
+  const double straight = PredictPercentCorrect(p, t, a, b);
+  EXPECT_GT(straight, 60.0);
+  p.label_swap_probability = 1.0;
+  EXPECT_NEAR(PredictPercentCorrect(p, t, a, b), 100.0 - straight, 1e-9);
+  p.label_swap_probability = 0.0;
+  p.lapse_rate = 1.0;
+  EXPECT_DOUBLE_EQ(PredictPercentCorrect(p, t, a, b), 50.0);
+}
+
+// predicted percent correct of wall `base` against each member of a family
+std::vector<double> FamilyPrediction(const Condition& base, const std::vector<Condition>& family) {
+  const ObserverParams p;
+  ToyStimulusSource source;
+  const StudyTest t = MethodTest();
+  // the same tap seeds for every wall: only the condition differs
+  const PerceptVector a = MeanPerceptVector(p, source, base, 40, 5);
+  std::vector<double> out;
+  for (const Condition& c : family) {
+    out.push_back(PredictPercentCorrect(p, t, a, MeanPerceptVector(p, source, c, 40, 5)));
+  }
+  return out;
+}
+
+void ExpectNonDecreasingFromChance(const std::vector<double>& pc, const std::string& family) {
+  ASSERT_FALSE(pc.empty());
+  EXPECT_DOUBLE_EQ(pc.front(), 50.0) << family << ": identical walls";
+  for (std::size_t i = 1; i < pc.size(); ++i) {
+    EXPECT_GE(pc[i], pc[i - 1] - 1e-9) << family << " member " << i;  // round-off only
+  }
+  EXPECT_GT(pc.back(), 75.0) << family << ": the largest difference is discriminable";
+}
+
+TEST(ObserverTest, LargerPhysicalDifferenceNeverLowersPredictedPercentCorrect) {
+  std::vector<Condition> stiffer;
+  for (double k = 1000.0; k <= 3000.0; k += 50.0) stiffer.push_back(Penalty(k));
+  ExpectNonDecreasingFromChance(FamilyPrediction(Penalty(1000.0), stiffer), "stiffness");
+
+  std::vector<Condition> bouncier;
+  for (double e = 0.0; e <= 1.0; e += 0.05) bouncier.push_back(Impulse(e));
+  ExpectNonDecreasingFromChance(FamilyPrediction(Impulse(0.0), bouncier), "restitution");
+
+  std::vector<Condition> lower;
+  for (double f = 250.0; f >= 100.0; f -= 10.0) lower.push_back(Train(f));
+  ExpectNonDecreasingFromChance(FamilyPrediction(Train(250.0), lower), "lower train frequency");
+
+  std::vector<Condition> higher;
+  for (double f = 250.0; f <= 390.0; f += 10.0) higher.push_back(Train(f));
+  ExpectNonDecreasingFromChance(FamilyPrediction(Train(250.0), higher), "higher train frequency");
+}
+
+Protocol TwoWalls(const Condition& a, const Condition& b) {
+  json d = {{"name", "pair"},
+            {"conditions", {{"a", a.ToJson()}, {"b", b.ToJson()}}},
+            {"tests", {{{"name", "t"}, {"conditions", {"a", "b"}}}}}};
+  return ParseProtocol(d, "pair");
+}
+
+TEST(ObserverTest, SimulatedParticipantsAgreeWithThePrediction) {
+  // stimulus without tap variability and no individual differences: the simulation and the
+  // analytic prediction describe the same random experiment
+  ObserverParams p;
+  p.individual_jnd_log_sd = 0.0;
+  ToyStimulusSource source(/*speed_log_sd=*/0.0);
+  const Protocol protocol = TwoWalls(Penalty(1000.0), Penalty(1500.0));
+  const PerceptVector a = MeanPerceptVector(p, source, protocol.conditions[0], 1, 0);
+  const PerceptVector b = MeanPerceptVector(p, source, protocol.conditions[1], 1, 0);
+  const double predicted = PredictPercentCorrect(p, protocol.tests[0], a, b);
+  EXPECT_GT(predicted, 60.0);
+  EXPECT_LT(predicted, 90.0);
+
+  constexpr int kParticipants = 2000;
+  int correct = 0;
+  int answers = 0;
+  for (int i = 0; i < kParticipants; ++i) {
+    SimulatedParticipant participant(protocol, p, source,
+                                     DeriveSeed(2024, {static_cast<std::uint64_t>(i)}));
+    for (const Step& step : MakePlan(protocol, static_cast<std::uint64_t>(i))) {
+      if (step.kind != StepKind::kSeries) continue;
+      correct += participant.Decide(step) == step.condition ? 1 : 0;
+      ++answers;
+    }
+  }
+  const double simulated = 100.0 * correct / answers;
+  // 40000 answers, but series of one participant share templates: allow 5 binomial SE (1.1%)
+  // plus the quadrature's error (< 0.1%)
+  const double se = 100.0 * std::sqrt(0.25 / answers);
+  EXPECT_NEAR(simulated, predicted, 5.0 * se + 0.1);
+}
+
+TEST(ObserverTest, DecisionsArePureFunctionsOfSeedAndStep) {
+  // a hard pair, so that answers depend on the participant's noise
+  const Protocol protocol = TwoWalls(Penalty(1000.0), Penalty(1200.0));
+  const ObserverParams p;
+  ToyStimulusSource source;
+  const std::vector<Step> plan = MakePlan(protocol, 3);
+  SimulatedParticipant forward(protocol, p, source, 77);
+  std::vector<int> in_order;
+  for (const Step& s : plan) {
+    if (s.kind == StepKind::kSeries) in_order.push_back(forward.Decide(s));
+  }
+  // a fresh participant asked from the middle (as after a resume) answers the same
+  SimulatedParticipant backward(protocol, p, source, 77);
+  std::vector<int> reversed;
+  for (auto it = plan.rbegin(); it != plan.rend(); ++it) {
+    if (it->kind == StepKind::kSeries) reversed.insert(reversed.begin(), backward.Decide(*it));
+  }
+  EXPECT_EQ(in_order, reversed);
+  SimulatedParticipant other(protocol, p, source, 78);
+  std::vector<int> other_answers;
+  for (const Step& s : plan) {
+    if (s.kind == StepKind::kSeries) other_answers.push_back(other.Decide(s));
+  }
+  EXPECT_NE(in_order, other_answers);
+}
+
+TEST(ObserverTest, IndividualDifferencesScaleTheJnd) {
+  ObserverParams p;
+  ToyStimulusSource source;
+  const Protocol protocol = TwoWalls(Train(250.0), Train(100.0));
+  std::vector<double> factors;
+  for (std::uint64_t s = 0; s < 400; ++s) {
+    factors.push_back(std::log(SimulatedParticipant(protocol, p, source, s).jnd_factor()));
+  }
+  const MeanSd m = ComputeMeanSd(factors);
+  // ln(factor) ~ N(0, 0.2^2): mean SE 0.01, SD SE ~0.0071; tolerances 5 SE
+  EXPECT_NEAR(m.mean, 0.0, 0.05);
+  EXPECT_NEAR(m.sd, 0.2, 0.036);
+  p.individual_jnd_log_sd = 0.0;
+  EXPECT_EQ(SimulatedParticipant(protocol, p, source, 9).jnd_factor(), 1.0);
+}
+
+TEST(ObserverTest, ParametersParseWithNamedErrors) {
+  const ObserverParams defaults;
+  const ObserverParams same = ParseObserverParams(defaults.ToJson(), "observer.json");
+  EXPECT_EQ(same.ToJson(), defaults.ToJson());
+  const ObserverParams changed =
+      ParseObserverParams(json{{"lapse_rate", 0.1}, {"intensity_jnd_dB", 2.0}}, "o.json");
+  EXPECT_EQ(changed.lapse_rate, 0.1);
+  EXPECT_EQ(changed.intensity_jnd_dB, 2.0);
+  EXPECT_EQ(changed.frequency_weber_fraction, defaults.frequency_weber_fraction);
+  try {
+    ParseObserverParams(json{{"lapse", 0.1}}, "o.json");
+    FAIL();
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("unknown observer parameter \"lapse\""), std::string::npos) << m;
+    EXPECT_NE(m.find("lapse_rate"), std::string::npos) << m;
+  }
+  try {
+    ParseObserverParams(json{{"lapse_rate", 1.5}}, "o.json");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("lapse_rate: 1.5 is out of range; valid: >= 0 and <= 1"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(ParseObserverParams(json{{"intensity_jnd_dB", 0}}, "o.json"), Error);
+  EXPECT_THROW(ParseObserverParams(json{{"non_pacinian_corner_hz", 300}}, "o.json"), Error);
+}
+
+}  // namespace
+}  // namespace rigidtouch::study

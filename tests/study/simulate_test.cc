@@ -1,0 +1,255 @@
+#include "study/simulate.h"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "rigidtouch/types.h"
+#include "study/analysis.h"
+#include "study/log.h"
+#include "study/random.h"
+#include "study/statistics.h"
+#include "study/test_files.h"
+#include "study/toy_stimulus.h"
+
+namespace rigidtouch::study {
+namespace {
+
+using nlohmann::json;
+using testing::ReadFile;
+using testing::ScratchDir;
+using testing::ToyStimulusSource;
+
+Protocol Cohort(json first, json second, int series = 20) {
+  json d = {{"name", "cohort"},
+            {"series", series},
+            {"conditions", {{"first", first}, {"second", second}}},
+            {"tests", {{{"name", "only"}, {"conditions", {"first", "second"}}}}}};
+  return ParseProtocol(d, "cohort");
+}
+
+const json kTrain250 = {{"renderer", "train"}, {"frequency_hz", 250}};
+const json kTrain100 = {{"renderer", "train"}, {"frequency_hz", 100}};
+const json kPenalty1000 = {{"renderer", "penalty"}, {"stiffness_N_per_m", 1000}};
+const json kPenalty1300 = {{"renderer", "penalty"}, {"stiffness_N_per_m", 1300}};
+
+// per participant: (test, series, condition, answer) of every answer
+std::vector<std::vector<std::vector<int>>> Answers(const std::vector<ParticipantRun>& runs) {
+  std::vector<std::vector<std::vector<int>>> out;
+  for (const ParticipantRun& run : runs) {
+    std::vector<std::vector<int>> answers;
+    for (const json& r : run.records) {
+      if (r["type"] != "answer") continue;
+      answers.push_back({r["test"].get<int>(), r["series"].get<int>(), r["condition"].get<int>(),
+                         r["answer"].get<int>()});
+    }
+    out.push_back(answers);
+  }
+  return out;
+}
+
+TEST(SimulateTest, IdenticalWallsGiveChanceWithinTheBinomialInterval) {
+  // two labels, one configuration: 200 participants x 20 series = 4000 answers
+  const Protocol protocol = Cohort(kTrain250, kTrain250);
+  ToyStimulusSource source;
+  CohortConfig config;
+  config.participants = 200;
+  config.seed = 12345;
+  const auto runs = SimulateCohort(protocol, source, config);
+  std::vector<LogInput> logs;
+  for (const auto& run : runs) logs.push_back({run.id, run.records});
+  const StudyReport report = AnalyzeLogs(logs);
+  ASSERT_EQ(report.tests.size(), 1u);
+  const TestResult& t = report.tests[0];
+  EXPECT_EQ(t.percent_correct.n, 200);
+  EXPECT_EQ(t.pooled_answers, 4000);
+  // exact central 95% interval of Binomial(4000, 0.5); with every session complete the cohort
+  // mean of percent correct equals the pooled percentage
+  const double lo = 100.0 * BinomialQuantile(4000, 0.5, 0.025) / 4000.0;
+  const double hi = 100.0 * BinomialQuantile(4000, 0.5, 0.975) / 4000.0;
+  EXPECT_GE(t.percent_correct.mean, lo);
+  EXPECT_LE(t.percent_correct.mean, hi);
+  EXPECT_NEAR(t.percent_correct.mean, 100.0 * t.pooled_correct / 4000.0, 1e-9);
+}
+
+TEST(SimulateTest, DifferentWallsAreToldApartAndTheCohortIsDeterministic) {
+  const Protocol protocol = Cohort(kTrain250, kTrain100);
+  ToyStimulusSource source;
+  CohortConfig config;
+  config.participants = 20;
+  config.seed = 7;
+  const auto a = SimulateCohort(protocol, source, config);
+  const auto b = SimulateCohort(protocol, source, config);
+  EXPECT_EQ(Answers(a), Answers(b));
+  ASSERT_EQ(a.size(), 20u);
+  EXPECT_EQ(a[0].id, "sim-001");
+  EXPECT_EQ(a[19].id, "sim-020");
+  EXPECT_NE(a[0].seed, a[1].seed);
+  config.seed = 8;
+  EXPECT_NE(Answers(SimulateCohort(protocol, source, config)), Answers(a));
+
+  std::vector<LogInput> logs;
+  for (const auto& run : a) logs.push_back({run.id, run.records});
+  const TestResult t = AnalyzeLogs(logs).tests[0];
+  EXPECT_GT(t.percent_correct.mean, 75.0);
+  EXPECT_GT(t.pooled.p_greater, 0.0);
+  EXPECT_LT(t.pooled.p_greater, 1e-6);
+  // simulated logs say what they are
+  EXPECT_EQ(a[0].records[0]["mode"], "simulated");
+  EXPECT_EQ(a[0].records[0]["stimulus_source"], "test-only toy stimulus source");
+  EXPECT_EQ(a[0].records[0]["observer"], ObserverParams{}.ToJson());
+}
+
+TEST(SimulateTest, IdsAreZeroPaddedToTheCohortSize) {
+  EXPECT_EQ(SimulatedParticipantId(0, 9), "sim-001");
+  EXPECT_EQ(SimulatedParticipantId(41, 999), "sim-042");
+  EXPECT_EQ(SimulatedParticipantId(41, 1000), "sim-0042");
+  EXPECT_EQ(SimulatedParticipantId(12344, 20000), "sim-12345");
+}
+
+TEST(SimulateTest, SwappedLabelsAreFlaggedBelowChance) {
+  const Protocol protocol = Cohort(kTrain250, kTrain100);
+  ToyStimulusSource source;
+  CohortConfig config;
+  config.participants = 5;
+  config.seed = 3;
+  config.observer.label_swap_probability = 1.0;
+  config.observer.lapse_rate = 0.0;
+  std::vector<LogInput> logs;
+  for (const auto& run : SimulateCohort(protocol, source, config)) {
+    logs.push_back({run.id, run.records});
+  }
+  const TestResult t = AnalyzeLogs(logs).tests[0];
+  for (const ParticipantResult& p : t.participants) {
+    EXPECT_TRUE(p.label_swap_suspected) << p.id << " " << p.percent_correct;
+    EXPECT_LT(p.d_prime.d_prime, 0.0);
+  }
+}
+
+TEST(SimulateTest, LoggedCohortRefusesAnotherObserverOnResume) {
+  ScratchDir dir;
+  const Protocol protocol = Cohort(kPenalty1000, kPenalty1300, 4);
+  ToyStimulusSource source;
+  CohortConfig config;
+  config.participants = 2;
+  config.seed = 5;
+  config.log_dir = dir.path();
+  SimulateCohort(protocol, source, config);
+  const std::string before = ReadFile(dir.File("sim-001.jsonl"));
+  config.resume = true;
+  config.observer.lapse_rate = 0.1;
+  try {
+    SimulateCohort(protocol, source, config);
+    FAIL() << "expected a refusal";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("different observer"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ReadFile(dir.File("sim-001.jsonl")), before);
+  config.resume = false;
+  config.observer = ObserverParams{};
+  EXPECT_THROW(SimulateCohort(protocol, source, config), Error);  // logs exist, no --resume
+}
+
+// answers recorded so far in the cohort's logs (the logs may be being written)
+int CountAnswers(const ScratchDir& dir, int participants) {
+  int answers = 0;
+  for (int i = 0; i < participants; ++i) {
+    const std::string log = dir.File(SimulatedParticipantId(i, participants) + ".jsonl");
+    for (const json& r : ReadLog(log).records) answers += r["type"] == "answer" ? 1 : 0;
+  }
+  return answers;
+}
+
+TEST(SimulateTest, KilledAndResumedCohortEqualsAnUninterruptedOne) {
+  const Protocol protocol = Cohort(kPenalty1000, kPenalty1300, 12);
+  ToyStimulusSource source;
+  CohortConfig config;
+  config.participants = 4;
+  config.seed = 99;
+
+  ScratchDir reference_dir;
+  config.log_dir = reference_dir.path();
+  const auto reference = SimulateCohort(protocol, source, config);
+  const int total = 4 * 12;
+
+  ScratchDir crash_dir;
+  config.log_dir = crash_dir.path();
+  config.resume = true;
+  Rng rng(2718);
+  std::set<int> answers_at_kill;  // where the kills landed
+  int target = 0;
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    // the next kill point: a random number of answers further, then a random delay
+    target += static_cast<int>(rng.Below(9));
+    std::fflush(nullptr);
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      // the child resumes the cohort until it is killed; no gtest code runs here
+      try {
+        SimulateCohort(protocol, source, config);
+      } catch (...) {
+        _exit(3);
+      }
+      _exit(0);
+    }
+    int status = 0;
+    bool exited = false;
+    while (CountAnswers(crash_dir, 4) < target) {
+      if (waitpid(child, &status, WNOHANG) == child) {
+        exited = true;
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    if (!exited) {
+      std::this_thread::sleep_for(std::chrono::microseconds(rng.Below(3000)));
+      kill(child, SIGKILL);
+      waitpid(child, &status, 0);
+    }
+    if (WIFSIGNALED(status)) {
+      answers_at_kill.insert(CountAnswers(crash_dir, 4));
+    } else {
+      ASSERT_TRUE(WIFEXITED(status));
+      ASSERT_EQ(WEXITSTATUS(status), 0) << "the child failed to resume";
+    }
+  }
+  const auto resumed = SimulateCohort(protocol, source, config);
+  EXPECT_EQ(Answers(resumed), Answers(reference));
+  for (const auto& run : resumed) {
+    const LogContents c = ReadLog(run.log_path);
+    EXPECT_EQ(c.torn_tail_bytes, 0u);
+    EXPECT_EQ(c.records.back()["type"], "session_end");
+  }
+  std::cout << "[ info ] " << answers_at_kill.size() << " kills landed, after";
+  for (int a : answers_at_kill) std::cout << " " << a;
+  std::cout << " of " << total << " answers\n";
+  EXPECT_GE(answers_at_kill.size(), 3u) << "the kills should land at several points";
+}
+
+TEST(SimulateTest, PredictProtocolUsesTheObserverModel) {
+  const Protocol same = Cohort(kTrain250, kTrain250);
+  const Protocol different = Cohort(kTrain250, kTrain100);
+  ToyStimulusSource source;
+  const ObserverParams observer;
+  const auto p_same = PredictProtocol(same, source, observer, 1, 10);
+  const auto p_diff = PredictProtocol(different, source, observer, 1, 10);
+  ASSERT_EQ(p_same.size(), 1u);
+  EXPECT_EQ(p_same[0].name, "only");
+  EXPECT_EQ(p_same[0].distance_jnd, 0.0);
+  EXPECT_DOUBLE_EQ(p_same[0].percent_correct, 50.0);
+  EXPECT_GT(p_diff[0].distance_jnd, 0.0);
+  EXPECT_GT(p_diff[0].percent_correct, 50.0);
+  EXPECT_THROW(PredictProtocol(same, source, observer, 1, 0), Error);
+}
+
+}  // namespace
+}  // namespace rigidtouch::study
