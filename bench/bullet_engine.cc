@@ -21,9 +21,9 @@ Eigen::Isometry3d MjPose(const mjtNum* position, const mjtNum* rotation) {
 btTransform ToBullet(const Eigen::Isometry3d& pose) {
   const Mat3& r = pose.linear();
   const Vec3& p = pose.translation();
-  return btTransform(btMatrix3x3(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0),
-                                 r(2, 1), r(2, 2)),
-                     btVector3(p.x(), p.y(), p.z()));
+  return btTransform(
+      btMatrix3x3(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)),
+      btVector3(p.x(), p.y(), p.z()));
 }
 
 Eigen::Isometry3d FromBullet(const btTransform& transform) {
@@ -55,7 +55,8 @@ std::string ElementName(const mjModel& model, mjtObj type, int id) {
 }
 
 // the Bullet shape with the geom's MJCF size, in the geom's own frame
-std::unique_ptr<btCollisionShape> MakeShape(const mjModel& model, int geom, const std::string& path) {
+std::unique_ptr<btCollisionShape> MakeShape(const mjModel& model, int geom,
+                                            const std::string& path) {
   const mjtNum* size = model.geom_size + 3 * geom;
   switch (model.geom_type[geom]) {
     case mjGEOM_PLANE:
@@ -69,8 +70,8 @@ std::unique_ptr<btCollisionShape> MakeShape(const mjModel& model, int geom, cons
     case mjGEOM_CYLINDER:
       return std::make_unique<btCylinderShapeZ>(btVector3(size[0], size[0], size[1]));
     default:
-      throw Error("scene " + path + ": geom '" + ElementName(model, mjOBJ_GEOM, geom) + "' has type " +
-                  std::to_string(model.geom_type[geom]) +
+      throw Error("scene " + path + ": geom '" + ElementName(model, mjOBJ_GEOM, geom) +
+                  "' has type " + std::to_string(model.geom_type[geom]) +
                   "; the Bullet peer supports plane, sphere, box, capsule and cylinder");
   }
 }
@@ -79,7 +80,9 @@ std::unique_ptr<btCollisionShape> MakeShape(const mjModel& model, int geom, cons
 
 BulletEngine::BulletEngine() = default;
 
-BulletEngine::~BulletEngine() { Clear(); }
+BulletEngine::~BulletEngine() {
+  Clear();
+}
 
 void BulletEngine::Clear() {
   if (world_ != nullptr) {
@@ -167,8 +170,8 @@ void BulletEngine::Load(const Scene& scene) {
     const Eigen::Isometry3d T_world_inertial = MjPose(data->xipos + 3 * b, data->ximat + 9 * b);
     btCollisionShape* shape = nullptr;
     const Eigen::Isometry3d T_inertial_geom0 =
-        T_world_inertial.inverse() * MjPose(data->geom_xpos + 3 * first_geom,
-                                            data->geom_xmat + 9 * first_geom);
+        T_world_inertial.inverse() *
+        MjPose(data->geom_xpos + 3 * first_geom, data->geom_xmat + 9 * first_geom);
     if (geom_count == 1 && IsIdentity(T_inertial_geom0)) {
       shapes_.push_back(MakeShape(model, first_geom, path_));
       shape = shapes_.back().get();
@@ -233,7 +236,8 @@ double BulletEngine::DeepestPenetration_m() const {
   for (int i = 0; i < manifolds; ++i) {
     const btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(i);
     for (int k = 0; k < manifold->getNumContacts(); ++k) {
-      deepest_m = std::max(deepest_m, -static_cast<double>(manifold->getContactPoint(k).getDistance()));
+      deepest_m =
+          std::max(deepest_m, -static_cast<double>(manifold->getContactPoint(k).getDistance()));
     }
   }
   return deepest_m;
@@ -322,12 +326,14 @@ std::string BulletEngine::Configuration() const {
   return "Bullet " + std::to_string(btGetVersion()) +
          (btIsDoublePrecision() ? " double" : " single") +
          " precision, btSequentialImpulseConstraintSolver defaults: iterations " +
-         std::to_string(info.m_numIterations) + ", erp " + std::to_string(info.m_erp) +
-         ", split impulse " + (info.m_splitImpulse ? "on" : "off") +
-         ", warm starting " + ((info.m_solverMode & SOLVER_USE_WARMSTARTING) ? "on" : "off") +
+         std::to_string(info.m_numIterations) + ", erp " + std::to_string(info.m_erp).substr(0, 4) +
+         ", split impulse " + (info.m_splitImpulse ? "on" : "off") + ", warm starting " +
+         ((info.m_solverMode & SOLVER_USE_WARMSTARTING) ? "on" : "off") +
          ", btDbvtBroadphase, deactivation disabled, stepSimulation(h, 0)";
 }
 
-std::unique_ptr<Engine> MakeBulletEngine() { return std::make_unique<BulletEngine>(); }
+std::unique_ptr<Engine> MakeBulletEngine() {
+  return std::make_unique<BulletEngine>();
+}
 
 }  // namespace rigidtouch::bench

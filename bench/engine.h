@@ -77,13 +77,13 @@ struct EngineEntry {
   EngineFactory make;
 };
 
-/// All registered engines, in registration order.
+/// All registered engines: the reference engine first, then the peers by name.
 std::vector<EngineEntry>& Engines();
 
 /// Registers an engine at static-initialisation time: a file `bench/<name>_engine.cc` defines
 /// `const EngineRegistrar kRegistrar{"<name>", &Make<Name>Engine};` and needs no other change.
 struct EngineRegistrar {
-  /// Appends the engine to Engines().
+  /// Adds the engine to Engines(), keeping its order.
   EngineRegistrar(std::string name, EngineFactory make);
 };
 

@@ -29,8 +29,10 @@ SceneRun::SceneRun(Engine& engine, const Scene& scene) : engine_(engine), scene_
 
 void SceneRun::Track() {
   if (!engine_.StateIsFinite()) gates_.finite = false;
-  gates_.deepest_penetration_m =
-      std::max(gates_.deepest_penetration_m, engine_.DeepestPenetration_m());
+  const double penetration_m = engine_.DeepestPenetration_m();
+  gates_.deepest_penetration_m = std::max(gates_.deepest_penetration_m, penetration_m);
+  ++gates_.steps;
+  if (!(penetration_m < scene_.max_penetration_m)) ++gates_.steps_over_penetration;
 }
 
 void SceneRun::Prepare() {
@@ -123,8 +125,7 @@ RunResult SceneRun::Finish() {
   gates_.failures.clear();
   if (!gates_.finite) gates_.failures.push_back("a position or velocity became NaN or infinite");
   if (gates_.warnings > 0) {
-    gates_.failures.push_back("the engine raised " + std::to_string(gates_.warnings) +
-                              " warnings");
+    gates_.failures.push_back("the engine raised " + std::to_string(gates_.warnings) + " warnings");
   }
   if (gates_.watch_displacement_m >= 0 &&
       !(gates_.watch_displacement_m < scene_.max_watch_displacement_m)) {
@@ -135,7 +136,9 @@ RunResult SceneRun::Finish() {
   }
   if (!(gates_.deepest_penetration_m < scene_.max_penetration_m)) {
     gates_.failures.push_back("deepest penetration " + Millimetres(gates_.deepest_penetration_m) +
-                              " (limit " + Millimetres(scene_.max_penetration_m) + ")");
+                              " (limit " + Millimetres(scene_.max_penetration_m) + "), over the " +
+                              "limit in " + std::to_string(gates_.steps_over_penetration) + " of " +
+                              std::to_string(gates_.steps) + " steps");
   }
   if (gates_.strikes_missed > 0) {
     gates_.failures.push_back(std::to_string(gates_.strikes_missed) +

@@ -17,6 +17,8 @@ struct GateReport {
   bool finite = true;                 ///< no NaN or infinity in any position or velocity
   long warnings = 0;                  ///< engine warnings (e.g. MuJoCo's full contact buffer)
   double deepest_penetration_m = 0;   ///< over every step run
+  long steps = 0;                     ///< every step run (warm-up, gates, measurement)
+  long steps_over_penetration = 0;    ///< steps whose deepest penetration broke the limit
   double watch_displacement_m = -1;   ///< the watched body's largest displacement; -1: no gate
   long strikes_missed = 0;            ///< strikes without tool contact in `strike_max_steps`
   std::vector<std::string> failures;  ///< one sentence per failed gate, with the measured value

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 
 namespace rigidtouch::bench {
 namespace {
@@ -11,6 +12,12 @@ const EngineRegistrar kRegistrar{"mujoco", &MakeMujocoEngine};
 
 bool AllFinite(const mjtNum* values, int n) {
   return std::all_of(values, values + n, [](mjtNum v) { return std::isfinite(v); });
+}
+
+std::string Scientific(double value) {
+  std::array<char, 32> text{};
+  std::snprintf(text.data(), text.size(), "%g", value);
+  return text.data();
 }
 
 }  // namespace
@@ -62,7 +69,9 @@ void MujocoEngine::Step() {
   mj_step(model_, data_);
 }
 
-int MujocoEngine::ContactCount() const { return data_->ncon; }
+int MujocoEngine::ContactCount() const {
+  return data_->ncon;
+}
 
 int MujocoEngine::BodyContactCount(std::string_view body) const {
   const int id = BodyId(body);
@@ -89,7 +98,9 @@ int MujocoEngine::FreeQposAddress(int body_id) const {
   return model_->jnt_qposadr[joint];
 }
 
-int MujocoEngine::BodyId(std::string_view body) const { return MjBodyId(*model_, body, path_); }
+int MujocoEngine::BodyId(std::string_view body) const {
+  return MjBodyId(*model_, body, path_);
+}
 
 Vec3 MujocoEngine::BodyPosition(std::string_view body) const {
   const int id = BodyId(body);
@@ -128,7 +139,9 @@ void MujocoEngine::SaveSnapshot() {
   snapshot_ = mj_copyData(snapshot_, model_, data_);
 }
 
-void MujocoEngine::RestoreSnapshot() { mj_copyData(data_, model_, snapshot_); }
+void MujocoEngine::RestoreSnapshot() {
+  mj_copyData(data_, model_, snapshot_);
+}
 
 bool MujocoEngine::StateIsFinite() const {
   return AllFinite(data_->qpos, model_->nq) && AllFinite(data_->qvel, model_->nv);
@@ -145,13 +158,17 @@ std::string MujocoEngine::Configuration() const {
   static constexpr const char* kCones[] = {"pyramidal", "elliptic"};
   const mjOption& opt = model_->opt;
   return std::string("MuJoCo ") + mj_versionString() + ", MJCF defaults: solver " +
-         kSolvers[opt.solver] + ", iterations " + std::to_string(opt.iterations) +
-         ", tolerance " + std::to_string(opt.tolerance) + ", cone " + kCones[opt.cone] +
-         ", integrator " + (opt.integrator == mjINT_EULER ? "Euler" : opt.integrator == mjINT_RK4 ? "RK4" : "implicit") +
+         kSolvers[opt.solver] + ", iterations " + std::to_string(opt.iterations) + ", tolerance " +
+         Scientific(opt.tolerance) + ", cone " + kCones[opt.cone] + ", integrator " +
+         (opt.integrator == mjINT_EULER ? "Euler"
+          : opt.integrator == mjINT_RK4 ? "RK4"
+                                        : "implicit") +
          ", nconmax " + std::to_string(model_->nconmax) + ", njmax " +
          std::to_string(model_->njmax);
 }
 
-std::unique_ptr<Engine> MakeMujocoEngine() { return std::make_unique<MujocoEngine>(); }
+std::unique_ptr<Engine> MakeMujocoEngine() {
+  return std::make_unique<MujocoEngine>();
+}
 
 }  // namespace rigidtouch::bench

@@ -76,7 +76,8 @@ std::string FormatRatioTable(const std::vector<RunResult>& results, std::string_
   for (const std::string& scene : SceneOrder(results)) {
     out << Pad(scene, 13);
     const RunResult* ours = Find(results, scene, reference);
-    for (const std::string& peer : peers) out << Pad(RatioCell(ours, Find(results, scene, peer)), 24);
+    for (const std::string& peer : peers)
+      out << Pad(RatioCell(ours, Find(results, scene, peer)), 24);
     out << "\n";
   }
   return out.str();

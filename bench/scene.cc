@@ -6,7 +6,9 @@
 
 namespace rigidtouch::bench {
 
-std::string DefaultScenesDir() { return RIGIDTOUCH_SCENES; }
+std::string DefaultScenesDir() {
+  return RIGIDTOUCH_SCENES;
+}
 
 std::vector<Scene> BenchmarkScenes(const std::string& scenes_dir, double scale) {
   if (!(scale > 0.0 && scale <= 1.0)) {

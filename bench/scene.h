@@ -18,16 +18,16 @@ enum class SceneKind {
 
 /// One benchmark scene with its measurement plan and quality gates (immutable once built).
 struct Scene {
-  std::string name;        ///< benchmark name, e.g. "pile-strike"
-  std::string mjcf_path;   ///< the MJCF file
+  std::string name;       ///< benchmark name, e.g. "pile-strike"
+  std::string mjcf_path;  ///< the MJCF file
   SceneKind kind = SceneKind::kSteady;
   std::string tool_body = "tool";
   Vec3 tool_force_N = Vec3(0.0, 0.0, -2.0);  ///< constant, world frame, at the tool's centre
   double tool_radius_m = 0.005;
 
-  int warmup_steps = 2000;    ///< steps after load before the snapshot
-  int measured_steps = 0;     ///< steady: measured steps; strike: measured strikes
-  int batch_steps = 1000;     ///< steady: restore the snapshot every this many steps
+  int warmup_steps = 2000;  ///< steps after load before the snapshot
+  int measured_steps = 0;   ///< steady: measured steps; strike: measured strikes
+  int batch_steps = 1000;   ///< steady: restore the snapshot every this many steps
 
   /// Gate: this body moves less than `max_watch_displacement_m` over `watch_steps` steps run
   /// from the snapshot (empty: no such gate).

@@ -104,10 +104,9 @@ int main(int argc, char** argv) {
   }
   for (const Scene& scene : scenes) {
     for (const EngineEntry& entry : Engines()) {
-      benchmark::RegisterBenchmark((scene.name + "/" + entry.name).c_str(),
-                                   [&entry, &scene](benchmark::State& state) {
-                                     RunScene(state, entry, scene);
-                                   })
+      benchmark::RegisterBenchmark(
+          (scene.name + "/" + entry.name).c_str(),
+          [&entry, &scene](benchmark::State& state) { RunScene(state, entry, scene); })
           ->UseManualTime()
           ->Iterations(scene.measured_steps)
           ->Unit(benchmark::kMicrosecond);
