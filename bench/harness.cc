@@ -19,10 +19,14 @@ std::string Millimetres(double metres) {
 
 }  // namespace
 
-double CubeTopZ(const Vec3& position_m, const Quat& orientation, double half_size_m) {
-  // the highest corner rises by the half-size times the row sum of |R| for the world z axis
+double StrikeStartHeight(const Vec3& position_m, const Quat& orientation, double half_size_m,
+                         double gap_m, double radius_m) {
+  // the face normals are the body axes and their opposites; the upward one has the largest |z|
   const Mat3 rotation = orientation.toRotationMatrix();
-  return position_m.z() + half_size_m * rotation.row(2).cwiseAbs().sum();
+  const double normal_z = rotation.row(2).cwiseAbs().maxCoeff();
+  // the face plane is at distance half-size from the centre along the normal, and the sphere's
+  // centre at gap + radius from the plane: both distances grow by 1 / n_z along the vertical
+  return position_m.z() + (half_size_m + gap_m + radius_m) / normal_z;
 }
 
 SceneRun::SceneRun(Engine& engine, const Scene& scene) : engine_(engine), scene_(scene) {}
@@ -80,12 +84,11 @@ std::int64_t SceneRun::MeasureSteady() {
 
 std::int64_t SceneRun::MeasureStrike() {
   engine_.RestoreSnapshot();
-  const double top_z_m =
-      CubeTopZ(engine_.BodyPosition(scene_.strike_target),
-               engine_.BodyOrientation(scene_.strike_target), scene_.strike_target_half_size_m);
   const Vec3 target_m = engine_.BodyPosition(scene_.strike_target);
   const Vec3 tool_m(target_m.x(), target_m.y(),
-                    top_z_m + scene_.strike_gap_m + scene_.tool_radius_m);
+                    StrikeStartHeight(target_m, engine_.BodyOrientation(scene_.strike_target),
+                                      scene_.strike_target_half_size_m, scene_.strike_gap_m,
+                                      scene_.tool_radius_m));
   engine_.SetBodyMotion(scene_.tool_body, tool_m, Vec3(0.0, 0.0, -scene_.strike_speed_mps));
   // every approach step is timed the same way; only the first one with tool contact counts
   for (int step = 1; step <= scene_.strike_max_steps; ++step) {

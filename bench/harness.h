@@ -77,8 +77,11 @@ class SceneRun {
   int last_strike_steps_ = 0;
 };
 
-/// Returns the world-frame height of the top face of an axis-aligned-in-body cube of half-size
-/// `half_size_m` centred at `position_m` with orientation `orientation`: its highest corner.
-double CubeTopZ(const Vec3& position_m, const Quat& orientation, double half_size_m);
+/// Returns the height (world z) at which to place the centre of a sphere of radius `radius_m`
+/// straight above the centre of a cube (half-size `half_size_m`, centre `position_m`, orientation
+/// `orientation`) so that the gap between the sphere and the cube's upward face, measured along
+/// that face's normal, is `gap_m`. The upward face is the one whose normal has the largest z.
+double StrikeStartHeight(const Vec3& position_m, const Quat& orientation, double half_size_m,
+                         double gap_m, double radius_m);
 
 }  // namespace rigidtouch::bench

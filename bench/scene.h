@@ -38,8 +38,9 @@ struct Scene {
   /// Gate: the deepest penetration over every step run (warm-up, gates, measurement).
   double max_penetration_m = std::numeric_limits<double>::infinity();
 
-  /// Strike: the tool is placed `strike_gap_m` above the top face of `strike_target` (gap between
-  /// the tool's surface and the face) moving down at `strike_speed_mps`.
+  /// Strike: the tool is placed straight above the centre of `strike_target`, `strike_gap_m` from
+  /// its upward face (between the tool's surface and the face, along the face normal), moving
+  /// down at `strike_speed_mps`.
   std::string strike_target;
   double strike_target_half_size_m = 0.025;  ///< the target is a cube of this half-size
   double strike_gap_m = 0.010;

@@ -21,13 +21,28 @@ Scene SceneFor(const std::string& file) {
 constexpr double kH = 0.001;
 constexpr double kToolAcceleration = 9.81 + 2.0 / 0.1;
 
-TEST(CubeTopZ, HighestCornerOfATiltedCube) {
+TEST(StrikeStartHeight, GapIsMeasuredAlongTheUpwardFaceNormal) {
   const Vec3 centre_m(0.3, -0.2, 0.1);
-  // upright: the top face, half-size above the centre
-  EXPECT_NEAR(CubeTopZ(centre_m, Quat::Identity(), 0.025), 0.125, 1e-15);
-  // 45 degrees about x: an edge on top, half-size * (cos 45 + sin 45) = half-size * sqrt(2)
-  const Quat tilted(Eigen::AngleAxisd(M_PI / 4, Vec3::UnitX()));
-  EXPECT_NEAR(CubeTopZ(centre_m, tilted, 0.025), 0.1 + 0.025 * std::sqrt(2.0), 1e-15);
+  // upright: half-size + gap + radius above the centre
+  EXPECT_NEAR(StrikeStartHeight(centre_m, Quat::Identity(), 0.025, 0.010, 0.005), 0.14, 1e-15);
+  // tilted by 10 degrees about x: the face plane and the sphere's offset from it both rise by
+  // 1 / cos(10 deg) along the vertical through the centre
+  const double tilt = 10.0 * M_PI / 180.0;
+  const Quat tilted(Eigen::AngleAxisd(tilt, Vec3::UnitX()));
+  EXPECT_NEAR(StrikeStartHeight(centre_m, tilted, 0.025, 0.010, 0.005),
+              0.1 + 0.040 / std::cos(tilt), 1e-15);
+  // upside down (180 degrees about y): the former bottom face is now the upward one
+  const Quat flipped(Eigen::AngleAxisd(M_PI, Vec3::UnitY()));
+  EXPECT_NEAR(StrikeStartHeight(centre_m, flipped, 0.025, 0.010, 0.005), 0.14, 1e-15);
+  // on its side (90 degrees about x, then 10 degrees about y): a side face is the upward one
+  const Quat side = Quat(Eigen::AngleAxisd(tilt, Vec3::UnitY())) *
+                    Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()));
+  EXPECT_NEAR(StrikeStartHeight(centre_m, side, 0.025, 0.010, 0.005), 0.1 + 0.040 / std::cos(tilt),
+              1e-15);
+  // sphere-to-plane distance check for the tilted case: (z - z_face) n_z - r = gap
+  const double z = StrikeStartHeight(centre_m, tilted, 0.025, 0.010, 0.005);
+  const double face_z = 0.1 + 0.025 / std::cos(tilt);
+  EXPECT_NEAR((z - face_z) * std::cos(tilt) - 0.005, 0.010, 1e-15);
 }
 
 TEST(SceneRun, SteadyRunMeasuresEveryStepAndRestoresEachBatch) {
