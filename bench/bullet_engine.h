@@ -20,7 +20,9 @@ namespace rigidtouch::bench {
 /// Sleeping (deactivation) is disabled for every body, as MuJoCo has none.
 class BulletEngine final : public Engine {
  public:
+  /// Makes an engine with nothing loaded.
   BulletEngine();
+  /// Frees everything the last Load() made.
   ~BulletEngine() override;
 
   std::string_view Name() const override { return "bullet"; }

@@ -23,7 +23,9 @@ int MjBodyId(const mjModel& model, std::string_view body, const std::string& pat
 /// The MuJoCo engine: the constant tool force goes through `xfrc_applied` every step.
 class MujocoEngine final : public Engine {
  public:
+  /// Makes an engine with nothing loaded.
   MujocoEngine();
+  /// Frees everything the last Load() made.
   ~MujocoEngine() override;
 
   std::string_view Name() const override { return "mujoco"; }
