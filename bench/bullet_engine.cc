@@ -1,0 +1,339 @@
+#include "bench/bullet_engine.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "bench/mujoco_engine.h"
+
+namespace rigidtouch::bench {
+namespace {
+
+const EngineRegistrar kRegistrar{"bullet", &MakeBulletEngine};
+
+// pose from MuJoCo's world position (3) and row-major rotation matrix (9)
+Eigen::Isometry3d MjPose(const mjtNum* position, const mjtNum* rotation) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Vec3(position[0], position[1], position[2]);
+  pose.linear() = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rotation);
+  return pose;
+}
+
+btTransform ToBullet(const Eigen::Isometry3d& pose) {
+  const Mat3& r = pose.linear();
+  const Vec3& p = pose.translation();
+  return btTransform(
+      btMatrix3x3(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)),
+      btVector3(p.x(), p.y(), p.z()));
+}
+
+Eigen::Isometry3d FromBullet(const btTransform& transform) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  const btMatrix3x3& r = transform.getBasis();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) pose.linear()(i, j) = r[i][j];
+  }
+  const btVector3& p = transform.getOrigin();
+  pose.translation() = Vec3(p.x(), p.y(), p.z());
+  return pose;
+}
+
+bool IsIdentity(const Eigen::Isometry3d& pose) {
+  return pose.matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-12);
+}
+
+bool Finite(const btVector3& v) {
+  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
+
+// the MJCF name, or "#<id>" for an unnamed element
+std::string ElementName(const mjModel& model, mjtObj type, int id) {
+  const char* name = mj_id2name(&model, type, id);
+  if (name != nullptr) return name;
+  std::string unnamed = "#";
+  unnamed.append(std::to_string(id));
+  return unnamed;
+}
+
+// the Bullet shape with the geom's MJCF size, in the geom's own frame
+std::unique_ptr<btCollisionShape> MakeShape(const mjModel& model, int geom,
+                                            const std::string& path) {
+  const mjtNum* size = model.geom_size + 3 * geom;
+  switch (model.geom_type[geom]) {
+    case mjGEOM_PLANE:
+      return std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
+    case mjGEOM_SPHERE:
+      return std::make_unique<btSphereShape>(size[0]);
+    case mjGEOM_BOX:
+      return std::make_unique<btBoxShape>(btVector3(size[0], size[1], size[2]));
+    case mjGEOM_CAPSULE:
+      return std::make_unique<btCapsuleShapeZ>(size[0], 2 * size[1]);
+    case mjGEOM_CYLINDER:
+      return std::make_unique<btCylinderShapeZ>(btVector3(size[0], size[0], size[1]));
+    default:
+      throw Error("scene " + path + ": geom '" + ElementName(model, mjOBJ_GEOM, geom) +
+                  "' has type " + std::to_string(model.geom_type[geom]) +
+                  "; the Bullet peer supports plane, sphere, box, capsule and cylinder");
+  }
+}
+
+}  // namespace
+
+BulletEngine::BulletEngine() = default;
+
+BulletEngine::~BulletEngine() {
+  Clear();
+}
+
+void BulletEngine::Clear() {
+  if (world_ != nullptr) {
+    for (auto& body : bodies_) world_->removeRigidBody(body.get());
+  }
+  bodies_.clear();
+  dynamic_bodies_.clear();
+  shapes_.clear();
+  records_.clear();
+  snapshot_.clear();
+  world_.reset();
+  solver_.reset();
+  broadphase_.reset();
+  dispatcher_.reset();
+  configuration_.reset();
+  tool_ = nullptr;
+}
+
+btRigidBody* BulletEngine::AddBody(double mass_kg, const btVector3& inertia_kgm2,
+                                   btCollisionShape* shape,
+                                   const Eigen::Isometry3d& T_world_inertial, double friction) {
+  btRigidBody::btRigidBodyConstructionInfo info(mass_kg, nullptr, shape, inertia_kgm2);
+  info.m_startWorldTransform = ToBullet(T_world_inertial);
+  info.m_friction = friction;
+  info.m_restitution = 0;
+  auto body = std::make_unique<btRigidBody>(info);
+  // no sleeping: MuJoCo keeps integrating resting bodies, so Bullet must too
+  body->setActivationState(DISABLE_DEACTIVATION);
+  world_->addRigidBody(body.get());
+  bodies_.push_back(std::move(body));
+  return bodies_.back().get();
+}
+
+void BulletEngine::Load(const Scene& scene) {
+  // the same compiled model MuJoCo runs: sizes, poses, masses and inertias
+  auto model_ptr = LoadMjcf(scene.mjcf_path);
+  const mjModel& model = *model_ptr;
+  std::unique_ptr<mjData, void (*)(mjData*)> data(mj_makeData(&model), &mj_deleteData);
+  mj_forward(&model, data.get());
+
+  Clear();
+  path_ = scene.mjcf_path;
+  configuration_ = std::make_unique<btDefaultCollisionConfiguration>();
+  dispatcher_ = std::make_unique<btCollisionDispatcher>(configuration_.get());
+  broadphase_ = std::make_unique<btDbvtBroadphase>();
+  solver_ = std::make_unique<btSequentialImpulseConstraintSolver>();
+  world_ = std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(),
+                                                     solver_.get(), configuration_.get());
+  const mjtNum* gravity = model.opt.gravity;
+  world_->setGravity(btVector3(gravity[0], gravity[1], gravity[2]));
+  timestep_s_ = model.opt.timestep;
+
+  for (int b = 0; b < model.nbody; ++b) {
+    const std::string body_name = ElementName(model, mjOBJ_BODY, b);
+    const bool is_static = b == 0 || model.body_jntnum[b] == 0;
+    if (b != 0) {
+      const bool free = model.body_jntnum[b] == 1 &&
+                        model.jnt_type[model.body_jntadr[b]] == mjJNT_FREE &&
+                        model.body_parentid[b] == 0;
+      if (!free && !(is_static && model.body_parentid[b] == 0)) {
+        throw Error("scene " + path_ + ": body '" + body_name +
+                    "' is neither a free body nor welded to the world; the Bullet peer supports "
+                    "only those");
+      }
+    }
+    const Eigen::Isometry3d T_world_body = MjPose(data->xpos + 3 * b, data->xmat + 9 * b);
+    const int first_geom = model.body_geomadr[b];
+    const int geom_count = model.body_geomnum[b];
+    BodyRecord record;
+    if (is_static) {
+      // every static geom is its own fixed collision object at its world pose
+      record.T_world_body = T_world_body;
+      for (int g = first_geom; g < first_geom + geom_count; ++g) {
+        shapes_.push_back(MakeShape(model, g, path_));
+        AddBody(0.0, btVector3(0, 0, 0), shapes_.back().get(),
+                MjPose(data->geom_xpos + 3 * g, data->geom_xmat + 9 * g),
+                model.geom_friction[3 * g]);
+      }
+      records_[body_name] = record;
+      continue;
+    }
+    if (geom_count == 0) {
+      throw Error("scene " + path_ + ": free body '" + body_name + "' has no geom");
+    }
+    const Eigen::Isometry3d T_world_inertial = MjPose(data->xipos + 3 * b, data->ximat + 9 * b);
+    btCollisionShape* shape = nullptr;
+    const Eigen::Isometry3d T_inertial_geom0 =
+        T_world_inertial.inverse() *
+        MjPose(data->geom_xpos + 3 * first_geom, data->geom_xmat + 9 * first_geom);
+    if (geom_count == 1 && IsIdentity(T_inertial_geom0)) {
+      shapes_.push_back(MakeShape(model, first_geom, path_));
+      shape = shapes_.back().get();
+    } else {
+      // several geoms or an offset geom: a compound in the centre-of-mass frame
+      auto compound = std::make_unique<btCompoundShape>();
+      for (int g = first_geom; g < first_geom + geom_count; ++g) {
+        shapes_.push_back(MakeShape(model, g, path_));
+        const Eigen::Isometry3d T_inertial_geom =
+            T_world_inertial.inverse() * MjPose(data->geom_xpos + 3 * g, data->geom_xmat + 9 * g);
+        compound->addChildShape(ToBullet(T_inertial_geom), shapes_.back().get());
+      }
+      shapes_.push_back(std::move(compound));
+      shape = shapes_.back().get();
+    }
+    const mjtNum* inertia = model.body_inertia + 3 * b;
+    // Bullet keeps one friction per body; the first geom's sliding friction
+    record.body = AddBody(model.body_mass[b], btVector3(inertia[0], inertia[1], inertia[2]), shape,
+                          T_world_inertial, model.geom_friction[3 * first_geom]);
+    record.T_inertial_body = T_world_inertial.inverse() * T_world_body;
+    dynamic_bodies_.push_back(record.body);
+    records_[body_name] = record;
+  }
+
+  tool_ = Record(scene.tool_body).body;
+  if (tool_ == nullptr) throw Error("scene " + path_ + ": the tool body is not free");
+  tool_force_N_ = btVector3(scene.tool_force_N.x(), scene.tool_force_N.y(), scene.tool_force_N.z());
+}
+
+void BulletEngine::Step() {
+  // stepSimulation clears forces after the step, so the push is applied every step
+  tool_->applyCentralForce(tool_force_N_);
+  // maxSubSteps = 0: exactly one step of length h, no interpolation
+  world_->stepSimulation(timestep_s_, 0);
+}
+
+int BulletEngine::ContactCount() const {
+  int count = 0;
+  const int manifolds = dispatcher_->getNumManifolds();
+  for (int i = 0; i < manifolds; ++i) {
+    count += dispatcher_->getManifoldByIndexInternal(i)->getNumContacts();
+  }
+  return count;
+}
+
+int BulletEngine::BodyContactCount(std::string_view body) const {
+  const btRigidBody* target = Record(body).body;
+  int count = 0;
+  const int manifolds = dispatcher_->getNumManifolds();
+  for (int i = 0; i < manifolds; ++i) {
+    const btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(i);
+    if (manifold->getBody0() == target || manifold->getBody1() == target) {
+      count += manifold->getNumContacts();
+    }
+  }
+  return count;
+}
+
+double BulletEngine::DeepestPenetration_m() const {
+  double deepest_m = 0.0;
+  const int manifolds = dispatcher_->getNumManifolds();
+  for (int i = 0; i < manifolds; ++i) {
+    const btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(i);
+    for (int k = 0; k < manifold->getNumContacts(); ++k) {
+      deepest_m =
+          std::max(deepest_m, -static_cast<double>(manifold->getContactPoint(k).getDistance()));
+    }
+  }
+  return deepest_m;
+}
+
+const BulletEngine::BodyRecord& BulletEngine::Record(std::string_view body) const {
+  const auto it = records_.find(std::string(body));
+  if (it == records_.end()) {
+    throw Error("scene " + path_ + " has no body named '" + std::string(body) + "'");
+  }
+  return it->second;
+}
+
+const btRigidBody* BulletEngine::RigidBody(std::string_view body) const {
+  return Record(body).body;
+}
+
+Vec3 BulletEngine::BodyPosition(std::string_view body) const {
+  const BodyRecord& record = Record(body);
+  if (record.body == nullptr) return record.T_world_body.translation();
+  return (FromBullet(record.body->getWorldTransform()) * record.T_inertial_body).translation();
+}
+
+Quat BulletEngine::BodyOrientation(std::string_view body) const {
+  const BodyRecord& record = Record(body);
+  if (record.body == nullptr) return Quat(record.T_world_body.linear());
+  const Eigen::Isometry3d T_world_body =
+      FromBullet(record.body->getWorldTransform()) * record.T_inertial_body;
+  return Quat(T_world_body.linear()).normalized();
+}
+
+void BulletEngine::SetBodyMotion(std::string_view body, const Vec3& position_m,
+                                 const Vec3& velocity_mps) {
+  const BodyRecord& record = Record(body);
+  if (record.body == nullptr) {
+    throw Error("body '" + std::string(body) + "' in " + path_ + " is not free");
+  }
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  T_world_body.translation() = position_m;
+  const btTransform transform = ToBullet(T_world_body * record.T_inertial_body.inverse());
+  const btVector3 velocity(velocity_mps.x(), velocity_mps.y(), velocity_mps.z());
+  btRigidBody* rigid = record.body;
+  rigid->setWorldTransform(transform);
+  rigid->setInterpolationWorldTransform(transform);
+  rigid->setLinearVelocity(velocity);
+  rigid->setInterpolationLinearVelocity(velocity);
+  rigid->setAngularVelocity(btVector3(0, 0, 0));
+  rigid->setInterpolationAngularVelocity(btVector3(0, 0, 0));
+  world_->updateSingleAabb(rigid);
+}
+
+void BulletEngine::SaveSnapshot() {
+  snapshot_.clear();
+  for (const btRigidBody* body : dynamic_bodies_) {
+    snapshot_.push_back(SavedMotion{body->getWorldTransform(), body->getLinearVelocity(),
+                                    body->getAngularVelocity()});
+  }
+}
+
+void BulletEngine::RestoreSnapshot() {
+  // bodies only: contact manifolds (and their warm-start impulses) stay as the last step left
+  // them; Bullet refreshes them from the restored poses at the next step
+  for (std::size_t i = 0; i < dynamic_bodies_.size(); ++i) {
+    btRigidBody* body = dynamic_bodies_[i];
+    const SavedMotion& saved = snapshot_[i];
+    body->setWorldTransform(saved.transform);
+    body->setInterpolationWorldTransform(saved.transform);
+    body->setLinearVelocity(saved.linear_velocity);
+    body->setInterpolationLinearVelocity(saved.linear_velocity);
+    body->setAngularVelocity(saved.angular_velocity);
+    body->setInterpolationAngularVelocity(saved.angular_velocity);
+    body->clearForces();
+    world_->updateSingleAabb(body);
+  }
+}
+
+bool BulletEngine::StateIsFinite() const {
+  return std::all_of(dynamic_bodies_.begin(), dynamic_bodies_.end(), [](const btRigidBody* body) {
+    return Finite(body->getWorldTransform().getOrigin()) && Finite(body->getLinearVelocity()) &&
+           Finite(body->getAngularVelocity());
+  });
+}
+
+std::string BulletEngine::Configuration() const {
+  const btContactSolverInfo& info = world_->getSolverInfo();
+  return "Bullet " + std::to_string(btGetVersion()) +
+         (btIsDoublePrecision() ? " double" : " single") +
+         " precision, btSequentialImpulseConstraintSolver defaults: iterations " +
+         std::to_string(info.m_numIterations) + ", erp " + std::to_string(info.m_erp).substr(0, 4) +
+         ", split impulse " + (info.m_splitImpulse ? "on" : "off") + ", warm starting " +
+         ((info.m_solverMode & SOLVER_USE_WARMSTARTING) ? "on" : "off") +
+         ", btDbvtBroadphase, deactivation disabled, stepSimulation(h, 0)";
+}
+
+std::unique_ptr<Engine> MakeBulletEngine() {
+  return std::make_unique<BulletEngine>();
+}
+
+}  // namespace rigidtouch::bench

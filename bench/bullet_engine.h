@@ -1,0 +1,92 @@
+// Bullet peer: a btDiscreteDynamicsWorld built from the compiled mjModel of the same MJCF file
+// (geom types, sizes and poses, body masses and inertias), stepped with one fixed step of the
+// MJCF timestep per Step() and Bullet's default solver settings.
+#pragma once
+
+#include <btBulletDynamicsCommon.h>
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "bench/engine.h"
+
+namespace rigidtouch::bench {
+
+/// The Bullet engine: the constant tool force goes through applyCentralForce every step.
+/// Sleeping (deactivation) is disabled for every body, as MuJoCo has none.
+class BulletEngine final : public Engine {
+ public:
+  /// Makes an engine with nothing loaded.
+  BulletEngine();
+  /// Frees everything the last Load() made.
+  ~BulletEngine() override;
+
+  std::string_view Name() const override { return "bullet"; }
+  void Load(const Scene& scene) override;
+  void Step() override;
+  int ContactCount() const override;
+  int BodyContactCount(std::string_view body) const override;
+  double DeepestPenetration_m() const override;
+  Vec3 BodyPosition(std::string_view body) const override;
+  Quat BodyOrientation(std::string_view body) const override;
+  void SetBodyMotion(std::string_view body, const Vec3& position_m,
+                     const Vec3& velocity_mps) override;
+  void SaveSnapshot() override;
+  void RestoreSnapshot() override;
+  bool StateIsFinite() const override;
+  long WarningCount() const override { return 0; }
+  std::string Configuration() const override;
+
+  /// Returns the Bullet body built for the named MJCF body (null for a static one). Throws
+  /// `rigidtouch::Error` when the scene has no such body.
+  const btRigidBody* RigidBody(std::string_view body) const;
+
+  /// Returns the dynamics world (null before Load()).
+  const btDiscreteDynamicsWorld* world() const { return world_.get(); }
+
+  /// Returns the time step, in seconds, taken from the MJCF `<option timestep>`.
+  double timestep_s() const { return timestep_s_; }
+
+ private:
+  // one MJCF body; static bodies have body == nullptr and a fixed pose
+  struct BodyRecord {
+    btRigidBody* body = nullptr;
+    Eigen::Isometry3d T_inertial_body = Eigen::Isometry3d::Identity();  // body frame in COM frame
+    Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();     // static bodies only
+  };
+  struct SavedMotion {
+    btTransform transform;
+    btVector3 linear_velocity;
+    btVector3 angular_velocity;
+  };
+
+  void Clear();
+  const BodyRecord& Record(std::string_view body) const;
+  btRigidBody* AddBody(double mass_kg, const btVector3& inertia_kgm2, btCollisionShape* shape,
+                       const Eigen::Isometry3d& T_world_inertial, double friction);
+
+  std::string path_;
+  // declaration order is destruction order in reverse: bodies go before the world they are in
+  std::unique_ptr<btDefaultCollisionConfiguration> configuration_;
+  std::unique_ptr<btCollisionDispatcher> dispatcher_;
+  std::unique_ptr<btBroadphaseInterface> broadphase_;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> solver_;
+  std::unique_ptr<btDiscreteDynamicsWorld> world_;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes_;
+  std::vector<std::unique_ptr<btRigidBody>> bodies_;  // dynamic and static
+  std::vector<btRigidBody*> dynamic_bodies_;
+  std::unordered_map<std::string, BodyRecord> records_;
+  std::vector<SavedMotion> snapshot_;
+  btRigidBody* tool_ = nullptr;
+  btVector3 tool_force_N_{0, 0, 0};
+  double timestep_s_ = 0.0;
+};
+
+/// Makes an unloaded Bullet engine.
+std::unique_ptr<Engine> MakeBulletEngine();
+
+}  // namespace rigidtouch::bench

@@ -1,0 +1,86 @@
+#include "bench/report.h"
+
+#include <cstdio>
+#include <set>
+#include <sstream>
+
+namespace rigidtouch::bench {
+namespace {
+
+std::string Fixed(double value, int decimals) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
+  return buffer;
+}
+
+std::string Pad(const std::string& text, std::size_t width) {
+  return text.size() >= width ? text + " " : text + std::string(width - text.size(), ' ');
+}
+
+const RunResult* Find(const std::vector<RunResult>& results, const std::string& scene,
+                      std::string_view engine) {
+  for (const RunResult& result : results) {
+    if (result.scene == scene && result.engine == engine) return &result;
+  }
+  return nullptr;
+}
+
+std::vector<std::string> SceneOrder(const std::vector<RunResult>& results) {
+  std::vector<std::string> scenes;
+  std::set<std::string> seen;
+  for (const RunResult& result : results) {
+    if (seen.insert(result.scene).second) scenes.push_back(result.scene);
+  }
+  return scenes;
+}
+
+std::string RatioCell(const RunResult* reference, const RunResult* peer) {
+  if (reference == nullptr || peer == nullptr || peer->time.count == 0 ||
+      reference->time.count == 0) {
+    return "n/a";
+  }
+  const std::string flag = reference->gates.ok() && peer->gates.ok() ? "" : " !";
+  return Fixed(reference->time.median_ns / peer->time.median_ns, 2) + " (" +
+         Fixed(reference->time.p999_ns / peer->time.p999_ns, 2) + ")" + flag;
+}
+
+}  // namespace
+
+std::string FormatResultTable(const std::vector<RunResult>& results) {
+  std::ostringstream out;
+  out << Pad("scene", 13) << Pad("engine", 12) << Pad("median_us", 11) << Pad("p99_us", 11)
+      << Pad("p99.9_us", 11) << Pad("max_us", 11) << Pad("contacts", 10) << Pad("steps", 8)
+      << "gates\n";
+  std::ostringstream failures;
+  for (const RunResult& r : results) {
+    out << Pad(r.scene, 13) << Pad(r.engine, 12) << Pad(Fixed(r.time.median_ns * 1e-3, 1), 11)
+        << Pad(Fixed(r.time.p99_ns * 1e-3, 1), 11) << Pad(Fixed(r.time.p999_ns * 1e-3, 1), 11)
+        << Pad(Fixed(r.time.max_ns * 1e-3, 1), 11) << Pad(Fixed(r.mean_contacts, 1), 10)
+        << Pad(std::to_string(r.time.count), 8) << (r.gates.ok() ? "ok" : "FAILED") << "\n";
+    for (const std::string& failure : r.gates.failures) {
+      failures << "  " << r.scene << " / " << r.engine << ": " << failure << "\n";
+    }
+  }
+  if (!failures.str().empty()) out << "failed gates:\n" << failures.str();
+  return out.str();
+}
+
+std::string FormatRatioTable(const std::vector<RunResult>& results, std::string_view reference,
+                             const std::vector<std::string>& peers) {
+  std::ostringstream out;
+  out << "ratio " << reference << " / peer, median (p99.9) step time; > 1: " << reference
+      << " is slower; !: a gate failed\n";
+  out << Pad("scene", 13);
+  for (const std::string& peer : peers) out << Pad(std::string(reference) + "/" + peer, 24);
+  out << "\n";
+  for (const std::string& scene : SceneOrder(results)) {
+    out << Pad(scene, 13);
+    const RunResult* ours = Find(results, scene, reference);
+    for (const std::string& peer : peers)
+      out << Pad(RatioCell(ours, Find(results, scene, peer)), 24);
+    out << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace rigidtouch::bench

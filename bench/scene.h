@@ -1,0 +1,59 @@
+// The benchmark scenes: which MJCF file, the constant tool force, how long to warm up and
+// measure, and the quality gates each engine must pass for its numbers to count.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::bench {
+
+/// How a scene is measured.
+enum class SceneKind {
+  kSteady,  ///< every measured step is a step of the settled scene
+  kStrike,  ///< every measured step is the one that resolves a tool strike on the settled scene
+};
+
+/// One benchmark scene with its measurement plan and quality gates (immutable once built).
+struct Scene {
+  std::string name;       ///< benchmark name, e.g. "pile-strike"
+  std::string mjcf_path;  ///< the MJCF file
+  SceneKind kind = SceneKind::kSteady;
+  std::string tool_body = "tool";
+  Vec3 tool_force_N = Vec3(0.0, 0.0, -2.0);  ///< constant, world frame, at the tool's centre
+  double tool_radius_m = 0.005;
+
+  int warmup_steps = 2000;  ///< steps after load before the snapshot
+  int measured_steps = 0;   ///< steady: measured steps; strike: measured strikes
+  int batch_steps = 1000;   ///< steady: restore the snapshot every this many steps
+
+  /// Gate: this body moves less than `max_watch_displacement_m` over `watch_steps` steps run
+  /// from the snapshot (empty: no such gate).
+  std::string watch_body;
+  int watch_steps = 0;
+  double max_watch_displacement_m = std::numeric_limits<double>::infinity();
+
+  /// Gate: the deepest penetration over every step run (warm-up, gates, measurement).
+  double max_penetration_m = std::numeric_limits<double>::infinity();
+
+  /// Strike: the tool is placed straight above the centre of `strike_target`, `strike_gap_m` from
+  /// its upward face (between the tool's surface and the face, along the face normal), moving
+  /// down at `strike_speed_mps`.
+  std::string strike_target;
+  double strike_target_half_size_m = 0.025;  ///< the target is a cube of this half-size
+  double strike_gap_m = 0.010;
+  double strike_speed_mps = 0.3;
+  int strike_max_steps = 200;  ///< a strike that takes longer fails the gate
+};
+
+/// The scene folder compiled into the benchmark (the source tree's scenes/).
+std::string DefaultScenesDir();
+
+/// Returns the four benchmark scenes (tap, stack, pile, pile-strike) reading MJCF files from
+/// `scenes_dir`. `scale` in (0, 1] shortens the measurement (for smoke runs); gates and warm-up
+/// stay as specified. Throws `rigidtouch::Error` when `scale` is out of range.
+std::vector<Scene> BenchmarkScenes(const std::string& scenes_dir, double scale = 1.0);
+
+}  // namespace rigidtouch::bench

@@ -1,0 +1,145 @@
+// Google Benchmark suite: every registered engine (rigidtouch once its adapter is registered,
+// MuJoCo, Bullet) on every benchmark scene, then tables of the results and of the ratios.
+//
+// Extra flags (after Google Benchmark's own):
+//   --rigidtouch_scenes=DIR   folder with tap.xml, stack.xml, pile.xml (default: the source tree)
+//   --rigidtouch_scale=X      measure X (0 < X <= 1) of the specified steps, for smoke runs
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "bench/engine.h"
+#include "bench/harness.h"
+#include "bench/report.h"
+#include "bench/scene.h"
+
+namespace rigidtouch::bench {
+namespace {
+
+std::vector<RunResult>& Results() {
+  static std::vector<RunResult> results;
+  return results;
+}
+
+void ReportGateFailure(const RunResult& result) {
+  std::fprintf(stderr,
+               "\n!!!!!!!!!! QUALITY GATE FAILED: %s / %s -- its times are NOT comparable "
+               "!!!!!!!!!!\n",
+               result.scene.c_str(), result.engine.c_str());
+  for (const std::string& failure : result.gates.failures) {
+    std::fprintf(stderr, "!!!   %s\n", failure.c_str());
+  }
+  std::fprintf(stderr, "!!!   (measured anyway: median %.1f us, p99.9 %.1f us per step)\n\n",
+               result.time.median_ns * 1e-3, result.time.p999_ns * 1e-3);
+}
+
+void RunScene(benchmark::State& state, const EngineEntry& entry, const Scene& scene) {
+  const auto engine = entry.make();
+  SceneRun run(*engine, scene);
+  try {
+    run.Prepare();
+  } catch (const Error& error) {
+    state.SkipWithError(error.what());
+    return;
+  }
+  for (auto _ : state) {
+    const std::int64_t duration_ns = run.MeasureOne();
+    state.SetIterationTime(duration_ns > 0 ? static_cast<double>(duration_ns) * 1e-9 : 0.0);
+  }
+  const RunResult result = run.Finish();
+  Results().push_back(result);
+  state.counters["median_ns"] = result.time.median_ns;
+  state.counters["p99_ns"] = result.time.p99_ns;
+  state.counters["p99.9_ns"] = result.time.p999_ns;
+  state.counters["max_ns"] = result.time.max_ns;
+  state.counters["contacts"] = result.mean_contacts;
+  state.counters["penetration_mm"] = result.gates.deepest_penetration_m * 1e3;
+  state.counters["gate_failures"] = static_cast<double>(result.gates.failures.size());
+  if (!result.gates.ok()) {
+    ReportGateFailure(result);
+    std::string message = "quality gate failed:";
+    for (const std::string& failure : result.gates.failures) message += " " + failure + ";";
+    state.SkipWithError(message.c_str());
+  }
+}
+
+std::string FlagValue(int argc, char** argv, const std::string& flag) {
+  const std::string prefix = "--" + flag + "=";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind(prefix, 0) == 0) return arg.substr(prefix.size());
+  }
+  return "";
+}
+
+// removes our flags so Google Benchmark does not reject them
+void DropFlags(int& argc, char** argv) {
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]).rfind("--rigidtouch_", 0) != 0) argv[kept++] = argv[i];
+  }
+  argc = kept;
+}
+
+}  // namespace
+}  // namespace rigidtouch::bench
+
+int main(int argc, char** argv) {
+  using namespace rigidtouch::bench;
+  std::string scenes_dir = FlagValue(argc, argv, "rigidtouch_scenes");
+  if (scenes_dir.empty()) scenes_dir = DefaultScenesDir();
+  const std::string scale_text = FlagValue(argc, argv, "rigidtouch_scale");
+  DropFlags(argc, argv);
+
+  static std::vector<Scene> scenes;
+  try {
+    scenes = BenchmarkScenes(scenes_dir, scale_text.empty() ? 1.0 : std::atof(scale_text.c_str()));
+  } catch (const rigidtouch::Error& error) {
+    std::cerr << "error: " << error.what() << "\n";
+    return 2;
+  }
+  for (const Scene& scene : scenes) {
+    for (const EngineEntry& entry : Engines()) {
+      benchmark::RegisterBenchmark(
+          (scene.name + "/" + entry.name).c_str(),
+          [&entry, &scene](benchmark::State& state) { RunScene(state, entry, scene); })
+          ->UseManualTime()
+          ->Iterations(scene.measured_steps)
+          ->Unit(benchmark::kMicrosecond);
+    }
+  }
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+
+  const std::vector<RunResult>& results = Results();
+  std::cout << "\n" << FormatResultTable(results) << "\n";
+  std::vector<std::string> peers;
+  for (const EngineEntry& entry : Engines()) {
+    if (entry.name != kReferenceEngine) peers.push_back(entry.name);
+  }
+  std::cout << FormatRatioTable(results, kReferenceEngine, peers);
+  bool has_reference = false;
+  for (const EngineEntry& entry : Engines()) has_reference |= entry.name == kReferenceEngine;
+  if (!has_reference) {
+    std::cout << "(no engine named '" << kReferenceEngine
+              << "' is registered yet: its column stays n/a)\n";
+  }
+  if (peers.size() >= 2) std::cout << "\n" << FormatRatioTable(results, peers[1], {peers[0]});
+  std::cout << "\nconfiguration:\n";
+  std::vector<std::string> printed;
+  for (const RunResult& result : results) {
+    bool seen = false;
+    for (const std::string& line : printed) seen |= line == result.configuration;
+    if (!seen) {
+      printed.push_back(result.configuration);
+      std::cout << "  " << result.engine << ": " << result.configuration << "\n";
+    }
+  }
+  return 0;
+}
