@@ -24,29 +24,6 @@
 #define RIGIDTOUCH_VERSION "unknown"
 #endif
 
-namespace rigidtouch::study {
-
-// Placeholders until the engine integration defines these factories (declared in
-// src/study/stimulus.h). They are weak: a definition in any object file linked into the
-// executable replaces them. A definition inside a static library is only picked up if that
-// library member is linked for another reason, so delete these placeholders when the real
-// factories exist.
-[[gnu::weak]] std::unique_ptr<StimulusSource> MakeTapStimulusSource(
-    const TapSourceOptions& /*options*/) {
-  throw Error(
-      "the engine's tap stimulus source is not wired into this build yet "
-      "(rigidtouch::study::MakeTapStimulusSource); study simulate and study predict need it");
-}
-
-[[gnu::weak]] std::unique_ptr<WallPresenter> MakeDeviceWallPresenter(
-    const PresenterOptions& /*options*/) {
-  throw Error(
-      "the device wall presenter is not wired into this build yet "
-      "(rigidtouch::study::MakeDeviceWallPresenter); use --presenter text for a dry run");
-}
-
-}  // namespace rigidtouch::study
-
 namespace rigidtouch::cli {
 
 namespace {

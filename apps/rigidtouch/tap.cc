@@ -11,11 +11,11 @@
 #include "analysis/tap_experiment.h"
 #include "command.h"
 #include "io/config.h"
+#include "io/resources.h"
 #include "io/trace_csv.h"
-#include "resources.h"
 #include "scene_flags.h"
 
-namespace rigidtouch::cli {
+namespace rigidtouch::io {
 namespace {
 
 struct TapFlags {
@@ -49,7 +49,7 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     throw Error("--spread " + std::to_string(f.spread) + " is out of range: valid [0, 0.5]");
   }
   analysis::TapExperimentConfig c;
-  c.scene_path = f.scene.scene.empty() ? ShippedFile("scenes/wall.xml") : f.scene.scene;
+  c.scene_path = f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
   c.load = ToLoadOptions(f.scene);
   if (wall) {
     const RenderParams r = analysis::WallRenderParams(*wall);
@@ -100,31 +100,34 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
   }
   nlohmann::json warnings = nlohmann::json::object();
   for (int k = 0; k < static_cast<int>(Warning::kCount); ++k) {
-    if (run.warnings[k].count > 0) warnings[WarningName(static_cast<Warning>(k))] = run.warnings[k].count;
+    if (run.warnings[k].count > 0)
+      warnings[WarningName(static_cast<Warning>(k))] = run.warnings[k].count;
   }
   const bool train = m.render.renderer == RendererKind::kTrain;
-  return {{"renderer", io::RendererName(m.render.renderer)},
-          {"restitution", m.render.restitution},
-          {"frequency_hz", train ? nlohmann::json(m.render.frequency_hz) : nlohmann::json(nullptr)},
-          {"t_collision_s", train ? nlohmann::json(m.render.t_collision_s) : nlohmann::json(nullptr)},
-          {"impulses_per_window", train ? m.schedule.impulses : (m.render.renderer == RendererKind::kImpulse ? 1 : 0)},
-          {"timestep_s", m.timestep_s},
-          {"device", run.device.name},
-          {"max_force_N", run.device.max_force_N},
-          {"coupling", coupling},
-          {"stiffness_N_per_m", m.contact.stiffness_N_per_m},
-          {"damping_Ns_per_m", m.contact.damping_Ns_per_m},
-          {"tool_mass_kg", m.bodies[m.tool].mass_kg},
-          {"energy_to_user_J", run.energy_to_user_J},
-          {"clipped_ticks", run.clipped_ticks},
-          {"clipped_impulse_ticks", run.clipped_impulse_ticks},
-          {"taps", taps},
-          {"warnings", warnings}};
+  return {
+      {"renderer", io::RendererName(m.render.renderer)},
+      {"restitution", m.render.restitution},
+      {"frequency_hz", train ? nlohmann::json(m.render.frequency_hz) : nlohmann::json(nullptr)},
+      {"t_collision_s", train ? nlohmann::json(m.render.t_collision_s) : nlohmann::json(nullptr)},
+      {"impulses_per_window",
+       train ? m.schedule.impulses : (m.render.renderer == RendererKind::kImpulse ? 1 : 0)},
+      {"timestep_s", m.timestep_s},
+      {"device", run.device.name},
+      {"max_force_N", run.device.max_force_N},
+      {"coupling", coupling},
+      {"stiffness_N_per_m", m.contact.stiffness_N_per_m},
+      {"damping_Ns_per_m", m.contact.damping_Ns_per_m},
+      {"tool_mass_kg", m.bodies[m.tool].mass_kg},
+      {"energy_to_user_J", run.energy_to_user_J},
+      {"clipped_ticks", run.clipped_ticks},
+      {"clipped_impulse_ticks", run.clipped_impulse_ticks},
+      {"taps", taps},
+      {"warnings", warnings}};
 }
 
 // draws a figure; a missing matplotlib is reported, not fatal (the trace is already written)
 void Plot(const std::string& script, const std::vector<std::string>& args, bool quiet) {
-  const analysis::FigureResult r = analysis::RunPlotScript(ShippedFile(script), args);
+  const analysis::FigureResult r = analysis::RunPlotScript(io::ShippedFile(script), args);
   if (r.status == analysis::FigureStatus::kOk) return;
   if (r.status == analysis::FigureStatus::kMissingMatplotlib) {
     std::cerr << "rigidtouch: matplotlib is missing (Debian: apt-get install python3-matplotlib); "
@@ -163,8 +166,8 @@ const char* kTableHeader =
 
 void CompareWalls(const TapFlags& f) {
   std::filesystem::create_directories(f.out_dir);
-  const char* names[] = {"penalty (no impulses)", "wall 0: single impulse",
-                         "wall 1: train 250 Hz", "wall 2: train 50 Hz"};
+  const char* names[] = {"penalty (no impulses)", "wall 0: single impulse", "wall 1: train 250 Hz",
+                         "wall 2: train 50 Hz"};
   std::vector<std::string> traces;
   nlohmann::json results = nlohmann::json::object();
   std::ostringstream table;
@@ -249,8 +252,9 @@ void Register(CLI::App& root) {
   CLI::App* app = root.add_subcommand(
       "tap", "tap a wall with the simulated hand and device; metrics, trace and figures");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
-  app->add_option("--wall", f->wall, "the method's walls: 0 single impulse, 1 train 250 Hz, "
-                                     "2 train 50 Hz")
+  app->add_option("--wall", f->wall,
+                  "the method's walls: 0 single impulse, 1 train 250 Hz, "
+                  "2 train 50 Hz")
       ->check(CLI::IsMember({0, 1, 2}));
   app->add_option("--rate", f->rate_hz, "haptic rate [Hz], 100 to 20000")->capture_default_str();
   app->add_option("--device", f->device, "device preset: touch, omni, falcon, omega3, generic")
@@ -273,4 +277,4 @@ void Register(CLI::App& root) {
 const CommandRegistrar registrar(&Register);
 
 }  // namespace
-}  // namespace rigidtouch::cli
+}  // namespace rigidtouch::io

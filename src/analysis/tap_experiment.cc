@@ -15,7 +15,8 @@ double ToolReach(const Model& model, const Vec3& n) {
     const Vec3 c = g.pos_B;  // principal frame; the tool starts unrotated in every mode here
     double r = g.rbound_m;
     if (g.type == GeomType::kSphere) r = g.size.x();
-    if (g.type == GeomType::kBox) r = (g.quat_B.toRotationMatrix().transpose() * n).cwiseAbs().dot(g.size);
+    if (g.type == GeomType::kBox)
+      r = (g.quat_B.toRotationMatrix().transpose() * n).cwiseAbs().dot(g.size);
     reach = std::max(reach, r - c.dot(n));
   }
   return reach;

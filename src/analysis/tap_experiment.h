@@ -19,14 +19,14 @@ RenderParams WallRenderParams(int wall);
 
 /// Everything a tap run needs.
 struct TapExperimentConfig {
-  std::string scene_path;              // MJCF with a wall and the tool
-  LoadOptions load;                    // tool name, renderer, contact law, coupling
+  std::string scene_path;  // MJCF with a wall and the tool
+  LoadOptions load;        // tool name, renderer, contact law, coupling
   std::string device_preset = "touch";
-  double rate_hz = 1000.0;             // haptic rate: engine step and device tick, h = 1/rate
+  double rate_hz = 1000.0;                  // haptic rate: engine step and device tick, h = 1/rate
   std::optional<double> stiffness_N_per_m;  // default: the preset's maximum stiffness
   std::optional<double> damping_Ns_per_m;   // default: k h, twice Colgate's bound k T / 2
-  Vec3 wall_point_m = Vec3::Zero();    // a point of the wall surface
-  Vec3 wall_normal = Vec3::UnitZ();    // its outward normal
+  Vec3 wall_point_m = Vec3::Zero();         // a point of the wall surface
+  Vec3 wall_normal = Vec3::UnitZ();         // its outward normal
   device::HandParams hand;
   device::DeviceModelParams device_model;  // tick_rate_hz is set from rate_hz
   device::TapScript script;                // surface point and normal are set from the wall
@@ -34,12 +34,12 @@ struct TapExperimentConfig {
 
 /// The result of a run.
 struct TapRun {
-  Model model;                          // as rendered (tool mass, stiffness, schedule)
+  Model model;  // as rendered (tool mass, stiffness, schedule)
   device::DeviceLimits device;
-  std::vector<TraceSample> trace;       // one sample per tick
-  std::vector<TapMetrics> taps;         // one per scripted tap
-  double energy_to_user_J = 0.0;        // the device's own bookkeeping over the whole run
-  std::int64_t clipped_ticks = 0;       // ticks whose force the device limit clipped
+  std::vector<TraceSample> trace;          // one sample per tick
+  std::vector<TapMetrics> taps;            // one per scripted tap
+  double energy_to_user_J = 0.0;           // the device's own bookkeeping over the whole run
+  std::int64_t clipped_ticks = 0;          // ticks whose force the device limit clipped
   std::int64_t clipped_impulse_ticks = 0;  // ... while an impulsive force was in the command
   std::array<WarningStat, static_cast<int>(Warning::kCount)> warnings{};
 };

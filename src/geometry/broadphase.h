@@ -25,7 +25,7 @@ struct Broadphase {
   std::vector<int> planes;                 // static plane geoms
   std::vector<std::pair<int, int>> pairs;  // (capacity) candidate pairs, geom indices
   int npair = 0;
-  int dropped = 0;                         // candidates beyond capacity this tick
+  int dropped = 0;  // candidates beyond capacity this tick
 
   /// Sizes the buffers for `model`; `pair_capacity` candidate pairs at most.
   void Reserve(const Model& model, int pair_capacity);

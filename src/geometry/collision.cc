@@ -102,8 +102,7 @@ void AddContact(const Model& model, Data& data, int ga, int gb, const Vec3& p_W,
   }
   // a is dynamic, and the tool when it takes part (its forces then act along +n)
   const int tool = model.tool;
-  if (model.geoms[ga].body < 0 ||
-      (model.geoms[gb].body == tool && model.geoms[ga].body != tool)) {
+  if (model.geoms[ga].body < 0 || (model.geoms[gb].body == tool && model.geoms[ga].body != tool)) {
     std::swap(ga, gb);
     n_W = -n_W;
   }
@@ -126,11 +125,16 @@ void AddContact(const Model& model, Data& data, int ga, int gb, const Vec3& p_W,
 
 int MjType(GeomType t) {
   switch (t) {
-    case GeomType::kPlane: return mjGEOM_PLANE;
-    case GeomType::kSphere: return mjGEOM_SPHERE;
-    case GeomType::kCapsule: return mjGEOM_CAPSULE;
-    case GeomType::kBox: return mjGEOM_BOX;
-    case GeomType::kMesh: return mjGEOM_MESH;
+    case GeomType::kPlane:
+      return mjGEOM_PLANE;
+    case GeomType::kSphere:
+      return mjGEOM_SPHERE;
+    case GeomType::kCapsule:
+      return mjGEOM_CAPSULE;
+    case GeomType::kBox:
+      return mjGEOM_BOX;
+    case GeomType::kMesh:
+      return mjGEOM_MESH;
   }
   return mjGEOM_NONE;
 }

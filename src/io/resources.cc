@@ -1,4 +1,4 @@
-#include "resources.h"
+#include "io/resources.h"
 
 #include <cstdlib>
 #include <filesystem>
@@ -6,7 +6,7 @@
 
 #include "rigidtouch/types.h"
 
-namespace rigidtouch::cli {
+namespace rigidtouch::io {
 
 std::string ShippedFile(const std::string& relative) {
   std::vector<std::string> roots;
@@ -24,4 +24,4 @@ std::string ShippedFile(const std::string& relative) {
               "); set RIGIDTOUCH_DATA_DIR to the folder holding scenes/ and python/");
 }
 
-}  // namespace rigidtouch::cli
+}  // namespace rigidtouch::io

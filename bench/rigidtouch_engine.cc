@@ -1,0 +1,133 @@
+// rigidtouch in the benchmark suite: the same scenes, the same constant tool force, the default
+// renderer (the impulse train at 250 Hz, t_c = 0.1 s) and default contact law.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "bench/engine.h"
+#include "io/config.h"
+#include "rigidtouch/rigidtouch.h"
+
+namespace rigidtouch::bench {
+namespace {
+
+class RigidtouchEngine final : public Engine {
+ public:
+  std::string_view Name() const override { return kReferenceEngine; }
+
+  void Load(const Scene& scene) override {
+    LoadOptions options;
+    options.tool_name = scene.tool_body;
+    model_ = std::make_unique<Model>(LoadModel(scene.mjcf_path, options));
+    data_ = std::make_unique<Data>(MakeData(*model_));
+    input_.tool_wrench.force_N = scene.tool_force_N;
+  }
+
+  void Step() override { Tick(*model_, *data_, input_); }
+
+  int ContactCount() const override { return data_->ncontact; }
+
+  int BodyContactCount(std::string_view body) const override {
+    const int b = Index(body);
+    int n = 0;
+    for (int c = 0; c < data_->ncontact; ++c) {
+      n += data_->contacts[c].body_a == b || data_->contacts[c].body_b == b;
+    }
+    return n;
+  }
+
+  double DeepestPenetration_m() const override {
+    double d = 0.0;
+    for (int c = 0; c < data_->ncontact; ++c) d = std::max(d, data_->contacts[c].depth_m);
+    return d;
+  }
+
+  Vec3 BodyPosition(std::string_view body) const override { return data_->bodies[Index(body)].x_W; }
+
+  Quat BodyOrientation(std::string_view body) const override {
+    const int b = Index(body);
+    return data_->bodies[b].q_WB * model_->bodies[b].iquat_B.conjugate();
+  }
+
+  void SetBodyMotion(std::string_view body, const Vec3& position_m,
+                     const Vec3& velocity_mps) override {
+    BodyState& s = data_->bodies[Index(body)];
+    s.x_W = position_m;
+    s.v_W = velocity_mps;
+    s.w_W.setZero();
+  }
+
+  // the state that carries over between ticks: bodies, last contacts (identity, anchors) and the
+  // collision windows
+  void SaveSnapshot() override {
+    snapshot_.bodies = data_->bodies;
+    snapshot_.previous = data_->previous;
+    snapshot_.nprevious = data_->nprevious;
+    snapshot_.window = data_->window;
+    snapshot_.step = data_->step;
+    snapshot_.next_contact_id = data_->next_contact_id;
+  }
+
+  void RestoreSnapshot() override {
+    std::copy(snapshot_.bodies.begin(), snapshot_.bodies.end(), data_->bodies.begin());
+    std::copy(snapshot_.previous.begin(), snapshot_.previous.end(), data_->previous.begin());
+    data_->nprevious = snapshot_.nprevious;
+    std::copy(snapshot_.window.begin(), snapshot_.window.end(), data_->window.begin());
+    data_->step = snapshot_.step;
+    data_->time_s = static_cast<double>(snapshot_.step) * model_->timestep_s;
+    data_->next_contact_id = snapshot_.next_contact_id;
+  }
+
+  bool StateIsFinite() const override {
+    for (const BodyState& s : data_->bodies) {
+      if (!s.x_W.allFinite() || !s.v_W.allFinite() || !s.w_W.allFinite()) return false;
+    }
+    return true;
+  }
+
+  long WarningCount() const override {
+    long n = 0;
+    for (const WarningStat& w : data_->warnings) n += w.count;
+    return n;
+  }
+
+  std::string Configuration() const override {
+    std::ostringstream s;
+    const Model& m = *model_;
+    s << "rigidtouch: renderer " << io::RendererName(m.render.renderer) << " (f "
+      << m.render.frequency_hz << " Hz, t_c " << m.render.t_collision_s << " s), h " << m.timestep_s
+      << " s, tool contact k " << m.contact.stiffness_N_per_m << " N/m b "
+      << m.contact.damping_Ns_per_m << " N s/m (explicit), scene contact k "
+      << m.contact.scene_stiffness_N_per_m << " N/m b " << m.contact.scene_damping_Ns_per_m
+      << " N s/m (implicit), own narrow phase for plane/sphere/box";
+    return s.str();
+  }
+
+ private:
+  int Index(std::string_view name) const {
+    for (std::size_t i = 0; i < model_->bodies.size(); ++i) {
+      if (model_->bodies[i].name == name) return static_cast<int>(i);
+    }
+    throw Error("no body named '" + std::string(name) + "' in " + model_->source);
+  }
+
+  struct Snapshot {
+    std::vector<BodyState> bodies;
+    std::vector<Contact> previous;
+    int nprevious = 0;
+    std::vector<WindowState> window;
+    std::int64_t step = 0;
+    int next_contact_id = 0;
+  };
+
+  std::unique_ptr<Model> model_;
+  std::unique_ptr<Data> data_;
+  TickInput input_;
+  Snapshot snapshot_;
+};
+
+const EngineRegistrar registrar("rigidtouch",
+                                [] { return std::unique_ptr<Engine>(new RigidtouchEngine); });
+
+}  // namespace
+}  // namespace rigidtouch::bench

@@ -1,0 +1,183 @@
+// The engine behind the study: simulated taps as percepts (StimulusSource), and walls rendered on
+// a device for a person (WallPresenter). Declared in study/stimulus.h.
+#include <atomic>
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+#include "analysis/tap_experiment.h"
+#include "device/udp_device.h"
+#include "io/resources.h"
+#include "loop/haptic_loop.h"
+#include "study/stimulus.h"
+
+namespace rigidtouch::study {
+namespace {
+
+RenderParams ToRenderParams(const Condition& c) {
+  RenderParams r;
+  switch (c.renderer) {
+    case Renderer::kPenalty:
+      r.renderer = RendererKind::kPenalty;
+      break;
+    case Renderer::kImpulse:
+      r.renderer = RendererKind::kImpulse;
+      break;
+    case Renderer::kTrain:
+      r.renderer = RendererKind::kTrain;
+      break;
+  }
+  r.restitution = c.restitution;
+  if (c.renderer == Renderer::kTrain) {
+    r.t_collision_s = c.t_collision_s;
+    r.frequency_hz = c.frequency_hz;
+  }
+  return r;
+}
+
+analysis::TapExperimentConfig TapConfig(const Condition& c, const std::string& scene,
+                                        const std::string& device, double speed_mps) {
+  analysis::TapExperimentConfig config;
+  config.scene_path =
+      c.scene ? *c.scene : (scene.empty() ? io::ShippedFile("scenes/wall.xml") : scene);
+  config.device_preset = c.device ? *c.device : (device.empty() ? "touch" : device);
+  config.load.render = ToRenderParams(c);
+  config.stiffness_N_per_m = c.stiffness_N_per_m;
+  config.damping_Ns_per_m = c.damping_Ns_per_m;
+  config.script.approach_speed_mps =
+      c.approach_speed_mps ? *c.approach_speed_mps : (speed_mps > 0.0 ? speed_mps : 0.2);
+  return config;
+}
+
+// RMS of the force minus its low-pass part (a centred 50 ms moving average, whose first null is
+// at 20 Hz): the vibratory transient the skin senses, over the collision window
+double VibrationRms(const std::vector<TraceSample>& trace, double onset_s, double window_s) {
+  std::vector<double> f;
+  std::size_t first = trace.size();
+  for (std::size_t k = 0; k < trace.size(); ++k) {
+    if (trace[k].time_s >= onset_s && first == trace.size()) first = k;
+    if (trace[k].time_s >= onset_s && trace[k].time_s < onset_s + window_s) {
+      f.push_back(trace[k].device_force_N.dot(trace[k].wall_normal));
+    }
+  }
+  if (f.size() < 3 || trace.size() < 2) return 0.0;
+  const double h = trace[1].time_s - trace[0].time_s;
+  const int half = std::max(1, static_cast<int>(std::lround(0.025 / h)));
+  double sum2 = 0.0;
+  for (int i = 0; i < static_cast<int>(f.size()); ++i) {
+    double mean = 0.0;
+    int n = 0;
+    for (int j = i - half; j <= i + half; ++j) {
+      // outside the window the force is what the trace says (zero before contact)
+      const long k = static_cast<long>(first) + j;
+      if (k < 0 || k >= static_cast<long>(trace.size())) continue;
+      mean += trace[k].device_force_N.dot(trace[k].wall_normal);
+      ++n;
+    }
+    mean /= n;
+    sum2 += (f[i] - mean) * (f[i] - mean);
+  }
+  return std::sqrt(sum2 / f.size());
+}
+
+class TapStimulusSource final : public StimulusSource {
+ public:
+  explicit TapStimulusSource(const TapSourceOptions& o) : options_(o) {}
+
+  TapPercept RenderTap(const Condition& condition, std::uint64_t tap_seed) override {
+    analysis::TapExperimentConfig config =
+        TapConfig(condition, options_.scene, options_.device, options_.approach_speed_mps);
+    config.script.taps = 1;
+    config.script.seed = tap_seed;
+    // tap variability comes from the hand: 10% speed spread unless the caller sets one
+    config.script.speed_spread =
+        options_.approach_speed_relative_sd >= 0.0 ? options_.approach_speed_relative_sd : 0.1;
+    const analysis::TapRun run = analysis::RunTapExperiment(config);
+    TapPercept p;
+    if (run.taps.empty() || !run.taps.front().contact) return p;  // the hand never touched
+    const analysis::TapMetrics& m = run.taps.front();
+    p.peak_force_N = m.peak_force_N;
+    p.rate_hardness_N_per_m = m.rate_hardness_N_per_m;
+    p.dominant_frequency_hz = m.dominant_frequency_hz;
+    for (int b = 0; b < kPerceptBands; ++b) p.band_energy_fraction[b] = m.band_energy_fraction[b];
+    p.vibration_rms_N = VibrationRms(run.trace, m.contact_onset_time_s, 0.1);
+    p.approach_speed_mps = m.approach_speed_mps;
+    return p;
+  }
+
+  std::string Describe() const override {
+    std::ostringstream s;
+    s << "simulated taps (rigidtouch tap experiment, device "
+      << (options_.device.empty() ? "touch" : options_.device) << ")";
+    return s.str();
+  }
+
+ private:
+  TapSourceOptions options_;
+};
+
+// renders a wall for a person: on the in-process simulated device (a dry run that reports what
+// the simulated hand felt) or, with a udp:// address, on a real device through the bridge
+class DeviceWallPresenter final : public WallPresenter {
+ public:
+  explicit DeviceWallPresenter(const PresenterOptions& o) : options_(o) {}
+
+  void Present(const Condition& condition, int taps) override {
+    if (options_.device.rfind("udp://", 0) == 0) {
+      PresentOnBridge(condition, taps);
+      return;
+    }
+    analysis::TapExperimentConfig config = TapConfig(condition, options_.scene, options_.device, 0);
+    config.script.taps = taps;
+    const analysis::TapRun run = analysis::RunTapExperiment(config);
+    double peak = 0.0;
+    for (const auto& t : run.taps) peak = std::max(peak, t.peak_force_N);
+    std::cout << "  (simulated device rendered " << taps << " taps, peak force " << peak << " N)\n";
+  }
+
+  std::string Describe() const override {
+    return options_.device.rfind("udp://", 0) == 0 ? "device bridge " + options_.device
+                                                   : "in-process simulated device";
+  }
+
+ private:
+  void PresentOnBridge(const Condition& condition, int taps) {
+    LoadOptions load;
+    load.render = ToRenderParams(condition);
+    load.device.coupling = Coupling::kDirect;
+    load.timestep_s = 0.001;
+    if (condition.stiffness_N_per_m) load.contact.stiffness_N_per_m = *condition.stiffness_N_per_m;
+    if (condition.damping_Ns_per_m) load.contact.damping_Ns_per_m = *condition.damping_Ns_per_m;
+    const std::string scene = condition.scene          ? *condition.scene
+                              : options_.scene.empty() ? io::ShippedFile("scenes/wall.xml")
+                                                       : options_.scene;
+    const Model model = LoadModel(scene, load);
+    Data data = MakeData(model);
+    device::UdpDeviceOptions dev_options;
+    dev_options.server = options_.device;
+    device::UdpDevice dev(dev_options);
+    loop::LoopOptions loop;
+    loop.rate_hz = 1000.0;
+    loop.duration_s = 1.5 * taps;  // time for the participant's taps
+    std::cout << "  tap the wall " << taps << " times now (" << loop.duration_s << " s)\n"
+              << std::flush;
+    const loop::HapticLoopResult r = loop::RunHapticLoop(model, data, dev, loop, nullptr);
+    if (r.invalid_device_ticks > r.timing.ticks / 2) {
+      std::cout << "  warning: the device sent no valid state for most of the series\n";
+    }
+  }
+
+  PresenterOptions options_;
+};
+
+}  // namespace
+
+std::unique_ptr<StimulusSource> MakeTapStimulusSource(const TapSourceOptions& options) {
+  return std::make_unique<TapStimulusSource>(options);
+}
+
+std::unique_ptr<WallPresenter> MakeDeviceWallPresenter(const PresenterOptions& options) {
+  return std::make_unique<DeviceWallPresenter>(options);
+}
+
+}  // namespace rigidtouch::study
