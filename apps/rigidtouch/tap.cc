@@ -15,7 +15,7 @@
 #include "io/trace_csv.h"
 #include "scene_flags.h"
 
-namespace rigidtouch::io {
+namespace rigidtouch::cli {
 namespace {
 
 struct TapFlags {
@@ -277,4 +277,4 @@ void Register(CLI::App& root) {
 const CommandRegistrar registrar(&Register);
 
 }  // namespace
-}  // namespace rigidtouch::io
+}  // namespace rigidtouch::cli
