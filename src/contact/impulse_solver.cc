@@ -201,7 +201,7 @@ ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double sc
   if (p_w_J > 0.0 && p_ap_J > 0.0) {
     // an inexact p with p . w > 0 would let the impulse 2 p (e = 1) add energy 2 p . w; the
     // exact line search along p, gamma = -b.p / p^T A p < 1, restores p . w = 0
-    const double gamma = (p_ap_J - p_w_J) / p_ap_J;
+    const double gamma = std::max((p_ap_J - p_w_J) / p_ap_J, 0.0);
     for (int j = 0; j < c; ++j) {
       p_[j] *= gamma;
       w_mps_[j] = gamma * (w_mps_[j] - b_mps_[j]) + b_mps_[j];
@@ -463,6 +463,9 @@ bool ImpulseSolver::SolveDense(std::span<const double> p_warm, ImpulseSolverStat
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// minimum-norm polish (step 3 of the header comment)
+
 bool ImpulseSolver::Polish(ImpulseSolverStats& stats) {
   const int c = num_rows_;
   MultiplyA(p_.data(), w_mps_.data(), nullptr);
@@ -592,9 +595,8 @@ bool ImpulseSolver::PolishDense(int f, ImpulseSolverStats& stats) {
 bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats) {
   const int c = num_rows_;
   const double* s = row_scale_.data();
-  // |A_hat_ij| <= 1 (unit diagonal, positive semi-definite), so the row sum bound gives
-  // ||A_hat|| <= rows touching a + rows touching b; the expansion step length must be <=
-  // 2/||A_hat||
+  // the expansion step length must be <= 2 / ||A_hat||; |A_hat_ij| <= 1 (unit diagonal,
+  // positive semi-definite), so Gershgorin bounds ||A_hat|| by the rows touching a plus b
   int max_neighbours = 1;
   for (int j = 0; j < c; ++j) {
     const PackedRow& row = rows_[j];
