@@ -646,8 +646,8 @@ bool ImpulseSolver::PolishDense(int f, ImpulseSolverStats& stats) {
 bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats) {
   const int c = num_rows_;
   const double* s = row_scale_.data();
-  // the expansion step length must be <= 2 / ||A_hat||; |A_hat_ij| <= 1 (unit diagonal,
-  // positive semi-definite), so Gershgorin bounds ||A_hat|| by the rows touching a plus b
+  // |A_hat_ij| <= 1 (unit diagonal, positive semi-definite), so Gershgorin bounds ||A_hat|| by
+  // the number of rows touching a plus those touching b
   int max_neighbours = 1;
   for (int j = 0; j < c; ++j) {
     const PackedRow& row = rows_[j];
@@ -658,8 +658,9 @@ bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStat
     if (row.body_b >= 0) neighbours += body_row_count_[row.body_b];
     max_neighbours = std::max(max_neighbours, neighbours);
   }
-  // the expansion step length: start from 1.9 (||A_hat|| >= 1) and halve it whenever an
-  // expansion step fails to decrease the objective, down to the safe bound 1.9 / max_neighbours
+  // the expansion step length (at most 2 / ||A_hat|| in the theory): start from 1.9
+  // (||A_hat|| >= 1) and halve it whenever an expansion step fails to decrease the objective,
+  // down to the always-safe 1.9 / max_neighbours
   const double min_step_bar = 1.9 / max_neighbours;
   double step_bar = 1.9;
   double inv_step_bar = 1.0 / step_bar;

@@ -95,8 +95,8 @@ namespace rigidtouch::contact {
 
 /// A row is inert when its Delassus diagonal is at most this fraction of the group's largest one.
 inline constexpr double kInertRowThreshold = 1e-12;
-/// Rank threshold of the dense minimum-norm polish, relative to the largest diagonal of A_FF; the
-/// same value as the reference pseudo-inverse threshold.
+/// Rank threshold of the dense minimum-norm polish: on the Jacobi-scaled A_FF (unit diagonal)
+/// and relative to the largest diagonal of G_K^T G_K; the value of the reference pseudo-inverse.
 inline constexpr double kRankThreshold = 1e-10;
 
 /// Why a solve returned the safe impulse p_out = 0.
@@ -118,14 +118,13 @@ const char* ToString(ImpulseSolverError error);
 /// What one solve did. Plain data, written by Solve without allocating.
 struct ImpulseSolverStats {
   ImpulseSolverError error = ImpulseSolverError::kNone;  ///< kNone when p_out holds the answer.
-  bool converged = false;    ///< The active-set method met its stopping test.
-  bool matrix_free = false;  ///< The matrix-free path (MPRGP) was used instead of the dense one.
-  bool min_norm = false;     ///< The minimum-norm polish was accepted (see the file comment).
-  int iterations = 0;        ///< Free-set changes (dense path) or MPRGP iterations.
-  int polish_iterations =
-      0;                    ///< Active-set (dense) or conjugate-gradient iterations of the polish.
-  int inert_rows = 0;       ///< Rows with no effective mass; they get p = 0.
-  int unresolved_rows = 0;  ///< Inert rows that approach; no impulse can stop them.
+  bool converged = false;         ///< The active-set method met its stopping test.
+  bool matrix_free = false;       ///< The answer came from MPRGP, not from the dense active set.
+  bool min_norm = false;          ///< The minimum-norm polish was accepted (see the file comment).
+  int iterations = 0;             ///< Free-set changes (dense path) or MPRGP iterations.
+  int polish_iterations = 0;      ///< Conjugate-gradient plus dense active-set polish iterations.
+  int inert_rows = 0;             ///< Rows with no effective mass; they get p = 0.
+  int unresolved_rows = 0;        ///< Inert rows that approach; no impulse can stop them.
   double max_approach_mps = 0.0;  ///< Largest approach speed -w_j left after p* (0 if none).
 };
 
@@ -238,7 +237,7 @@ class ImpulseSolver {
 
   // dense path (max_dense)
   Eigen::MatrixXd a_dense_;   // A (unregularised)
-  Eigen::MatrixXd l_dense_;   // Cholesky factor of the free block; the polish's G
+  Eigen::MatrixXd l_dense_;   // L^T of the free block (row k of L in column k); the polish's G
   Eigen::MatrixXd h_dense_;   // G_K^T G_K of the polish
   Eigen::VectorXi free_;      // free rows in factor order
   Eigen::VectorXi blocked_;   // rows the dense path must not add again
