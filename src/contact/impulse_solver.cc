@@ -77,8 +77,9 @@ ImpulseSolver::ImpulseSolver(int max_rows, int max_bodies, const ImpulseSolverOp
     throw Error("ImpulseSolver: max_rows = " + std::to_string(max_rows) +
                 " and max_bodies = " + std::to_string(max_bodies) + " must be >= 0");
   }
-  if (options.dense_max_rows < 0) {
+  if (options.dense_max_rows < 0 || options.dense_polish_max_rows < 0) {
     throw Error("ImpulseSolverOptions::dense_max_rows = " + std::to_string(options.dense_max_rows) +
+                " and dense_polish_max_rows = " + std::to_string(options.dense_polish_max_rows) +
                 " must be >= 0");
   }
   if (options.max_iterations < 0) {
@@ -99,7 +100,9 @@ ImpulseSolver::ImpulseSolver(int max_rows, int max_bodies, const ImpulseSolverOp
     }
   }
 
-  max_dense_ = std::min(max_rows, options.dense_max_rows);
+  dense_path_rows_ = std::min(max_rows, options.dense_max_rows);
+  dense_polish_rows_ = std::min(max_rows, options.dense_polish_max_rows);
+  max_dense_ = std::max(dense_path_rows_, dense_polish_rows_);
   rows_.resize(static_cast<std::size_t>(max_rows));
   body_dv_.resize(static_cast<std::size_t>(max_bodies), Vec6::Zero());
   body_row_count_.setZero(max_bodies);
@@ -178,9 +181,16 @@ ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double sc
     stats.converged = true;
     stats.min_norm = true;
   } else {
-    stats.matrix_free = c > max_dense_;
-    stats.converged = stats.matrix_free ? SolveMprgp(p_warm.first(warm ? c : 0), stats)
-                                        : SolveDense(p_warm.first(warm ? c : 0), stats);
+    stats.matrix_free = c > dense_path_rows_;
+    const std::span<const double> start = p_warm.first(warm ? c : 0);
+    stats.converged = stats.matrix_free ? SolveMprgp(start, stats) : SolveDense(start, stats);
+    if (!stats.converged && stats.matrix_free && c <= max_dense_) {
+      // MPRGP can stall on highly degenerate groups; the finite dense method settles them
+      p_.head(c).setZero();
+      stats.matrix_free = false;
+      stats.iterations = 0;
+      stats.converged = SolveDense(start, stats);
+    }
     if (!stats.converged) {
       stats.error = ImpulseSolverError::kNotConverged;
       return stats;
@@ -201,7 +211,7 @@ ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double sc
   if (p_w_J > 0.0 && p_ap_J > 0.0) {
     // an inexact p with p . w > 0 would let the impulse 2 p (e = 1) add energy 2 p . w; the
     // exact line search along p, gamma = -b.p / p^T A p < 1, restores p . w = 0
-    const double gamma = (p_ap_J - p_w_J) / p_ap_J;
+    const double gamma = std::max((p_ap_J - p_w_J) / p_ap_J, 0.0);
     for (int j = 0; j < c; ++j) {
       p_[j] *= gamma;
       w_mps_[j] = gamma * (w_mps_[j] - b_mps_[j]) + b_mps_[j];
@@ -328,18 +338,23 @@ double ImpulseSolver::CouplingOf(int i, int j) const {
 
 bool ImpulseSolver::DenseAppend(int row) {
   // new factor row l solves L l = A_F,row; its pivot is the Schur complement, >= eps_row in
-  // exact arithmetic because A + E >= E (E = regularization * diag(A))
+  // exact arithmetic because A + E >= E (E = regularization * diag(A)). The factor is stored
+  // transposed (column k of l_dense_ is row k of L) so that the substitutions run contiguously.
   const int n = num_free_;
+  double* lt = l_dense_.data();
+  const Eigen::Index ld = l_dense_.rows();
+  double* l_new = lt + n * ld;  // row n of L
   for (int k = 0; k < n; ++k) {
+    const double* l_k = lt + k * ld;
     double sum = a_dense_(free_[k], row);
-    for (int m = 0; m < k; ++m) sum -= l_dense_(k, m) * l_dense_(n, m);
-    l_dense_(n, k) = sum / l_dense_(k, k);
+    for (int m = 0; m < k; ++m) sum -= l_k[m] * l_new[m];
+    l_new[k] = sum / l_k[k];
   }
   const double eps = options_.regularization * diag_[row];
   double pivot = a_dense_(row, row) + eps;
-  for (int m = 0; m < n; ++m) pivot -= l_dense_(n, m) * l_dense_(n, m);
+  for (int m = 0; m < n; ++m) pivot -= l_new[m] * l_new[m];
   if (!(pivot > 0.5 * eps)) return false;
-  l_dense_(n, n) = std::sqrt(pivot);
+  l_new[n] = std::sqrt(pivot);
   free_[n] = row;
   num_free_ = n + 1;
   return true;
@@ -358,15 +373,44 @@ void ImpulseSolver::DenseRefactor() {
 
 void ImpulseSolver::DenseSolveFree(const double* rhs, double* z) const {
   const int n = num_free_;
-  for (int k = 0; k < n; ++k) {  // L y = rhs
+  const double* lt = l_dense_.data();
+  const Eigen::Index ld = l_dense_.rows();
+  for (int k = 0; k < n; ++k) {  // L y = rhs, row k of L is contiguous
+    const double* l_k = lt + k * ld;
     double sum = rhs[k];
-    for (int m = 0; m < k; ++m) sum -= l_dense_(k, m) * z[m];
-    z[k] = sum / l_dense_(k, k);
+    for (int m = 0; m < k; ++m) sum -= l_k[m] * z[m];
+    z[k] = sum / l_k[k];
   }
-  for (int k = n - 1; k >= 0; --k) {  // L^T z = y
-    double sum = z[k];
-    for (int m = k + 1; m < n; ++m) sum -= l_dense_(m, k) * z[m];
-    z[k] = sum / l_dense_(k, k);
+  for (int k = n - 1; k >= 0; --k) {  // L^T z = y, column-oriented: subtract as each z is known
+    z[k] /= lt[k * ld + k];
+    const double* l_k = lt + k * ld;
+    for (int m = 0; m < k; ++m) z[m] -= l_k[m] * z[k];
+  }
+}
+
+void ImpulseSolver::RefineDense() {
+  // iterative refinement on the final free set with the regularised factor: each step shrinks
+  // the regularisation's bias w_F = -E p_F by E / (A + E) per eigendirection, which matters for
+  // nearly singular groups
+  const double tol_mps = options_.tolerance * v_ref_mps_;
+  double previous_max_mps = std::numeric_limits<double>::infinity();
+  for (int step = 0; step < 30; ++step) {
+    double residual_max_mps = 0.0;
+    for (int k = 0; k < num_free_; ++k) {
+      double residual_mps = -b_mps_[free_[k]];
+      for (int m = 0; m < num_free_; ++m)
+        residual_mps -= a_dense_(free_[k], free_[m]) * p_[free_[m]];
+      rhs_[k] = residual_mps;
+      residual_max_mps = std::max(residual_max_mps, std::abs(residual_mps));
+    }
+    // stop when converged, or stalled (rounding dominates)
+    if (residual_max_mps <= tol_mps || residual_max_mps > 0.9 * previous_max_mps) return;
+    previous_max_mps = residual_max_mps;
+    DenseSolveFree(rhs_.data(), z_.data());
+    for (int k = 0; k < num_free_; ++k) {
+      if (!(p_[free_[k]] + z_[k] > 0.0)) return;  // would leave the feasible set: stop here
+    }
+    for (int k = 0; k < num_free_; ++k) p_[free_[k]] += z_[k];
   }
 }
 
@@ -452,7 +496,10 @@ bool ImpulseSolver::SolveDense(std::span<const double> p_warm, ImpulseSolverStat
         best = j;
       }
     }
-    if (best < 0) return true;
+    if (best < 0) {
+      RefineDense();
+      return true;
+    }
     if (++stats.iterations >= max_iterations) return false;
     if (!DenseAppend(best)) {
       blocked_[best] = 1;
@@ -463,6 +510,9 @@ bool ImpulseSolver::SolveDense(std::span<const double> p_warm, ImpulseSolverStat
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// minimum-norm polish (step 3 of the header comment)
+
 bool ImpulseSolver::Polish(ImpulseSolverStats& stats) {
   const int c = num_rows_;
   MultiplyA(p_.data(), w_mps_.data(), nullptr);
@@ -471,11 +521,15 @@ bool ImpulseSolver::Polish(ImpulseSolverStats& stats) {
   for (int j = 0; j < c; ++j) {
     w_mps_[j] += b_mps_[j];
     in_set_[j] = !inert_[j] && w_mps_[j] <= threshold_mps ? 1 : 0;
-    if (in_set_[j] && f < max_dense_) set_rows_[f] = j;
+    if (in_set_[j] && f < dense_polish_rows_) set_rows_[f] = j;
     f += in_set_[j];
   }
   if (f == 0) return false;
-  return f <= max_dense_ ? PolishDense(f, stats) : PolishCg(stats);
+  const bool dense_fits = f <= dense_polish_rows_;
+  // after the dense active set the dense polish costs about as much again, so it goes first;
+  // after MPRGP the O(c)-per-iteration conjugate gradients usually suffice and are cheaper
+  if (!stats.matrix_free) return dense_fits ? PolishDense(f, stats) : PolishCg(stats);
+  return PolishCg(stats) || (dense_fits && PolishDense(f, stats));
 }
 
 bool ImpulseSolver::PolishDense(int f, ImpulseSolverStats& stats) {
@@ -510,7 +564,7 @@ bool ImpulseSolver::PolishDense(int f, ImpulseSolverStats& stats) {
   const int max_iterations = 4 * f + 20;
   for (int it = 0;; ++it) {
     if (it >= max_iterations) return false;
-    stats.polish_iterations = it + 1;
+    ++stats.polish_iterations;
     // H = G_K^T G_K, basic solution u of H u = beta through a pivoted Cholesky
     auto& h = h_dense_;
     for (int a = 0; a < r; ++a) {
@@ -592,9 +646,8 @@ bool ImpulseSolver::PolishDense(int f, ImpulseSolverStats& stats) {
 bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats) {
   const int c = num_rows_;
   const double* s = row_scale_.data();
-  // |A_hat_ij| <= 1 (unit diagonal, positive semi-definite), so the row sum bound gives
-  // ||A_hat|| <= rows touching a + rows touching b; the expansion step length must be <=
-  // 2/||A_hat||
+  // |A_hat_ij| <= 1 (unit diagonal, positive semi-definite), so Gershgorin bounds ||A_hat|| by
+  // the number of rows touching a plus those touching b
   int max_neighbours = 1;
   for (int j = 0; j < c; ++j) {
     const PackedRow& row = rows_[j];
@@ -605,8 +658,12 @@ bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStat
     if (row.body_b >= 0) neighbours += body_row_count_[row.body_b];
     max_neighbours = std::max(max_neighbours, neighbours);
   }
-  const double step_bar = 1.9 / max_neighbours;
-  const double inv_step_bar = max_neighbours / 1.9;
+  // the expansion step length (at most 2 / ||A_hat|| in the theory): start from 1.9
+  // (||A_hat|| >= 1) and halve it whenever an expansion step fails to decrease the objective,
+  // down to the always-safe 1.9 / max_neighbours
+  const double min_step_bar = 1.9 / max_neighbours;
+  double step_bar = 1.9;
+  double inv_step_bar = 1.0 / step_bar;
   const double* sqrt_diag = sqrt_diag_.data();  // 1 / s: scaled gradient to velocity
   const double tol_mps = options_.tolerance * v_ref_mps_;
   const int max_iterations = options_.max_iterations > 0 ? options_.max_iterations : 20 * c + 200;
@@ -678,14 +735,27 @@ bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStat
         const double beta = phi_ad / d_ad;
         for (int j = 0; j < c; ++j) d_[j] = free_gradient(j) - beta * d_[j];
       } else {
-        // expansion: to the boundary, then a projected gradient step of fixed length
+        // expansion: to the boundary, then a projected gradient step of length step_bar
         const double step = std::isfinite(feasible_step) ? feasible_step : 0.0;
+        double objective_half = 0.0;  // 1/2 x^T (g + b_hat) at the boundary point
         for (int j = 0; j < c; ++j) {
           x_[j] = std::max(x_[j] - step * d_[j], 0.0);
           g_[j] -= step * ad_[j];
+          tmp_[j] = x_[j];  // keep the boundary point and its gradient for a retry
+          ad_[j] = g_[j];
+          objective_half += 0.5 * x_[j] * (g_[j] + s[j] * b_mps_[j]);
         }
-        for (int j = 0; j < c; ++j) x_[j] = std::max(x_[j] - step_bar * free_gradient(j), 0.0);
-        full_gradient();
+        for (;;) {
+          for (int j = 0; j < c; ++j) {
+            x_[j] = std::max(tmp_[j] - step_bar * (tmp_[j] > 0.0 ? ad_[j] : 0.0), 0.0);
+          }
+          full_gradient();
+          double objective = 0.0;
+          for (int j = 0; j < c; ++j) objective += 0.5 * x_[j] * (g_[j] + s[j] * b_mps_[j]);
+          if (objective <= objective_half || step_bar <= min_step_bar) break;
+          step_bar = std::max(0.5 * step_bar, min_step_bar);
+          inv_step_bar = 1.0 / step_bar;
+        }
         for (int j = 0; j < c; ++j) d_[j] = free_gradient(j);
         fresh_gradient = true;
       }

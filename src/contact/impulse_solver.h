@@ -33,41 +33,49 @@
 //    shared bodies. A row with A_jj <= kInertRowThreshold * max_k A_kk (e.g. between two
 //    infinite-mass bodies) is inert: nothing can change its velocity, it gets p = 0 and, if it
 //    approaches, is counted in ImpulseSolverStats::unresolved_rows.
-// 2. Active set. Small groups (c <= options.dense_max_rows, 32 by default): the primal
+// 2. Active set. Small groups (c <= options.dense_max_rows, 8 by default): the primal
 //    active-set method of Lawson and Hanson (NNLS), written for the QP, on A + E with
 //    E = options.regularization * diag(A) (1e-10 by default, relative per row so that light and
 //    heavy bodies are regularised alike). E makes the QP strictly convex, so every free-set
 //    Cholesky factor exists (redundant rows would otherwise give zero pivots), and the method
 //    terminates: the objective strictly decreases whenever the free set changes, so no free set
 //    repeats. The factor grows by one row per added index (O(f^2)) and is refactored when indices
-//    leave (rare). It costs O(c^3) at worst, hence the size limit.
-//    Large groups (c > options.dense_max_rows): MPRGP (Dostal and Schoberl 2005, modified
-//    proportioning with reduced gradient projections), a conjugate-gradient method for
-//    bound-constrained QPs that adds and drops many bounds per iteration. It runs on the
-//    Jacobi-scaled problem (unknowns q_j = sqrt(A_jj) p_j, unit diagonal; the bounds p >= 0 are
-//    unchanged) without regularisation, needs only the O(c) products of step 1, and stops when the
-//    projected gradient (a velocity) is below options.tolerance * v_ref, with v_ref the largest
-//    |b_j|. Rejected alternatives: a dense factorisation of a 400-row group costs ~2e7 flops per
-//    solve; projected Gauss-Seidel converges linearly with a rate that degrades with stack height
-//    and mass ratio, too slowly for the accuracy the minimum-norm polish needs.
+//    leave (rare); a few steps of iterative refinement with the same factor then remove most of
+//    E's bias. It costs O(c^3) at worst.
+//    Larger groups: MPRGP (Dostal and Schoberl 2005, modified proportioning with reduced gradient
+//    projections), a conjugate-gradient method for bound-constrained QPs that adds and drops many
+//    bounds per iteration. It runs on the Jacobi-scaled problem (unknowns q_j = sqrt(A_jj) p_j,
+//    unit diagonal; the bounds p >= 0 are unchanged) without regularisation, needs only the O(c)
+//    products of step 1, and stops when the projected gradient (a velocity) is below
+//    options.tolerance * v_ref, with v_ref the largest |b_j|. Its expansion step length starts at
+//    1.9 and is halved whenever an expansion fails to decrease the objective, down to the safe
+//    1.9 / (Gershgorin bound of the scaled A). MPRGP can stall on highly degenerate groups (many
+//    more rows than the bodies' 6 b degrees of freedom); a group that fits the dense buffers
+//    (c <= options.dense_polish_max_rows) then falls back to the dense method.
+//    Why: on box piles MPRGP beat the dense method from about 8 rows on (25 rows: 2.7 us against
+//    18 us; 73 rows: 24 us against 160 us), and a dense factorisation of a 400-row group costs
+//    ~2e7 flops per solve. Projected Gauss-Seidel converges linearly with a rate that degrades
+//    with stack height and mass ratio, too slowly for the accuracy the minimum-norm polish needs.
 // 3. Minimum-norm polish. Let F = {j : w_j <= options.polish_threshold * v_ref} after step 2. w is
 //    the same for every plastic impulse, so F contains the support of p', and p' is the
 //    minimum-norm solution of {A_FF p = -b_F, p >= 0} (rows outside F carry no impulse).
-//    - If F has at most dense_max_rows rows (always on the dense path): a diagonally pivoted
-//      Cholesky of the Jacobi-scaled A_FF, truncated at kRankThreshold, gives A_FF = G G^T with G
-//      f x r of full column rank, and the constraint becomes G^T p = beta (G_1 beta = -b_F). A
-//      primal active-set method for min 1/2 |p|^2 subject to G^T p = beta, p >= 0 starts from the
-//      step-2 answer (feasible); each subproblem on the rows K outside its working set has the
-//      solution x = G_K u with (G_K^T G_K) u = beta, and the bound multipliers are -(G_W u). Its
-//      first subproblem is the unconstrained minimum-norm solution, which is the answer whenever
-//      it is >= 0 (in particular when the reference answer is >= 0).
-//    - Otherwise (matrix-free path, large F): conjugate gradients on A_FF x = -b_F from x = 0,
-//      whose iterates stay in range(A_FF), so the limit is the minimum-norm solution. If it is
-//      >= 0 it is p'. If not (p' then has zeros inside F: a degenerate, highly redundant contact
-//      set) the step-2 answer is kept: a valid plastic impulse, not necessarily of minimum norm.
-//    Either candidate is accepted only if it is >= 0, no row approaches by more than
-//    10 * options.tolerance * v_ref and rows with impulse have |w_j| below that; stats.min_norm
-//    tells whether the polish was accepted.
+//    - Conjugate gradients (first choice after MPRGP): CG on A_FF x = -b_F from x = 0, whose
+//      iterates stay in range(A_FF), so the limit is the minimum-norm solution. If it is >= 0 it
+//      is p'. If not, p' has zeros inside F (a degenerate, redundant contact set).
+//    - Dense (first choice after the dense method, and the fallback when CG's answer has
+//      negative entries; only if F has at most options.dense_polish_max_rows rows): a diagonally
+//      pivoted Cholesky of the Jacobi-scaled A_FF, truncated at kRankThreshold, gives A_FF = G G^T
+//      with G f x r of full column rank, and the constraint becomes G^T p = beta
+//      (G_1 beta = -b_F). A primal active-set method for min 1/2 |p|^2 subject to G^T p = beta,
+//      p >= 0 starts from the step-2 answer (feasible); each subproblem on the rows K outside its
+//      working set W has the solution x = G_K u with (G_K^T G_K) u = beta, and the bound
+//      multipliers are -(G_W u). Its first subproblem is the unconstrained minimum-norm
+//      solution, which is the answer whenever it is >= 0 (in particular when the reference
+//      answer is >= 0). This handles the degenerate case exactly.
+//    A candidate is accepted only if it is >= 0, no row approaches by more than
+//    10 * options.tolerance * v_ref and rows with impulse have |w_j| below that. Otherwise the
+//    step-2 answer is kept: a valid plastic impulse, not necessarily of minimum norm.
+//    stats.min_norm tells whether the polish was accepted.
 // 4. Check. p* . w* > 0 is corrected by the line-search factor above. If some row still
 //    approaches faster than options.failure_tolerance * v_ref after p*, the answer is rejected
 //    (error code, p_out = 0).
@@ -87,8 +95,8 @@ namespace rigidtouch::contact {
 
 /// A row is inert when its Delassus diagonal is at most this fraction of the group's largest one.
 inline constexpr double kInertRowThreshold = 1e-12;
-/// Rank threshold of the dense minimum-norm polish, relative to the largest diagonal of A_FF; the
-/// same value as the reference pseudo-inverse threshold.
+/// Rank threshold of the dense minimum-norm polish: on the Jacobi-scaled A_FF (unit diagonal)
+/// and relative to the largest diagonal of G_K^T G_K; the value of the reference pseudo-inverse.
 inline constexpr double kRankThreshold = 1e-10;
 
 /// Why a solve returned the safe impulse p_out = 0.
@@ -110,22 +118,25 @@ const char* ToString(ImpulseSolverError error);
 /// What one solve did. Plain data, written by Solve without allocating.
 struct ImpulseSolverStats {
   ImpulseSolverError error = ImpulseSolverError::kNone;  ///< kNone when p_out holds the answer.
-  bool converged = false;    ///< The active-set method met its stopping test.
-  bool matrix_free = false;  ///< The matrix-free path (MPRGP) was used instead of the dense one.
-  bool min_norm = false;     ///< The minimum-norm polish was accepted (see the file comment).
-  int iterations = 0;        ///< Free-set changes (dense path) or MPRGP iterations.
-  int polish_iterations =
-      0;                    ///< Active-set (dense) or conjugate-gradient iterations of the polish.
-  int inert_rows = 0;       ///< Rows with no effective mass; they get p = 0.
-  int unresolved_rows = 0;  ///< Inert rows that approach; no impulse can stop them.
+  bool converged = false;         ///< The active-set method met its stopping test.
+  bool matrix_free = false;       ///< The answer came from MPRGP, not from the dense active set.
+  bool min_norm = false;          ///< The minimum-norm polish was accepted (see the file comment).
+  int iterations = 0;             ///< Free-set changes (dense path) or MPRGP iterations.
+  int polish_iterations = 0;      ///< Conjugate-gradient plus dense active-set polish iterations.
+  int inert_rows = 0;             ///< Rows with no effective mass; they get p = 0.
+  int unresolved_rows = 0;        ///< Inert rows that approach; no impulse can stop them.
   double max_approach_mps = 0.0;  ///< Largest approach speed -w_j left after p* (0 if none).
 };
 
 /// Tuning of ImpulseSolver. Tolerances are relative: to each row's Delassus diagonal
 /// (regularization) or to v_ref, the largest |relative normal velocity| of the group (the rest).
 struct ImpulseSolverOptions {
-  /// Groups with at most this many rows use the dense active-set path, larger ones MPRGP.
-  int dense_max_rows = 32;
+  /// Groups with at most this many rows use the dense active-set path, larger ones MPRGP
+  /// (measured on box piles: MPRGP is faster from about 8 rows on, see the file comment).
+  int dense_max_rows = 8;
+  /// Free sets with at most this many rows can use the exact dense polish (see the file comment,
+  /// step 3); groups this small also fall back to the dense active set if MPRGP stalls.
+  int dense_polish_max_rows = 32;
   /// Relative regularisation of the dense path, A + regularization * diag(A).
   double regularization = 1e-10;
   /// Stopping tolerance of the active-set methods, as a velocity relative to v_ref.
@@ -144,7 +155,8 @@ class ImpulseSolver {
  public:
   /// Sizes every buffer for groups of up to `max_rows` rows and `max_bodies` bodies. Throws
   /// rigidtouch::Error if max_rows or max_bodies is negative, or an option is out of range
-  /// (dense_max_rows < 0, a tolerance not finite and positive, max_iterations < 0).
+  /// (dense_max_rows or dense_polish_max_rows < 0, a tolerance outside (0, 1),
+  /// max_iterations < 0).
   ImpulseSolver(int max_rows, int max_bodies, const ImpulseSolverOptions& options = {});
 
   /// Computes p_out = scale * p* (N s, one per row) for the group `problem`; scale must be in
@@ -183,6 +195,7 @@ class ImpulseSolver {
   void MultiplyA(const double* x, double* y, const double* row_scale);
   double CouplingOf(int i, int j) const;  // A_ij from the packed rows
   bool SolveDense(std::span<const double> p_warm, ImpulseSolverStats& stats);
+  void RefineDense();
   bool SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats);
   bool Polish(ImpulseSolverStats& stats);
   bool PolishDense(int f, ImpulseSolverStats& stats);
@@ -194,7 +207,9 @@ class ImpulseSolver {
 
   int max_rows_ = 0;
   int max_bodies_ = 0;
-  int max_dense_ = 0;
+  int dense_path_rows_ = 0;    // groups up to this size use the dense active set
+  int dense_polish_rows_ = 0;  // free sets up to this size use the exact dense polish
+  int max_dense_ = 0;          // size of the dense buffers
   ImpulseSolverOptions options_;
 
   // problem-dependent sizes and scales, set by Pack
@@ -222,7 +237,7 @@ class ImpulseSolver {
 
   // dense path (max_dense)
   Eigen::MatrixXd a_dense_;   // A (unregularised)
-  Eigen::MatrixXd l_dense_;   // Cholesky factor of the free block; the polish's G
+  Eigen::MatrixXd l_dense_;   // L^T of the free block (row k of L in column k); the polish's G
   Eigen::MatrixXd h_dense_;   // G_K^T G_K of the polish
   Eigen::VectorXi free_;      // free rows in factor order
   Eigen::VectorXi blocked_;   // rows the dense path must not add again
