@@ -1,0 +1,458 @@
+#include "geometry/narrow_phase.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rigidtouch::geometry {
+namespace {
+
+// another axis replaces the preferred one only if it penetrates at least 5% less (Box2D's
+// relative tolerance): near ties, a resting stack keeps one reference face instead of flipping
+constexpr double kAxisRelativeTolerance = 0.95;
+// and by more than this, so that barely touching boxes do not flip axes on rounding noise
+constexpr double kAxisAbsoluteTolerance_m = 1e-9;
+// edge pairs closer to parallel than this (sine of their angle) are covered by the face axes;
+// their cross product is too short to normalise reliably
+constexpr double kMinEdgeAxisSine = 1e-6;
+// at most this many points per face manifold: 4 span a face, more only cost solver rows
+constexpr int kMaxManifoldPoints = 4;
+// clipping a quad against 4 half-planes gives at most 8 vertices when convex; the extra room
+// absorbs rounding that makes a polygon slightly non-convex
+constexpr int kClipBuffer = 16;
+
+// sign that never returns 0, so that ties pick a fixed side
+double Sign(double x) {
+  return x < 0.0 ? -1.0 : 1.0;
+}
+
+// x * 0 is 0 for finite x and NaN for an infinity or NaN, so the sum is 0 only if all are finite
+double FiniteTest(const double* x, int n) {
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) sum += x[i] * 0.0;
+  return sum;
+}
+
+bool PoseFinite(const GeomPose& pose) {
+  return FiniteTest(pose.p_W.data(), 3) + FiniteTest(pose.R_WG.data(), 9) == 0.0;
+}
+
+bool PointFinite(const ContactPoint& c) {
+  return FiniteTest(c.p_W.data(), 3) + FiniteTest(c.n_W.data(), 3) + c.depth_m * 0.0 == 0.0;
+}
+
+// size components that a type uses must be positive (and finite)
+bool SizeValid(GeomType type, const Vec3& size) {
+  switch (type) {
+    case GeomType::kPlane:
+      return true;
+    case GeomType::kSphere:
+      return size.x() > 0.0 && size.x() * 0.0 == 0.0;
+    case GeomType::kBox:
+      return size.x() > 0.0 && size.y() > 0.0 && size.z() > 0.0 &&
+             FiniteTest(size.data(), 3) == 0.0;
+    default:
+      return false;
+  }
+}
+
+// sphere (geom 1) against plane (geom 2): the half-space below the plane is solid
+int SpherePlane(const Vec3& c_W, double radius_m, const GeomPose& plane, ContactPoint* out) {
+  const Vec3 n_W = plane.R_WG.col(2);
+  const double height_m = n_W.dot(c_W - plane.p_W);
+  const double depth_m = radius_m - height_m;
+  if (!(depth_m > 0.0)) return 0;
+  // midpoint of the sphere's lowest point c - r n and its projection c - height n
+  out[0] = {c_W - 0.5 * (radius_m + height_m) * n_W, n_W, depth_m};
+  return 1;
+}
+
+int SphereSphere(const Vec3& c1_W, double r1_m, const Vec3& c2_W, double r2_m, ContactPoint* out) {
+  const Vec3 d_W = c1_W - c2_W;
+  const double dist_m = d_W.norm();
+  const double depth_m = r1_m + r2_m - dist_m;
+  if (!(depth_m > 0.0)) return 0;
+  // concentric spheres have no preferred direction: a fixed one keeps the result deterministic
+  const Vec3 n_W = dist_m > 0.0 ? Vec3(d_W / dist_m) : Vec3::UnitZ();
+  out[0] = {0.5 * ((c1_W - r1_m * n_W) + (c2_W + r2_m * n_W)), n_W, depth_m};
+  return 1;
+}
+
+// sphere (geom 1) against box (geom 2)
+int SphereBox(const Vec3& c_W, double radius_m, const GeomPose& box, const Vec3& half_m,
+              ContactPoint* out) {
+  const Vec3 c_G = box.R_WG.transpose() * (c_W - box.p_W);
+  Vec3 q_G = c_G.cwiseMax(-half_m).cwiseMin(half_m);  // closest box point to the centre
+  const Vec3 d_G = c_G - q_G;
+  const double dist2_m2 = d_G.squaredNorm();
+  Vec3 n_G;
+  double depth_m = 0.0;
+  if (dist2_m2 > 0.0) {
+    if (dist2_m2 >= radius_m * radius_m) return 0;
+    const double dist_m = std::sqrt(dist2_m2);
+    n_G = d_G / dist_m;
+    depth_m = radius_m - dist_m;
+  } else {
+    // centre inside (or on) the box: push out through the nearest face, lowest axis on ties
+    int k = 0;
+    double gap_m = half_m[0] - std::abs(c_G[0]);
+    for (int i = 1; i < 3; ++i) {
+      const double g = half_m[i] - std::abs(c_G[i]);
+      if (g < gap_m) {
+        gap_m = g;
+        k = i;
+      }
+    }
+    const double s = Sign(c_G[k]);
+    n_G = Vec3::Zero();
+    n_G[k] = s;
+    q_G[k] = s * half_m[k];
+    depth_m = radius_m + gap_m;
+  }
+  if (!(depth_m > 0.0)) return 0;
+  const Vec3 n_W = box.R_WG * n_G;
+  const Vec3 q_W = box.p_W + box.R_WG * q_G;
+  out[0] = {0.5 * ((c_W - radius_m * n_W) + q_W), n_W, depth_m};
+  return 1;
+}
+
+// box (geom 1) against plane (geom 2): every vertex below the plane, the deepest `max_points`
+// if more penetrate, written in vertex order so that a resting face gives a fixed order
+int BoxPlane(const GeomPose& box, const Vec3& half_m, const GeomPose& plane, ContactPoint* out,
+             int max_points) {
+  const Vec3 n_W = plane.R_WG.col(2);
+  const double centre_height_m = n_W.dot(box.p_W - plane.p_W);
+  // extent of each box axis along the plane normal
+  const Vec3 reach_m = (box.R_WG.transpose() * n_W).cwiseProduct(half_m);
+  if (centre_height_m - reach_m.cwiseAbs().sum() >= 0.0) return 0;
+  double depth_m[8];
+  bool keep[8];
+  int count = 0;
+  for (int v = 0; v < 8; ++v) {
+    // vertex v has sign + on axis k when bit k of v is set
+    const double h = centre_height_m + ((v & 1) ? reach_m[0] : -reach_m[0]) +
+                     ((v & 2) ? reach_m[1] : -reach_m[1]) + ((v & 4) ? reach_m[2] : -reach_m[2]);
+    depth_m[v] = -h;
+    keep[v] = h < 0.0;
+    if (keep[v]) ++count;
+  }
+  // only a box deeper than its own thickness has more: drop the shallowest, highest vertex on ties
+  while (count > max_points) {
+    int drop = -1;
+    for (int v = 0; v < 8; ++v) {
+      if (keep[v] && (drop < 0 || depth_m[v] <= depth_m[drop])) drop = v;
+    }
+    keep[drop] = false;
+    --count;
+  }
+  int n = 0;
+  for (int v = 0; v < 8; ++v) {
+    if (!keep[v]) continue;
+    const Vec3 corner_G((v & 1) ? half_m[0] : -half_m[0], (v & 2) ? half_m[1] : -half_m[1],
+                        (v & 4) ? half_m[2] : -half_m[2]);
+    const Vec3 vertex_W = box.p_W + box.R_WG * corner_G;
+    out[n++] = {vertex_W + 0.5 * depth_m[v] * n_W, n_W, depth_m[v]};
+  }
+  return n;
+}
+
+// a polygon vertex in reference-face coordinates: (u, v) along the face's tangent axes, z the
+// height above the face (negative below)
+struct FacePoint {
+  double u, v, z;
+};
+
+// Sutherland-Hodgman step: keeps the part of polygon `in` with sign * coordinate <= limit;
+// vertices exactly on the line are kept and create no duplicate
+int ClipPolygon(const FacePoint* in, int n, bool along_v, double sign, double limit,
+                FacePoint* out) {
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const FacePoint& p = in[i];
+    const FacePoint& q = in[i + 1 < n ? i + 1 : 0];
+    const double fp = sign * (along_v ? p.v : p.u) - limit;
+    const double fq = sign * (along_v ? q.v : q.u) - limit;
+    if (fp <= 0.0 && m < kClipBuffer) out[m++] = p;
+    if (((fp < 0.0 && fq > 0.0) || (fp > 0.0 && fq < 0.0)) && m < kClipBuffer) {
+      const double t = fp / (fp - fq);
+      out[m++] = {p.u + t * (q.u - p.u), p.v + t * (q.v - p.v), p.z + t * (q.z - p.z)};
+    }
+  }
+  return m;
+}
+
+// twice the signed area of triangle (a, b, c) in the face plane
+double Cross2(const FacePoint& a, const FacePoint& b, const FacePoint& c) {
+  return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+}
+
+// twice the area of the convex hull of 4 points in convex position: the largest of the three
+// quadrilaterals through them
+double QuadArea2(const FacePoint& a, const FacePoint& b, const FacePoint& c, const FacePoint& d) {
+  const double abcd = std::abs(Cross2(a, b, c) + Cross2(a, c, d));
+  const double abdc = std::abs(Cross2(a, b, d) + Cross2(a, d, c));
+  const double acbd = std::abs(Cross2(a, c, b) + Cross2(a, b, d));
+  return std::max(abcd, std::max(abdc, acbd));
+}
+
+// chooses at most `max_points` of the n points: the deepest, the farthest from it, then those
+// that maximise the spanned area; marks them in `keep`. First index wins every tie.
+void ReduceManifold(const FacePoint* p, int n, int max_points, bool* keep) {
+  for (int i = 0; i < n; ++i) keep[i] = false;
+  int i0 = 0;
+  for (int i = 1; i < n; ++i) {
+    if (p[i].z < p[i0].z) i0 = i;
+  }
+  keep[i0] = true;
+  if (max_points < 2) return;
+  int i1 = -1;
+  double best = -1.0;
+  for (int i = 0; i < n; ++i) {
+    const double du = p[i].u - p[i0].u, dv = p[i].v - p[i0].v;
+    const double d2 = du * du + dv * dv;
+    if (!keep[i] && d2 > best) {
+      best = d2;
+      i1 = i;
+    }
+  }
+  if (i1 < 0) return;
+  keep[i1] = true;
+  if (max_points < 3) return;
+  int i2 = -1;
+  best = -1.0;
+  for (int i = 0; i < n; ++i) {
+    const double a = std::abs(Cross2(p[i0], p[i1], p[i]));
+    if (!keep[i] && a > best) {
+      best = a;
+      i2 = i;
+    }
+  }
+  if (i2 < 0) return;
+  keep[i2] = true;
+  if (max_points < 4) return;
+  int i3 = -1;
+  best = -1.0;
+  for (int i = 0; i < n; ++i) {
+    const double a = QuadArea2(p[i0], p[i1], p[i2], p[i]);
+    if (!keep[i] && a > best) {
+      best = a;
+      i3 = i;
+    }
+  }
+  if (i3 >= 0) keep[i3] = true;
+}
+
+// face contact: reference box R, face k with outward normal sign_m * (axis k of R) pointing at
+// the incident box I, whose rotation and position in R's frame are R_RI and p_RI. `n_W` is the
+// contact normal to report (from geom 2 to geom 1).
+int FaceContact(const GeomPose& ref, const Vec3& ref_half_m, int k, double sign_m, const Mat3& R_RI,
+                const Vec3& p_RI, const Vec3& inc_half_m, const Vec3& n_W, ContactPoint* out,
+                int max_points) {
+  // incident face: the one whose normal is most anti-parallel to the reference normal
+  int l = 0;
+  for (int j = 1; j < 3; ++j) {
+    if (std::abs(R_RI(k, j)) > std::abs(R_RI(k, l))) l = j;
+  }
+  const double sign_l = -Sign(sign_m * R_RI(k, l));
+  const int l1 = (l + 1) % 3, l2 = (l + 2) % 3;
+  const Vec3 centre_R = p_RI + sign_l * inc_half_m[l] * R_RI.col(l);
+  const Vec3 e1_R = inc_half_m[l1] * R_RI.col(l1);
+  const Vec3 e2_R = inc_half_m[l2] * R_RI.col(l2);
+  const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+  FacePoint a[kClipBuffer], b[kClipBuffer];
+  const double s1[4] = {1.0, -1.0, -1.0, 1.0}, s2[4] = {1.0, 1.0, -1.0, -1.0};
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 x_R = centre_R + s1[i] * e1_R + s2[i] * e2_R;
+    a[i] = {x_R[k1], x_R[k2], sign_m * x_R[k] - ref_half_m[k]};
+  }
+  // clip against the reference face's four side planes
+  int n = ClipPolygon(a, 4, false, 1.0, ref_half_m[k1], b);
+  n = ClipPolygon(b, n, false, -1.0, ref_half_m[k1], a);
+  n = ClipPolygon(a, n, true, 1.0, ref_half_m[k2], b);
+  n = ClipPolygon(b, n, true, -1.0, ref_half_m[k2], a);
+  // keep the points below the reference face
+  int below = 0;
+  for (int i = 0; i < n; ++i) {
+    if (a[i].z < 0.0) b[below++] = a[i];
+  }
+  bool keep[kClipBuffer];
+  if (below > max_points) {
+    ReduceManifold(b, below, max_points, keep);
+  } else {
+    for (int i = 0; i < below; ++i) keep[i] = true;
+  }
+  int count = 0;
+  for (int i = 0; i < below; ++i) {
+    if (!keep[i]) continue;
+    Vec3 x_R;
+    x_R[k1] = b[i].u;
+    x_R[k2] = b[i].v;
+    // midpoint between the incident point (height z) and its projection on the face
+    x_R[k] = sign_m * (ref_half_m[k] + 0.5 * b[i].z);
+    out[count++] = {ref.p_W + ref.R_WG * x_R, n_W, -b[i].z};
+  }
+  return count;
+}
+
+// box A (geom 1) against box B (geom 2), separating axis test over 15 axes in A's frame
+int BoxBox(const GeomPose& box_a, const Vec3& a_m, const GeomPose& box_b, const Vec3& b_m,
+           ContactPoint* out, int max_points) {
+  const Mat3 C = box_a.R_WG.transpose() * box_b.R_WG;  // C(i, j) = a_i . b_j
+  const Mat3 absC = C.cwiseAbs();
+  const Vec3 d_W = box_b.p_W - box_a.p_W;
+  const Vec3 d_A = box_a.R_WG.transpose() * d_W;
+  const Vec3 d_B = box_b.R_WG.transpose() * d_W;
+  // separations (negative: penetration) along A's face normals, then B's
+  constexpr double kNone = -std::numeric_limits<double>::infinity();
+  double sep_a = kNone, sep_b = kNone;
+  int face_a = 0, face_b = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double s = std::abs(d_A[i]) - (a_m[i] + absC.row(i).dot(b_m));
+    if (s >= 0.0) return 0;
+    if (s > sep_a) {
+      sep_a = s;
+      face_a = i;
+    }
+  }
+  for (int j = 0; j < 3; ++j) {
+    const double s = std::abs(d_B[j]) - (b_m[j] + absC.col(j).dot(a_m));
+    if (s >= 0.0) return 0;
+    if (s > sep_b) {
+      sep_b = s;
+      face_b = j;
+    }
+  }
+  // prefer A's faces, then B's, then edges (Box2D's and ODE's bias for stable manifolds)
+  const bool use_b = sep_b > kAxisRelativeTolerance * sep_a + kAxisAbsoluteTolerance_m;
+  const double sep_face = use_b ? sep_b : sep_a;
+  // edge axes a_i x b_j, written in A's frame as e_i x C.col(j). Each is tested for separation;
+  // one replaces the face axis only if it separates more than kAxisRelativeTolerance * sep_face +
+  // kAxisAbsoluteTolerance_m, so only such candidates need their normalised separation
+  double sep_e = kAxisRelativeTolerance * sep_face + kAxisAbsoluteTolerance_m;
+  int edge_i = -1, edge_j = -1;
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const double length2 = C(i1, j) * C(i1, j) + C(i2, j) * C(i2, j);
+      if (length2 < kMinEdgeAxisSine * kMinEdgeAxisSine) continue;
+      const double centre_m = d_A[i2] * C(i1, j) - d_A[i1] * C(i2, j);
+      const double radius_a_m = a_m[i1] * absC(i2, j) + a_m[i2] * absC(i1, j);
+      const double radius_b_m = b_m[j1] * absC(i, j2) + b_m[j2] * absC(i, j1);
+      // separation times the axis length
+      const double s_scaled = std::abs(centre_m) - radius_a_m - radius_b_m;
+      if (s_scaled >= 0.0) return 0;
+      // both negative: s_scaled / length > sep_e iff s_scaled^2 < sep_e^2 length^2
+      if (sep_e < 0.0 && s_scaled * s_scaled < sep_e * sep_e * length2) {
+        const double s = s_scaled / std::sqrt(length2);
+        if (s > sep_e) {
+          sep_e = s;
+          edge_i = i;
+          edge_j = j;
+        }
+      }
+    }
+  }
+  if (edge_i >= 0) {
+    const Vec3 ua_W = box_a.R_WG.col(edge_i), ub_W = box_b.R_WG.col(edge_j);
+    // normal from B to A
+    Vec3 n_W = ua_W.cross(ub_W).normalized();
+    if (n_W.dot(d_W) > 0.0) n_W = -n_W;
+    // the edge of A nearest B (support point of A along -n) and of B nearest A (along +n)
+    Vec3 xa_W = box_a.p_W, xb_W = box_b.p_W;
+    for (int k = 0; k < 3; ++k) {
+      if (k != edge_i) xa_W -= Sign(n_W.dot(box_a.R_WG.col(k))) * a_m[k] * box_a.R_WG.col(k);
+      if (k != edge_j) xb_W += Sign(n_W.dot(box_b.R_WG.col(k))) * b_m[k] * box_b.R_WG.col(k);
+    }
+    // closest points of the two edge lines, clamped to the edges
+    const Vec3 w_W = xa_W - xb_W;
+    const double c = ua_W.dot(ub_W), da = ua_W.dot(w_W), db = ub_W.dot(w_W);
+    const double denom = 1.0 - c * c;  // >= kMinEdgeAxisSine^2: the edges are not parallel
+    const double sa = std::clamp((c * db - da) / denom, -a_m[edge_i], a_m[edge_i]);
+    const double sb = std::clamp((db - c * da) / denom, -b_m[edge_j], b_m[edge_j]);
+    out[0] = {0.5 * ((xa_W + sa * ua_W) + (xb_W + sb * ub_W)), n_W, -sep_e};
+    return 1;
+  }
+  if (use_b) {
+    // B's face towards A is the reference; the normal from B to A is its outward normal
+    const double sign_m = -Sign(d_B[face_b]);
+    const Vec3 n_W = sign_m * box_b.R_WG.col(face_b);
+    return FaceContact(box_b, b_m, face_b, sign_m, C.transpose(), -d_B, a_m, n_W, out, max_points);
+  }
+  const double sign_m = Sign(d_A[face_a]);
+  const Vec3 n_W = -sign_m * box_a.R_WG.col(face_a);
+  return FaceContact(box_a, a_m, face_a, sign_m, C, d_A, b_m, n_W, out, max_points);
+}
+
+// dispatch with geom 1 of a type no later than geom 2's in sphere, box, plane order
+int CollideOrdered(GeomType t1, const Vec3& size1, const GeomPose& pose1, GeomType t2,
+                   const Vec3& size2, const GeomPose& pose2, ContactPoint* out, int capacity) {
+  if (t1 == GeomType::kSphere) {
+    switch (t2) {
+      case GeomType::kSphere:
+        return SphereSphere(pose1.p_W, size1.x(), pose2.p_W, size2.x(), out);
+      case GeomType::kBox:
+        return SphereBox(pose1.p_W, size1.x(), pose2, size2, out);
+      case GeomType::kPlane:
+        return SpherePlane(pose1.p_W, size1.x(), pose2, out);
+      default:
+        return 0;
+    }
+  }
+  if (t1 == GeomType::kBox) {
+    const int max_points = capacity < kMaxManifoldPoints ? capacity : kMaxManifoldPoints;
+    switch (t2) {
+      case GeomType::kBox:
+        return BoxBox(pose1, size1, pose2, size2, out, max_points);
+      case GeomType::kPlane:
+        return BoxPlane(pose1, size1, pose2, out, max_points);
+      default:
+        return 0;
+    }
+  }
+  return 0;
+}
+
+// position of a type in the canonical order of CollideOrdered
+int Rank(GeomType t) {
+  switch (t) {
+    case GeomType::kSphere:
+      return 0;
+    case GeomType::kBox:
+      return 1;
+    case GeomType::kPlane:
+      return 2;
+    default:
+      return 3;
+  }
+}
+
+}  // namespace
+
+bool HasNarrowPhase(GeomType a, GeomType b) {
+  const int ra = Rank(a), rb = Rank(b);
+  return ra < 3 && rb < 3 && !(ra == 2 && rb == 2);
+}
+
+int Collide(GeomType t1, const Vec3& size1, const GeomPose& pose1, GeomType t2, const Vec3& size2,
+            const GeomPose& pose2, ContactPoint* out, int capacity) {
+  if (out == nullptr || capacity <= 0 || !HasNarrowPhase(t1, t2)) return 0;
+  if (!PoseFinite(pose1) || !PoseFinite(pose2)) return 0;
+  if (!SizeValid(t1, size1) || !SizeValid(t2, size2)) return 0;
+  if (capacity > kMaxPairContacts) capacity = kMaxPairContacts;
+  int n = 0;
+  if (Rank(t1) <= Rank(t2)) {
+    n = CollideOrdered(t1, size1, pose1, t2, size2, pose2, out, capacity);
+  } else {
+    // swapped: same points, normal from the other geom
+    n = CollideOrdered(t2, size2, pose2, t1, size1, pose1, out, capacity);
+    for (int i = 0; i < n; ++i) out[i].n_W = -out[i].n_W;
+  }
+  // finite input can still overflow (e.g. sizes near the largest double)
+  for (int i = 0; i < n; ++i) {
+    if (!PointFinite(out[i])) return 0;
+  }
+  return n;
+}
+
+}  // namespace rigidtouch::geometry
