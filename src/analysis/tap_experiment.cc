@@ -50,7 +50,7 @@ RenderParams WallRenderParams(int wall) {
   return r;
 }
 
-TapRun RunTapExperiment(const TapExperimentConfig& config) {
+TapSetup PrepareTap(const TapExperimentConfig& config) {
   if (!(std::isfinite(config.rate_hz) && config.rate_hz >= 100.0 && config.rate_hz <= 20000.0)) {
     std::ostringstream msg;
     msg << "rate = " << config.rate_hz << " Hz is out of range: valid 100 to 20000 Hz";
@@ -59,25 +59,24 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   if (!config.wall_normal.allFinite() || config.wall_normal.norm() < 1e-9) {
     throw Error("wall normal must be a finite non-zero vector");
   }
-  TapRun run;
-  run.device = device::FindPreset(config.device_preset);
+  TapSetup setup;
+  setup.device = device::FindPreset(config.device_preset);
+  const device::DeviceLimits& limits = setup.device;
   const double h = 1.0 / config.rate_hz;
 
   LoadOptions load = config.load;
   load.timestep_s = h;
-  load.contact.stiffness_N_per_m =
-      config.stiffness_N_per_m.value_or(run.device.max_stiffness_N_per_m);
+  load.contact.stiffness_N_per_m = config.stiffness_N_per_m.value_or(limits.max_stiffness_N_per_m);
   const double k = load.contact.stiffness_N_per_m;
   load.contact.damping_Ns_per_m = config.damping_Ns_per_m.value_or(
-      run.device.max_damping_Ns_per_m > 0.0 ? std::min(k * h, run.device.max_damping_Ns_per_m)
-                                            : k * h);
-  load.device.max_force_N = run.device.max_force_N;
+      limits.max_damping_Ns_per_m > 0.0 ? std::min(k * h, limits.max_damping_Ns_per_m) : k * h);
+  load.device.max_force_N = limits.max_force_N;
   if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;
   if (load.device.coupling == Coupling::kVirtual) {
     // the coupling is what the device renders: its limits bound the coupling, not the wall
-    load.device.coupling_stiffness_N_per_m = run.device.max_stiffness_N_per_m;
+    load.device.coupling_stiffness_N_per_m = limits.max_stiffness_N_per_m;
     load.device.coupling_damping_Ns_per_m =
-        std::min(run.device.max_stiffness_N_per_m * h, run.device.max_damping_Ns_per_m);
+        std::min(limits.max_stiffness_N_per_m * h, limits.max_damping_Ns_per_m);
   }
   Model model = LoadModel(config.scene_path, load);
 
@@ -87,7 +86,8 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   const Vec3 n = config.wall_normal.normalized();
   script.surface_normal = n;
   script.surface_point_m = config.wall_point_m + ToolReach(model, n) * n;
-  device::SimulatedDevice dev(run.device, config.hand, dm, script);
+  setup.simulated = std::make_unique<device::SimulatedDevice>(limits, config.hand, dm, script);
+  device::SimulatedDevice& dev = *setup.simulated;
 
   BodyModel& tool = model.bodies[model.tool];
   if (model.device.coupling == Coupling::kDirect) {
@@ -104,6 +104,16 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   model.initial[model.tool].q_WB = Quat::Identity();
   Configure(model);
 
+  setup.model = std::move(model);
+  return setup;
+}
+
+TapRun RunTapExperiment(const TapExperimentConfig& config) {
+  TapSetup setup = PrepareTap(config);
+  TapRun run;
+  run.device = setup.device;
+  Model& model = setup.model;
+  device::SimulatedDevice& dev = *setup.simulated;
   Data data = MakeData(model);
   const std::int64_t max_ticks = std::llround((dev.duration_s() + 1.0) * config.rate_hz);
   run.trace.reserve(static_cast<std::size_t>(max_ticks));

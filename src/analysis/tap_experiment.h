@@ -2,6 +2,7 @@
 // of trace per tick, and the per-tap metrics (issue "simulated hand and device").
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,7 +45,19 @@ struct TapRun {
   std::array<WarningStat, static_cast<int>(Warning::kCount)> warnings{};
 };
 
-/// Runs the experiment. Throws Error on bad configuration (naming the parameter).
+/// A model and a simulated device made ready for a tap run: the tool starts at the device's
+/// start position, with the device's and hand's mass when coupled directly.
+struct TapSetup {
+  Model model;
+  device::DeviceLimits device;
+  std::unique_ptr<device::SimulatedDevice> simulated;
+};
+
+/// Builds the model and simulated device of `config`. Throws Error on bad configuration (naming
+/// the parameter).
+TapSetup PrepareTap(const TapExperimentConfig& config);
+
+/// Runs the experiment offline, as fast as it computes. Throws Error on bad configuration.
 TapRun RunTapExperiment(const TapExperimentConfig& config);
 
 }  // namespace rigidtouch::analysis

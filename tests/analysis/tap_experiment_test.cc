@@ -1,0 +1,142 @@
+// The tap experiment against the method's claims (issue: simulated hand and device).
+#include "analysis/tap_experiment.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rigidtouch::analysis {
+namespace {
+
+std::string WallScene() {
+  return std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml";
+}
+
+TapExperimentConfig Config(std::optional<int> wall, const std::string& preset, double speed,
+                           int taps = 1) {
+  TapExperimentConfig c;
+  c.scene_path = WallScene();
+  c.device_preset = preset;
+  if (wall) {
+    c.load.render = WallRenderParams(*wall);
+  } else {
+    c.load.render.renderer = RendererKind::kPenalty;
+  }
+  c.script.approach_speed_mps = speed;
+  c.script.taps = taps;
+  // the hand dwells on the wall long enough for the whole 100 ms window
+  c.script.dwell_s = 0.2;
+  return c;
+}
+
+std::vector<double> ImpulseTimes(const TapMetrics& m) {
+  std::vector<double> t;
+  for (const auto& e : m.impulses) t.push_back(e.time_s);
+  return t;
+}
+
+// wall 1 (h = 1 ms, t_c = 0.1 s): 25 impulses 4 ms apart; wall 2: 5 impulses 20 ms apart;
+// wall 0: one. Every impulse leaves kinetic energy no larger than before.
+TEST(TapExperimentTest, ImpulseCountsAndSpacingOfTheThreeWalls) {
+  const int expected_count[] = {1, 25, 5};
+  const double expected_gap_s[] = {0.0, 0.004, 0.020};
+  for (int wall = 0; wall <= 2; ++wall) {
+    const TapRun run = RunTapExperiment(Config(wall, "touch", 0.1));
+    ASSERT_EQ(run.taps.size(), 1u);
+    const TapMetrics& m = run.taps[0];
+    ASSERT_TRUE(m.contact) << "wall " << wall;
+    EXPECT_EQ(m.bounces, 0) << "wall " << wall << ": contact must last the window";
+    const std::vector<double> t = ImpulseTimes(m);
+    ASSERT_EQ(static_cast<int>(t.size()), expected_count[wall]) << "wall " << wall;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      EXPECT_NEAR(t[i] - t[i - 1], expected_gap_s[wall], 1e-9) << "wall " << wall;
+    }
+    for (const auto& e : m.impulses) {
+      // no impulse adds energy (1e-15 J: rounding of the sums)
+      EXPECT_LE(e.kinetic_energy_after_J, e.kinetic_energy_before_J + 1e-15) << "wall " << wall;
+    }
+  }
+}
+
+// passivity at the device port over whole taps: the energy delivered to the user is not
+// positive for the three walls across approach speeds 0.05-0.5 m/s and three presets, and for
+// pure penalty where Colgate's condition b > K T / 2 holds (the hand's |B| is on the user's side)
+TEST(TapExperimentTest, PassiveAtThePortAcrossSpeedsPresetsAndWalls) {
+  for (const std::string preset : {"touch", "omni", "falcon"}) {
+    for (const double speed : {0.05, 0.15, 0.3, 0.5}) {
+      for (int wall = -1; wall <= 2; ++wall) {
+        std::optional<int> w;
+        if (wall >= 0) w = wall;
+        TapExperimentConfig c = Config(w, preset, speed, 2);
+        const TapRun run = RunTapExperiment(c);
+        const double k = run.model.contact.stiffness_N_per_m;
+        const double b = run.model.contact.damping_Ns_per_m;
+        ASSERT_GT(b, k * run.model.timestep_s / 2.0) << "the default damping meets Colgate";
+        ASSERT_EQ(run.taps.size(), 2u);
+        for (const TapMetrics& m : run.taps) {
+          ASSERT_TRUE(m.contact);
+          // tolerance: 1e-9 J, far below the 1e-4 J scale of a tap's energy exchange
+          EXPECT_LE(m.energy_to_user_J, 1e-9)
+              << preset << " " << speed << " m/s wall " << wall << " tap " << m.tap;
+        }
+        EXPECT_LE(run.energy_to_user_J, 1e-9) << preset << " " << speed << " wall " << wall;
+      }
+    }
+  }
+}
+
+// and a wall that breaks Colgate's condition (b = 0 at the Falcon's stiffness) is active: the
+// check above can fail
+TEST(TapExperimentTest, PenaltyWithoutDampingIsActive) {
+  TapExperimentConfig c = Config(std::nullopt, "falcon", 0.3, 2);
+  c.damping_Ns_per_m = 0.0;
+  const TapRun run = RunTapExperiment(c);
+  EXPECT_GT(run.energy_to_user_J, 0.0);
+}
+
+double Mean(const TapRun& run, double TapMetrics::*field) {
+  double s = 0.0;
+  for (const TapMetrics& m : run.taps) s += m.*field;
+  return s / run.taps.size();
+}
+
+// at equal stiffness and damping: wall 0 has a rate hardness at least 5 times pure penalty's,
+// walls 1 and 2 a higher one than penalty's, and wall 1 a smaller maximum penetration
+TEST(TapExperimentTest, ImpulsesRaiseRateHardnessAndTheTrainReducesPenetration) {
+  const TapRun penalty = RunTapExperiment(Config(std::nullopt, "touch", 0.2, 3));
+  const TapRun wall0 = RunTapExperiment(Config(0, "touch", 0.2, 3));
+  const TapRun wall1 = RunTapExperiment(Config(1, "touch", 0.2, 3));
+  const TapRun wall2 = RunTapExperiment(Config(2, "touch", 0.2, 3));
+  for (const TapRun* r : {&wall0, &wall1, &wall2}) {
+    ASSERT_EQ(r->model.contact.stiffness_N_per_m, penalty.model.contact.stiffness_N_per_m);
+    ASSERT_EQ(r->model.contact.damping_Ns_per_m, penalty.model.contact.damping_Ns_per_m);
+  }
+  const double rh_penalty = Mean(penalty, &TapMetrics::rate_hardness_N_per_m);
+  EXPECT_GE(Mean(wall0, &TapMetrics::rate_hardness_N_per_m), 5.0 * rh_penalty);
+  EXPECT_GT(Mean(wall1, &TapMetrics::rate_hardness_N_per_m), rh_penalty);
+  EXPECT_GT(Mean(wall2, &TapMetrics::rate_hardness_N_per_m), rh_penalty);
+  EXPECT_LT(Mean(wall1, &TapMetrics::max_penetration_m),
+            Mean(penalty, &TapMetrics::max_penetration_m));
+}
+
+TEST(TapExperimentTest, BadConfigurationNamesTheParameter) {
+  TapExperimentConfig c = Config(1, "touch", 0.2);
+  c.rate_hz = 50.0;
+  try {
+    RunTapExperiment(c);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("100 to 20000"), std::string::npos) << e.what();
+  }
+  c = Config(1, "phantom-x", 0.2);
+  try {
+    RunTapExperiment(c);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("touch"), std::string::npos) << e.what();  // lists them
+  }
+  EXPECT_THROW(WallRenderParams(3), Error);
+}
+
+}  // namespace
+}  // namespace rigidtouch::analysis
