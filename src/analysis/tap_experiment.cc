@@ -61,6 +61,7 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   }
   TapSetup setup;
   setup.device = device::FindPreset(config.device_preset);
+  if (config.max_force_N) setup.device.max_force_N = *config.max_force_N;
   const device::DeviceLimits& limits = setup.device;
   const double h = 1.0 / config.rate_hz;
 
@@ -132,7 +133,8 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
     s.tool_velocity_mps = dev.true_velocity_mps();
     s.hand_force_N = dev.hand_force_N();
     s.device_force_N = dev.displayed_force_N();
-    s.clipped = dev.last_command_clipped();
+    // the engine clips to the preset's limit before the device sees the command
+    s.clipped = command.clipped || dev.last_command_clipped();
     if (s.clipped) {
       ++run.clipped_ticks;
       if (command.impulsive_force_N.squaredNorm() > 0.0) ++run.clipped_impulse_ticks;

@@ -23,6 +23,7 @@ struct TapExperimentConfig {
   std::string scene_path;  // MJCF with a wall and the tool
   LoadOptions load;        // tool name, renderer, contact law, coupling
   std::string device_preset = "touch";
+  std::optional<double> max_force_N;        // overrides the preset's force limit (0: unlimited)
   double rate_hz = 1000.0;                  // haptic rate: engine step and device tick, h = 1/rate
   std::optional<double> stiffness_N_per_m;  // default: the preset's maximum stiffness
   std::optional<double> damping_Ns_per_m;   // default: k h, twice Colgate's bound k T / 2

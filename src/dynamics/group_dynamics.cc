@@ -1,6 +1,6 @@
 #include "dynamics/group_dynamics.h"
 
-#include <Eigen/Cholesky>
+#include <cmath>
 
 #include "dynamics/rigid_body.h"
 
@@ -16,6 +16,36 @@ Vec6 RowJacobian(const Vec3& d, const Vec3& r) {
 }
 
 constexpr int kMaxPasses = 4;
+
+// in-place Cholesky H = L L^T (lower triangle) and solve L L^T x = b, over preallocated storage.
+// Eigen's LLT switches to a blocked product above a few dozen rows whose blocking buffers come
+// from the heap; this loop never allocates. Returns false if H is not positive definite.
+bool CholeskySolve(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> x) {
+  const int n = static_cast<int>(H.rows());
+  for (int j = 0; j < n; ++j) {
+    double d = H(j, j);
+    for (int k = 0; k < j; ++k) d -= H(j, k) * H(j, k);
+    if (!(d > 0.0)) return false;
+    d = std::sqrt(d);
+    H(j, j) = d;
+    for (int i = j + 1; i < n; ++i) {
+      double s = H(i, j);
+      for (int k = 0; k < j; ++k) s -= H(i, k) * H(j, k);
+      H(i, j) = s / d;
+    }
+  }
+  for (int i = 0; i < n; ++i) {  // L y = b
+    double s = x(i);
+    for (int k = 0; k < i; ++k) s -= H(i, k) * x(k);
+    x(i) = s / H(i, i);
+  }
+  for (int i = n - 1; i >= 0; --i) {  // L^T x = y
+    double s = x(i);
+    for (int k = i + 1; k < n; ++k) s -= H(k, i) * x(k);
+    x(i) = s / H(i, i);
+  }
+  return true;
+}
 
 }  // namespace
 
@@ -78,11 +108,7 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
         H.block<6, 6>(sb, sa).noalias() += hc * jb * ja.transpose();
       }
     }
-    Eigen::Ref<Eigen::MatrixXd> Href(H);
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(Href);
-    if (llt.info() != Eigen::Success) return false;
-    llt.solveInPlace(x);
-    if (!x.allFinite()) return false;
+    if (!CholeskySolve(H, x) || !x.allFinite()) return false;
     // write the candidate velocities, then check that no normal row pulls
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       BodyState& s = data.bodies[bodies[k]];
