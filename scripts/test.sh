@@ -12,7 +12,8 @@ files=$(git ls-files '*.h' '*.cc' 2>/dev/null || true)
 if [ -n "$files" ]; then clang-format --dry-run --Werror $files; fi
 
 echo "== release build, -Wall -Wextra -Werror"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRIGIDTOUCH_WERROR=ON -DRIGIDTOUCH_BUILD_TESTS=ON
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRIGIDTOUCH_WERROR=ON -DRIGIDTOUCH_BUILD_TESTS=ON \
+  -DRIGIDTOUCH_BUILD_BENCHMARKS=ON
 cmake --build build -j"$jobs"
 (cd build && ctest --output-on-failure -j"$jobs")
 
