@@ -1,5 +1,8 @@
 #include "dynamics/group_dynamics.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 
 #include "dynamics/rigid_body.h"
@@ -7,42 +10,62 @@
 namespace rigidtouch::dynamics {
 namespace {
 
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-
-Vec6 RowJacobian(const Vec3& d, const Vec3& r) {
-  Vec6 j;
-  j << d, r.cross(d);  // velocity of the point along d: d.v + (r x d).w
-  return j;
+// [r]x, the cross-product matrix: [r]x w = r x w
+Mat3 Skew(const Vec3& r) {
+  Mat3 m;
+  m << 0.0, -r.z(), r.y(), r.z(), 0.0, -r.x(), -r.y(), r.x(), 0.0;
+  return m;
 }
 
 constexpr int kMaxPasses = 4;
 
-// in-place Cholesky H = L L^T (lower triangle) and solve L L^T x = b, over preallocated storage.
-// Eigen's LLT switches to a blocked product above a few dozen rows whose blocking buffers come
-// from the heap; this loop never allocates. Returns false if H is not positive definite.
-bool CholeskySolve(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> x) {
-  const int n = static_cast<int>(H.rows());
-  for (int j = 0; j < n; ++j) {
-    double d = H(j, j);
-    for (int k = 0; k < j; ++k) d -= H(j, k) * H(j, k);
-    if (!(d > 0.0)) return false;
-    d = std::sqrt(d);
-    H(j, j) = d;
-    for (int i = j + 1; i < n; ++i) {
-      double s = H(i, j);
-      for (int k = 0; k < j; ++k) s -= H(i, k) * H(j, k);
-      H(i, j) = s / d;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+// solves H x = b in place by a Cholesky factorisation over 6 x 6 body blocks, skipping the blocks
+// of bodies that share no contact (a column of boxes is block tridiagonal: the cost grows with
+// the bodies, not their cube). `mask` (nb x nb, row-major) marks the non-zero blocks and gains the
+// fill-in. Fixed-size kernels only: nothing allocates. False if H is not positive definite.
+bool BlockCholeskySolve(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> x, int nb,
+                        std::vector<char>& mask) {
+  auto M = [&](int i, int j) -> char& { return mask[static_cast<std::size_t>(i) * nb + j]; };
+  for (int k = 0; k < nb; ++k) {
+    Eigen::LLT<Mat6> llt(H.block<6, 6>(6 * k, 6 * k));
+    if (llt.info() != Eigen::Success) return false;
+    const Mat6 L = llt.matrixL();
+    H.block<6, 6>(6 * k, 6 * k) = L;
+    for (int i = k + 1; i < nb; ++i) {
+      if (!M(i, k)) continue;
+      // L_ik = H_ik L_kk^-T
+      const Mat6 Lik = L.triangularView<Eigen::Lower>()
+                           .solve(H.block<6, 6>(6 * i, 6 * k).transpose())
+                           .transpose();
+      H.block<6, 6>(6 * i, 6 * k) = Lik;
+    }
+    for (int i = k + 1; i < nb; ++i) {
+      if (!M(i, k)) continue;
+      for (int j = k + 1; j <= i; ++j) {
+        if (!M(j, k)) continue;
+        H.block<6, 6>(6 * i, 6 * j).noalias() -=
+            H.block<6, 6>(6 * i, 6 * k) * H.block<6, 6>(6 * j, 6 * k).transpose();
+        M(i, j) = M(j, i) = 1;  // fill-in
+      }
     }
   }
-  for (int i = 0; i < n; ++i) {  // L y = b
-    double s = x(i);
-    for (int k = 0; k < i; ++k) s -= H(i, k) * x(k);
-    x(i) = s / H(i, i);
+  for (int k = 0; k < nb; ++k) {  // L y = b
+    Vec6 r = x.segment<6>(6 * k);
+    for (int j = 0; j < k; ++j) {
+      if (M(k, j)) r.noalias() -= H.block<6, 6>(6 * k, 6 * j) * x.segment<6>(6 * j);
+    }
+    x.segment<6>(6 * k) = H.block<6, 6>(6 * k, 6 * k).triangularView<Eigen::Lower>().solve(r);
   }
-  for (int i = n - 1; i >= 0; --i) {  // L^T x = y
-    double s = x(i);
-    for (int k = i + 1; k < n; ++k) s -= H(k, i) * x(k);
-    x(i) = s / H(i, i);
+  for (int k = nb - 1; k >= 0; --k) {  // L^T x = y
+    Vec6 r = x.segment<6>(6 * k);
+    for (int i = k + 1; i < nb; ++i) {
+      if (M(i, k)) r.noalias() -= H.block<6, 6>(6 * i, 6 * k).transpose() * x.segment<6>(6 * i);
+    }
+    x.segment<6>(6 * k) =
+        H.block<6, 6>(6 * k, 6 * k).transpose().triangularView<Eigen::Upper>().solve(r);
   }
   return true;
 }
@@ -53,6 +76,7 @@ void GroupSolverScratch::Reserve(int max_group_bodies) {
   H.setZero(6 * max_group_bodies, 6 * max_group_bodies);
   x.setZero(6 * max_group_bodies);
   v0.assign(max_group_bodies, Vec3::Zero());
+  mask.assign(static_cast<std::size_t>(max_group_bodies) * max_group_bodies, 0);
   w0.assign(max_group_bodies, Vec3::Zero());
 }
 
@@ -88,27 +112,65 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
       x.segment<3>(o) = bm.mass_kg * scratch.v0[k] + h * force_W[i];
       x.segment<3>(o + 3) = I * scratch.w0[k] + h * torque_W[i];
     }
-    for (const ImplicitRow& r : rows) {
-      if (!r.active) continue;
+    // per contact: its normal row and the tangential rows after it share the points, so
+    // sum_r c_r J_r^T J_r = J^T C J with C = sum_r c_r d_r d_r^T (3 x 3) and J = [I, -[r]x]:
+    // J_a^T C J_b = [[C, -C R_b], [R_a C, -R_a C R_b]] with R = [r]x, a few 3 x 3 products
+    // instead of one 6 x 6 outer product per row and body pair
+    for (std::size_t i = 0; i < rows.size();) {
+      std::size_t end = i + 1;
+      while (end < rows.size() && rows[end].normal_row == static_cast<int>(i)) ++end;
+      Mat3 C = Mat3::Zero();
+      Vec3 f = Vec3::Zero();
+      for (std::size_t k = i; k < end; ++k) {
+        const ImplicitRow& r = rows[k];
+        if (!r.active) continue;
+        C.noalias() += (h * r.c_Ns_per_m) * r.d_W * r.d_W.transpose();
+        f += (h * r.phi_N) * r.d_W;
+      }
+      const ImplicitRow& r = rows[i];
+      i = end;
+      if (f.isZero(0.0) && C.isZero(0.0)) continue;
       const int sa = r.body_a >= 0 ? 6 * slot[r.body_a] : -1;
       const int sb = r.body_b >= 0 ? 6 * slot[r.body_b] : -1;
-      const Vec6 ja = RowJacobian(r.d_W, r.r_a_W);
-      const Vec6 jb = -RowJacobian(r.d_W, r.r_b_W);
-      const double hc = h * r.c_Ns_per_m;
+      const Mat3 Ra = Skew(r.r_a_W), Rb = Skew(r.r_b_W);
+      const Mat3 CRb = C * Rb, RaC = Ra * C;
       if (sa >= 0) {
-        H.block<6, 6>(sa, sa).noalias() += hc * ja * ja.transpose();
-        x.segment<6>(sa) += h * r.phi_N * ja;
+        const Mat3 CRa = C * Ra;
+        H.block<3, 3>(sa, sa) += C;
+        H.block<3, 3>(sa, sa + 3) -= CRa;
+        H.block<3, 3>(sa + 3, sa) += RaC;
+        H.block<3, 3>(sa + 3, sa + 3).noalias() -= Ra * CRa;
+        x.segment<3>(sa) += f;
+        x.segment<3>(sa + 3) += Ra * f;  // r_a x f
       }
       if (sb >= 0) {
-        H.block<6, 6>(sb, sb).noalias() += hc * jb * jb.transpose();
-        x.segment<6>(sb) += h * r.phi_N * jb;
+        const Mat3 RbC = Rb * C;
+        H.block<3, 3>(sb, sb) += C;
+        H.block<3, 3>(sb, sb + 3) -= CRb;
+        H.block<3, 3>(sb + 3, sb) += RbC;
+        H.block<3, 3>(sb + 3, sb + 3).noalias() -= Rb * CRb;
+        x.segment<3>(sb) -= f;
+        x.segment<3>(sb + 3) -= Rb * f;
       }
       if (sa >= 0 && sb >= 0) {
-        H.block<6, 6>(sa, sb).noalias() += hc * ja * jb.transpose();
-        H.block<6, 6>(sb, sa).noalias() += hc * jb * ja.transpose();
+        // J_a^T C (-J_b) and its transpose
+        H.block<3, 3>(sa, sb) -= C;
+        H.block<3, 3>(sa, sb + 3) += CRb;
+        H.block<3, 3>(sa + 3, sb) -= RaC;
+        H.block<3, 3>(sa + 3, sb + 3).noalias() += Ra * CRb;
+        H.block<6, 6>(sb, sa) = H.block<6, 6>(sa, sb).transpose();
       }
     }
-    if (!CholeskySolve(H, x) || !x.allFinite()) return false;
+    const int nb = static_cast<int>(bodies.size());
+    std::fill(scratch.mask.begin(), scratch.mask.begin() + nb * nb, 0);
+    for (int k = 0; k < nb; ++k) scratch.mask[k * nb + k] = 1;
+    for (const ImplicitRow& r : rows) {
+      if (r.active && r.body_a >= 0 && r.body_b >= 0) {
+        scratch.mask[slot[r.body_a] * nb + slot[r.body_b]] = 1;
+        scratch.mask[slot[r.body_b] * nb + slot[r.body_a]] = 1;
+      }
+    }
+    if (!BlockCholeskySolve(H, x, nb, scratch.mask) || !x.allFinite()) return false;
     // write the candidate velocities, then check that no normal row pulls
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       BodyState& s = data.bodies[bodies[k]];

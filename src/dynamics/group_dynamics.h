@@ -33,6 +33,7 @@ struct GroupSolverScratch {
   Eigen::MatrixXd H;         // (6 nb x 6 nb) system matrix
   Eigen::VectorXd x;         // (6 nb) right-hand side, then the new velocities
   std::vector<Vec3> v0, w0;  // (nb) start-of-step velocities, kept across passes
+  std::vector<char> mask;    // (nb x nb) non-zero 6 x 6 blocks of H, with fill-in
   void Reserve(int max_group_bodies);
 };
 
