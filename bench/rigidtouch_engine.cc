@@ -57,12 +57,12 @@ class RigidtouchEngine final : public Engine {
     s.w_W.setZero();
   }
 
-  // the state that carries over between ticks: bodies, last contacts (identity, anchors) and the
-  // collision windows
+  // the state that carries over between ticks: bodies, the last tick's contacts (identity,
+  // anchors: they become `previous` at the next tick) and the collision windows
   void SaveSnapshot() override {
     snapshot_.bodies = data_->bodies;
-    snapshot_.previous = data_->previous;
-    snapshot_.nprevious = data_->nprevious;
+    snapshot_.contacts = data_->contacts;
+    snapshot_.ncontact = data_->ncontact;
     snapshot_.window = data_->window;
     snapshot_.step = data_->step;
     snapshot_.next_contact_id = data_->next_contact_id;
@@ -70,8 +70,8 @@ class RigidtouchEngine final : public Engine {
 
   void RestoreSnapshot() override {
     std::copy(snapshot_.bodies.begin(), snapshot_.bodies.end(), data_->bodies.begin());
-    std::copy(snapshot_.previous.begin(), snapshot_.previous.end(), data_->previous.begin());
-    data_->nprevious = snapshot_.nprevious;
+    std::copy(snapshot_.contacts.begin(), snapshot_.contacts.end(), data_->contacts.begin());
+    data_->ncontact = snapshot_.ncontact;
     std::copy(snapshot_.window.begin(), snapshot_.window.end(), data_->window.begin());
     data_->step = snapshot_.step;
     data_->time_s = static_cast<double>(snapshot_.step) * model_->timestep_s;
@@ -113,8 +113,8 @@ class RigidtouchEngine final : public Engine {
 
   struct Snapshot {
     std::vector<BodyState> bodies;
-    std::vector<Contact> previous;
-    int nprevious = 0;
+    std::vector<Contact> contacts;
+    int ncontact = 0;
     std::vector<WindowState> window;
     std::int64_t step = 0;
     int next_contact_id = 0;

@@ -44,6 +44,12 @@ struct Contact {
   int group = -1;
 };
 
+/// The contiguous run of one geom pair's points in a contact list (for matching across ticks).
+struct PairRun {
+  int geom_a = -1, geom_b = -1;
+  int begin = 0, count = 0;
+};
+
 /// A contact group's collision-rendering window, kept per body so it survives regrouping.
 struct WindowState {
   std::int64_t onset_step = -1;  // step of the last collision onset; -1: never
@@ -106,6 +112,8 @@ struct Data {
   int ncontact = 0;
   std::vector<Contact> previous;  // last tick's contacts, for identity matching
   int nprevious = 0;
+  std::vector<PairRun> previous_runs;  // (max_contacts) their geom pairs, sorted by pair
+  int nprevious_runs = 0;
   int next_contact_id = 0;
   std::vector<int> body_group;  // (nbody) group of each body, -1 if in no contact
   int ngroup = 0;

@@ -8,30 +8,47 @@
 namespace rigidtouch::geometry {
 namespace {
 
-// order of contacts by geom pair, then by id, for matching with binary search
-bool PairLess(const Contact& x, const Contact& y) {
-  if (x.geom_a != y.geom_a) return x.geom_a < y.geom_a;
-  if (x.geom_b != y.geom_b) return x.geom_b < y.geom_b;
-  return x.id < y.id;
-}
-
 Vec3 ToLocal(const Data& data, int body, const Vec3& p_W) {
   if (body < 0) return p_W;
   const BodyState& s = data.bodies[body];
   return s.q_WB.conjugate() * (p_W - s.x_W);
 }
 
+// last tick's contacts become `previous` (the buffers trade places, no copy), and the runs of
+// their geom pairs are indexed for MatchPair
+void RememberPrevious(Data& data) {
+  std::swap(data.contacts, data.previous);
+  data.nprevious = data.ncontact;
+  data.ncontact = 0;
+  int nruns = 0;
+  for (int begin = 0; begin < data.nprevious;) {
+    const Contact& c = data.previous[begin];
+    int end = begin + 1;
+    while (end < data.nprevious && data.previous[end].geom_a == c.geom_a &&
+           data.previous[end].geom_b == c.geom_b) {
+      ++end;
+    }
+    data.previous_runs[nruns++] = PairRun{c.geom_a, c.geom_b, begin, end - begin};
+    begin = end;
+  }
+  data.nprevious_runs = nruns;
+  std::sort(data.previous_runs.begin(), data.previous_runs.begin() + nruns,
+            [](const PairRun& x, const PairRun& y) {
+              return x.geom_a != y.geom_a ? x.geom_a < y.geom_a : x.geom_b < y.geom_b;
+            });
+}
+
 // matches the contacts of one geom pair [begin, end) in data.contacts against last tick's
 void MatchPair(Data& data, int begin, int end) {
   const Contact& key = data.contacts[begin];
-  const auto first = data.previous.begin();
-  const auto last = data.previous.begin() + data.nprevious;
-  auto lo = std::lower_bound(first, last, key, [](const Contact& x, const Contact& y) {
-    return x.geom_a != y.geom_a ? x.geom_a < y.geom_a : x.geom_b < y.geom_b;
-  });
-  auto hi = lo;
-  while (hi != last && hi->geom_a == key.geom_a && hi->geom_b == key.geom_b) ++hi;
-  const int nprev = static_cast<int>(hi - lo);
+  const auto runs_end = data.previous_runs.begin() + data.nprevious_runs;
+  const auto run = std::lower_bound(
+      data.previous_runs.begin(), runs_end, key, [](const PairRun& r, const Contact& c) {
+        return r.geom_a != c.geom_a ? r.geom_a < c.geom_a : r.geom_b < c.geom_b;
+      });
+  const bool found = run != runs_end && run->geom_a == key.geom_a && run->geom_b == key.geom_b;
+  const auto lo = data.previous.begin() + (found ? run->begin : 0);
+  const int nprev = found ? run->count : 0;
   const int ncur = end - begin;
   // a pair with one point before and now is the same contact wherever it slid
   const bool single = nprev == 1 && ncur == 1;
@@ -170,6 +187,7 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
 }  // namespace
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
+  RememberPrevious(data);
   GeomPoses(model, data.bodies, s.poses);
   FindPairs(model, s.poses, s.broadphase);
   if (s.broadphase.dropped > 0) {
@@ -177,7 +195,6 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
     ++w.count;
     w.last_step = data.step;
   }
-  data.ncontact = 0;
   for (int k = 0; k < s.broadphase.npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const GeomModel& a = model.geoms[g1];
@@ -197,12 +214,6 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
     for (int c = begin; c < end; ++c) data.contacts[c].pair_points = end - begin;
     if (end > begin) MatchPair(data, begin, end);
   }
-}
-
-void RememberContacts(Data& data) {
-  std::copy(data.contacts.begin(), data.contacts.begin() + data.ncontact, data.previous.begin());
-  data.nprevious = data.ncontact;
-  std::sort(data.previous.begin(), data.previous.begin() + data.nprevious, PairLess);
 }
 
 }  // namespace rigidtouch::geometry

@@ -37,13 +37,10 @@ struct CollisionScratch {
 };
 
 /// Detects contacts at the poses in `data.bodies` into data.contacts (first data.ncontact valid,
-/// the points of one geom pair contiguous), matching each to last tick's contacts (data.previous)
-/// to keep ids and friction anchors and to mark new contacts. Never allocates or throws; a full
-/// contact list counts Warning::kContactFull.
+/// the points of one geom pair contiguous), matching each to the contacts data.contacts held
+/// before the call (they become data.previous) to keep ids and friction anchors and to mark new
+/// contacts. Never allocates or throws; a full contact list counts Warning::kContactFull.
 void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch);
-
-/// Stores this tick's contacts as `previous`, sorted for matching.
-void RememberContacts(Data& data);
 
 /// Distance within which a contact point (in the first body's frame) is the same contact as one
 /// of last tick on the same geom pair.

@@ -39,6 +39,7 @@ Data MakeData(const Model& model) {
   data.bodies.resize(nbody);
   data.contacts.resize(ncap);
   data.previous.resize(ncap);
+  data.previous_runs.resize(ncap);
   data.body_group.assign(nbody, -1);
   data.window.resize(nbody);
   data.impulses.resize(nbody);
@@ -66,6 +67,7 @@ void ResetData(const Model& model, Data& data) {
   std::copy(model.initial.begin(), model.initial.end(), data.bodies.begin());
   data.ncontact = 0;
   data.nprevious = 0;
+  data.nprevious_runs = 0;
   data.next_contact_id = 0;
   data.ngroup = 0;
   std::fill(data.body_group.begin(), data.body_group.end(), -1);

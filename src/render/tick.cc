@@ -488,7 +488,6 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
     out.torque_Nm.setZero();
     out.safe_fallback = true;
   }
-  geometry::RememberContacts(data);
   ++data.step;
   data.time_s = static_cast<double>(data.step) * h;
   return out;
