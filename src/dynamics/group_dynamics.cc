@@ -46,9 +46,12 @@ bool BlockCholeskySolve(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorX
       if (!M(i, k)) continue;
       for (int j = k + 1; j <= i; ++j) {
         if (!M(j, k)) continue;
+        if (!M(i, j)) {  // fill-in: a block that was structurally zero
+          H.block<6, 6>(6 * i, 6 * j).setZero();
+          M(i, j) = M(j, i) = 1;
+        }
         H.block<6, 6>(6 * i, 6 * j).noalias() -=
             H.block<6, 6>(6 * i, 6 * k) * H.block<6, 6>(6 * j, 6 * k).transpose();
-        M(i, j) = M(j, i) = 1;  // fill-in
       }
     }
   }
@@ -100,7 +103,22 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
   for (int pass = 0; pass < kMaxPasses; ++pass) {
     auto H = scratch.H.topLeftCorner(n, n);
     auto x = scratch.x.head(n);
-    H.setZero();
+    // only the blocks of bodies that share a contact are non-zero (plus fill-in, zeroed when the
+    // factorisation creates it)
+    const int nb = static_cast<int>(bodies.size());
+    std::fill(scratch.mask.begin(), scratch.mask.begin() + nb * nb, 0);
+    for (int k = 0; k < nb; ++k) scratch.mask[k * nb + k] = 1;
+    for (const ImplicitRow& r : rows) {
+      if (r.active && r.body_a >= 0 && r.body_b >= 0) {
+        scratch.mask[slot[r.body_a] * nb + slot[r.body_b]] = 1;
+        scratch.mask[slot[r.body_b] * nb + slot[r.body_a]] = 1;
+      }
+    }
+    for (int i = 0; i < nb; ++i) {
+      for (int j = 0; j < nb; ++j) {
+        if (scratch.mask[i * nb + j]) H.block<6, 6>(6 * i, 6 * j).setZero();
+      }
+    }
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       const int i = bodies[k];
       const BodyModel& bm = model.bodies[i];
@@ -159,15 +177,6 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
         H.block<3, 3>(sa + 3, sb) -= RaC;
         H.block<3, 3>(sa + 3, sb + 3).noalias() += Ra * CRb;
         H.block<6, 6>(sb, sa) = H.block<6, 6>(sa, sb).transpose();
-      }
-    }
-    const int nb = static_cast<int>(bodies.size());
-    std::fill(scratch.mask.begin(), scratch.mask.begin() + nb * nb, 0);
-    for (int k = 0; k < nb; ++k) scratch.mask[k * nb + k] = 1;
-    for (const ImplicitRow& r : rows) {
-      if (r.active && r.body_a >= 0 && r.body_b >= 0) {
-        scratch.mask[slot[r.body_a] * nb + slot[r.body_b]] = 1;
-        scratch.mask[slot[r.body_b] * nb + slot[r.body_a]] = 1;
       }
     }
     if (!BlockCholeskySolve(H, x, nb, scratch.mask) || !x.allFinite()) return false;

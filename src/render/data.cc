@@ -49,6 +49,7 @@ Data MakeData(const Model& model) {
   ws.groups.Reserve(nbody, ncap);
   ws.laws.resize(ncap);
   ws.normal_velocity.resize(ncap);
+  ws.anchor_displacement.resize(ncap);
   ws.force_W.resize(nbody);
   ws.torque_W.resize(nbody);
   ws.rows.resize(3 * ncap);

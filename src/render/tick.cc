@@ -131,7 +131,7 @@ int ImplicitContactRows(const Model& model, Data& data, Workspace& ws, int ci, i
   rn = dynamics::ImplicitRow{c.body_a, c.body_b, c.n_W, r_a, r_b, law.k_N_per_m * c.depth_m,
                              c_n,      ci,       -1,    true};
   // stick or slip was decided for the whole geom pair (DecidePatchFriction)
-  const Vec3 s = AnchorDisplacement(data, c);
+  const Vec3 s = ws.anchor_displacement[ci];  // computed by DecidePatchFriction this tick
   const double fn_spring = law.k_N_per_m * c.depth_m;
   if (c.sticking) {
     // two tangential rows along an orthonormal basis of the tangent plane
@@ -158,7 +158,7 @@ int ImplicitContactRows(const Model& model, Data& data, Workspace& ws, int ci, i
 // contact patch with one friction cone (sum |kt s| <= mu_s sum k d), and a decision on state, not
 // on velocities, cannot chatter with velocity noise. Only implicit (scene) contacts; a tool
 // contact decides alone in ExplicitContact.
-void DecidePatchFriction(Data& data, const Workspace& ws) {
+void DecidePatchFriction(Data& data, Workspace& ws) {
   for (int begin = 0; begin < data.ncontact;) {
     const Contact& first = data.contacts[begin];
     int end = begin + 1;
@@ -171,7 +171,8 @@ void DecidePatchFriction(Data& data, const Workspace& ws) {
       for (int ci = begin; ci < end; ++ci) {
         const Contact& c = data.contacts[ci];
         fn += ws.laws[ci].k_N_per_m * c.depth_m;
-        ft += ws.laws[ci].kt_N_per_m * AnchorDisplacement(data, c).norm();
+        ws.anchor_displacement[ci] = AnchorDisplacement(data, c);
+        ft += ws.laws[ci].kt_N_per_m * ws.anchor_displacement[ci].norm();
       }
       const bool stick = ft <= ws.laws[begin].mu_static * fn;
       for (int ci = begin; ci < end; ++ci) data.contacts[ci].sticking = stick;
