@@ -17,6 +17,13 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRIGIDTOUCH_WERROR=ON -DRIGIDTOU
 cmake --build build -j"$jobs"
 (cd build && ctest --output-on-failure -j"$jobs")
 
+echo "== install, and find_package(rigidtouch) from another project"
+prefix="$(pwd)/build/install-check"
+cmake --install build --prefix "$prefix" >/dev/null
+cmake -S tests/install -B build/consumer -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+cmake --build build/consumer -j"$jobs" >/dev/null
+./build/consumer/consumer scenes/tap.xml
+
 if [ "${1:-}" != "--quick" ]; then
   echo "== AddressSanitizer + UndefinedBehaviorSanitizer over the unit tests"
   cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGIDTOUCH_WERROR=ON \

@@ -139,6 +139,23 @@ TEST(TapExperimentTest, ImpulsesRaiseRateHardnessAndTheTrainReducesPenetration) 
             Mean(penalty, &TapMetrics::max_penetration_m));
 }
 
+// virtual coupling: a spring-damper between device and a simulated tool; the taps still reach the
+// wall through it, the train still fires, and the port stays passive
+TEST(TapExperimentTest, VirtualCouplingRendersPassiveTaps) {
+  TapExperimentConfig c = Config(1, "omni", 0.15, 2);
+  c.load.device.coupling = Coupling::kVirtual;
+  const TapRun run = RunTapExperiment(c);
+  EXPECT_EQ(run.model.device.coupling, Coupling::kVirtual);
+  EXPECT_NEAR(run.model.bodies[run.model.tool].mass_kg, 0.1, 1e-12);  // the scene's tool mass
+  ASSERT_EQ(run.taps.size(), 2u);
+  for (const TapMetrics& m : run.taps) {
+    EXPECT_TRUE(m.contact);
+    EXPECT_GE(m.impulses.size(), 1u);
+    EXPECT_GT(m.peak_force_N, 0.0);
+    EXPECT_LE(m.energy_to_user_J, 1e-9);
+  }
+}
+
 TEST(TapExperimentTest, BadConfigurationNamesTheParameter) {
   TapExperimentConfig c = Config(1, "touch", 0.2);
   c.rate_hz = 50.0;
