@@ -44,7 +44,16 @@ Spectrum PowerSpectrum(std::span<const double> signal, double sample_rate_hz,
   }
   std::vector<double> input(static_cast<std::size_t>(fft_length), 0.0);
   for (int i = 0; i < n; ++i) {
-    const double window = 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * i / (n - 1)));
+    double window = 1.0;
+    if (options.window == SpectrumOptions::Window::kHann) {
+      window = 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * i / (n - 1)));
+    } else {
+      const double taper_start = 0.75 * (n - 1);
+      if (i > taper_start) {
+        window =
+            0.5 * (1.0 + std::cos(std::numbers::pi * (i - taper_start) / (n - 1 - taper_start)));
+      }
+    }
     input[static_cast<std::size_t>(i)] = window * (signal[static_cast<std::size_t>(i)] - mean);
   }
   const int bins = fft_length / 2 + 1;

@@ -10,6 +10,11 @@ namespace rigidtouch::analysis {
 
 /// How a signal window is turned into a spectrum.
 struct SpectrumOptions {
+  /// Taper applied before the transform. kHann suits steady signals; kTaperedEnd (flat, then a
+  /// half-cosine over the last quarter) suits a transient that starts at the first sample, such
+  /// as a tap from contact onset, which a Hann window would weigh by zero.
+  enum class Window { kHann, kTaperedEnd };
+  Window window = Window::kHann;
   /// Subtract the window's mean before windowing, so the sustained (pressing) force does not
   /// leak into the lowest bins and the spectrum describes the force's fluctuation.
   bool remove_mean = true;

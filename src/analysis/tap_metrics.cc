@@ -134,7 +134,10 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   if (force_N.size() >= 2 && s[last].time_s > s[onset].time_s) {
     sample_rate_hz = static_cast<double>(force_N.size() - 1) / (s[last].time_s - s[onset].time_s);
   }
-  const Spectrum spectrum = PowerSpectrum(force_N, sample_rate_hz, options.spectrum);
+  // the tap is a transient from onset: a Hann window would weigh the onset impulse by zero
+  SpectrumOptions spectrum_options = options.spectrum;
+  spectrum_options.window = SpectrumOptions::Window::kTaperedEnd;
+  const Spectrum spectrum = PowerSpectrum(force_N, sample_rate_hz, spectrum_options);
   if (spectrum.power.empty()) {
     m.dominant_frequency_hz = kNaN;
     m.band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};

@@ -100,3 +100,32 @@ TEST(SpectrumTest, TooShortSignalGivesAnEmptySpectrum) {
 
 }  // namespace
 }  // namespace rigidtouch::analysis
+
+namespace rigidtouch::analysis {
+namespace {
+
+// a transient at the first sample: the Hann window weighs it by zero (no energy above DC), the
+// end-tapered window keeps it (a unit impulse has a flat spectrum: every band gets its share)
+TEST(SpectrumTest, TaperedEndWindowKeepsAnImpulseAtTheFirstSample) {
+  std::vector<double> x(100, 0.0);
+  x[0] = 1.0;
+  SpectrumOptions hann;
+  hann.remove_mean = false;
+  const Spectrum h = PowerSpectrum(x, 1000.0, hann);
+  double hann_energy = 0.0;
+  for (double p : h.power) hann_energy += p;
+  EXPECT_EQ(hann_energy, 0.0);
+  SpectrumOptions tapered = hann;
+  tapered.window = SpectrumOptions::Window::kTaperedEnd;
+  const Spectrum t = PowerSpectrum(x, 1000.0, tapered);
+  const auto bands = BandEnergyFractions(t);
+  // flat spectrum up to 500 Hz: band widths 40, 60, 300, 100 Hz of 500 (tolerance: one 7.8 Hz
+  // bin of the 128-point transform at each edge, 0.02)
+  EXPECT_NEAR(bands[0], 40.0 / 500.0, 0.02);
+  EXPECT_NEAR(bands[1], 60.0 / 500.0, 0.02);
+  EXPECT_NEAR(bands[2], 300.0 / 500.0, 0.02);
+  EXPECT_NEAR(bands[3], 100.0 / 500.0, 0.02);
+}
+
+}  // namespace
+}  // namespace rigidtouch::analysis
