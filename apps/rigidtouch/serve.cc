@@ -89,12 +89,8 @@ void Run(const ServeFlags& f) {
     const std::string scene =
         f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
     Model model = LoadModel(scene, load);
-    // the tool is the end effector: the simulated device's apparent mass plus the hand's
-    const device::DeviceModelParams dm;
-    const device::HandParams hand;
-    BodyModel& tool = model.bodies[model.tool];
-    tool.inertia_kgm2 *= (dm.apparent_mass_kg + hand.mass_kg) / tool.mass_kg;
-    tool.mass_kg = dm.apparent_mass_kg + hand.mass_kg;
+    // the tool is the end effector; without a model of the real device, the simulated one's
+    analysis::UseDeviceAndHandMass(model, device::DeviceModelParams{}, device::HandParams{});
     Configure(model);
     device::UdpDeviceOptions o;
     o.server = f.device;

@@ -50,6 +50,14 @@ RenderParams WallRenderParams(int wall) {
   return r;
 }
 
+void UseDeviceAndHandMass(Model& model, const device::DeviceModelParams& device,
+                          const device::HandParams& hand) {
+  BodyModel& tool = model.bodies[model.tool];
+  const double mass = device.apparent_mass_kg + hand.mass_kg;
+  tool.inertia_kgm2 *= mass / tool.mass_kg;
+  tool.mass_kg = mass;
+}
+
 TapSetup PrepareTap(const TapExperimentConfig& config) {
   if (!(std::isfinite(config.rate_hz) && config.rate_hz >= 100.0 && config.rate_hz <= 20000.0)) {
     std::ostringstream msg;
@@ -90,14 +98,7 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   setup.simulated = std::make_unique<device::SimulatedDevice>(limits, config.hand, dm, script);
   device::SimulatedDevice& dev = *setup.simulated;
 
-  BodyModel& tool = model.bodies[model.tool];
-  if (model.device.coupling == Coupling::kDirect) {
-    // the tool is the end effector: its mass in Eq. 1 is the device's apparent mass plus the
-    // hand's (the rotational inertia keeps its shape)
-    const double mass = dm.apparent_mass_kg + config.hand.mass_kg;
-    tool.inertia_kgm2 *= mass / tool.mass_kg;
-    tool.mass_kg = mass;
-  }
+  if (model.device.coupling == Coupling::kDirect) UseDeviceAndHandMass(model, dm, config.hand);
   const DeviceState start = dev.Read();
   model.initial[model.tool].x_W = start.position_m;
   model.initial[model.tool].v_W.setZero();

@@ -46,6 +46,11 @@ struct TapRun {
   std::array<WarningStat, static_cast<int>(Warning::kCount)> warnings{};
 };
 
+/// Makes the tool the end effector of a directly coupled device: its mass in Eq. 1 becomes the
+/// device's apparent mass plus the hand's (the rotational inertia keeps its shape).
+void UseDeviceAndHandMass(Model& model, const device::DeviceModelParams& device,
+                          const device::HandParams& hand);
+
 /// A model and a simulated device made ready for a tap run: the tool starts at the device's
 /// start position, with the device's and hand's mass when coupled directly.
 struct TapSetup {
