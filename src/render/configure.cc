@@ -40,6 +40,10 @@ void Configure(Model& model) {
                 ">= 0, or -1 for the MJCF geom friction");
   RequireFinite("friction_kinetic", c.friction_kinetic, -1.0, kInf,
                 ">= 0, or -1 for the MJCF geom friction");
+  if (c.friction_static >= 0.0 && c.friction_kinetic >= 0.0) {
+    Require(c.friction_static >= c.friction_kinetic, "friction_static", c.friction_static,
+            ">= friction_kinetic (" + std::to_string(c.friction_kinetic) + ")");
+  }
   RequireFinite("tangential_ratio", c.tangential_ratio, 0.0, kInf, ">= 0");
   RequireFinite("onset_speed_mps", c.onset_speed_mps, 0.0, kInf, ">= 0 m/s");
 

@@ -64,7 +64,7 @@ void SlideAnchor(Data& data, Contact& c, const Vec3& s, const Vec3& f_t, double 
   c.anchor_B = LocalPoint(data, c.body_b, pb);
 }
 
-void Accumulate(Data& data, Workspace& ws, const Contact& c, const Vec3& f_on_a, const Vec3& r_a,
+void Accumulate(Workspace& ws, const Contact& c, const Vec3& f_on_a, const Vec3& r_a,
                 const Vec3& r_b) {
   if (c.body_a >= 0) {
     ws.force_W[c.body_a] += f_on_a;
@@ -74,7 +74,6 @@ void Accumulate(Data& data, Workspace& ws, const Contact& c, const Vec3& f_on_a,
     ws.force_W[c.body_b] -= f_on_a;
     ws.torque_W[c.body_b] -= r_b.cross(f_on_a);
   }
-  (void)data;
 }
 
 // explicit penalty and friction of one contact (tool contacts, or scene contacts of a group too
@@ -104,7 +103,7 @@ void ExplicitContact(Data& data, Workspace& ws, int ci) {
   }
   c.normal_force_N = fn;
   c.friction_force_W = ft;
-  Accumulate(data, ws, c, fn * c.n_W + ft, r_a, r_b);
+  Accumulate(ws, c, fn * c.n_W + ft, r_a, r_b);
 }
 
 // the rows of one scene contact for the implicit solve; slipping friction stays explicit
@@ -149,7 +148,7 @@ int ImplicitContactRows(const Model& model, Data& data, Workspace& ws, int ci, i
         stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * fn_spring / stretch)) : Vec3::Zero();
     SlideAnchor(data, c, s, ft, law.kt_N_per_m);
     c.friction_force_W = ft;
-    Accumulate(data, ws, c, ft, r_a, r_b);
+    Accumulate(ws, c, ft, r_a, r_b);
   }
   return nrow;
 }

@@ -103,6 +103,12 @@ TEST(MjcfLoaderTest, OutOfRangeParametersNameParameterAndRange) {
       {"timestep_s", [](LoadOptions& o) { o.timestep_s = INFINITY; }, "h <= 0.1 s"},
       {"frequency_hz", [](LoadOptions& o) { o.render.frequency_hz = 5.0; }, "[1/t_c, 1/h]"},
       {"max_force_N", [](LoadOptions& o) { o.device.max_force_N = -3; }, ">= 0 N"},
+      {"friction_static",
+       [](LoadOptions& o) {
+         o.contact.friction_static = 0.2;
+         o.contact.friction_kinetic = 0.4;
+       },
+       ">= friction_kinetic"},
   };
   for (const BadParam& c : cases) {
     LoadOptions o;
