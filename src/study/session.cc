@@ -76,7 +76,7 @@ json StepRecord(const char* type, const Protocol& protocol, const Step& step) {
 std::string TestIntro(const Protocol& protocol, const Step& step) {
   const StudyTest& test = protocol.tests[step.test];
   std::ostringstream out;
-  out << "\n== StudyTest " << step.test_position + 1 << " of " << protocol.tests.size() << ": "
+  out << "\n== Test " << step.test_position + 1 << " of " << protocol.tests.size() << ": "
       << test.name << " ==\n";
   for (int c = 0; c < 2; ++c) {
     out << "  key " << test.keys[c] << " = " << protocol.conditions[test.conditions[c]].label
