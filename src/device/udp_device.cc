@@ -101,17 +101,7 @@ DeviceState UdpDevice::Read() {
 
 void UdpDevice::Write(const DeviceCommand& command) {
   const CommandPacket packet = EncodeCommand(command);
-  if (loss_.DropOutgoing()) {
-    ++counters_.test_dropped_outgoing;
-    return;
-  }
-  const int status = socket_.SendTo(packet, server_);
-  if (status != 0) {
-    ++counters_.send_errors;
-    counters_.last_errno = status;
-    return;
-  }
-  ++counters_.sent;
+  SendCounted(socket_, loss_, counters_, packet, server_);
 }
 
 }  // namespace rigidtouch::device

@@ -66,17 +66,7 @@ void UdpDeviceServer::SendState() {
   if (!has_peer_) return;
   state.sequence = ++sequence_;
   const StatePacket packet = EncodeState(state);
-  if (loss_.DropOutgoing()) {
-    ++counters_.test_dropped_outgoing;
-    return;
-  }
-  const int status = socket_.SendTo(packet, peer_);
-  if (status != 0) {
-    ++counters_.send_errors;
-    counters_.last_errno = status;
-    return;
-  }
-  ++counters_.sent;
+  SendCounted(socket_, loss_, counters_, packet, peer_);
 }
 
 void UdpDeviceServer::DrainCommands(std::int64_t now_ns) {

@@ -50,4 +50,19 @@ bool LossSimulator::Draw(double fraction) {
   return uniform_(generator_) < fraction;
 }
 
+void SendCounted(UdpSocket& socket, LossSimulator& loss, UdpCounters& counters,
+                 std::span<const std::uint8_t> datagram, const UdpEndpoint& destination) noexcept {
+  if (loss.DropOutgoing()) {
+    ++counters.test_dropped_outgoing;
+    return;
+  }
+  const int status = socket.SendTo(datagram, destination);
+  if (status != 0) {
+    ++counters.send_errors;
+    counters.last_errno = status;
+    return;
+  }
+  ++counters.sent;
+}
+
 }  // namespace rigidtouch::device

@@ -5,9 +5,11 @@
 #include <array>
 #include <cstdint>
 #include <random>
+#include <span>
 #include <string_view>
 
 #include "device/udp_protocol.h"
+#include "device/udp_socket.h"
 
 namespace rigidtouch::device {
 
@@ -77,5 +79,10 @@ class LossSimulator {
   std::mt19937_64 generator_;
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
 };
+
+/// Sends one datagram unless the test-only loss drops it, and counts the outcome in `counters`
+/// (sent, send_errors with last_errno, test_dropped_outgoing). Never blocks, allocates or throws.
+void SendCounted(UdpSocket& socket, LossSimulator& loss, UdpCounters& counters,
+                 std::span<const std::uint8_t> datagram, const UdpEndpoint& destination) noexcept;
 
 }  // namespace rigidtouch::device
