@@ -1,7 +1,5 @@
 #include "dynamics/group_dynamics.h"
 
-#include <Eigen/Cholesky>
-#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 
@@ -10,197 +8,336 @@
 namespace rigidtouch::dynamics {
 namespace {
 
-// [r]x, the cross-product matrix: [r]x w = r x w
-Mat3 Skew(const Vec3& r) {
+constexpr int kMaxPasses = 4;
+
+// --- 6 x 6 kernels (column-major, fixed size: unrolled, no allocation) ---
+
+// in-place lower Cholesky factor of a symmetric block (reads the lower triangle); inv gets
+// 1 / L(j, j). False unless positive definite.
+bool Cholesky6(Mat6& A, Vec6& inv) {
+  for (int j = 0; j < 6; ++j) {
+    double d = A(j, j);
+    for (int m = 0; m < j; ++m) d -= A(j, m) * A(j, m);
+    if (!(d > 0.0)) return false;
+    const double l = std::sqrt(d);
+    A(j, j) = l;
+    inv(j) = 1.0 / l;
+    for (int i = j + 1; i < 6; ++i) {
+      double s = A(i, j);
+      for (int m = 0; m < j; ++m) s -= A(i, m) * A(j, m);
+      A(i, j) = s * inv(j);
+    }
+  }
+  return true;
+}
+
+// X <- X L^-T (L lower triangular): column c of X L^T = B is (B_c - sum_{m<c} X_m L(c,m)) / L(c,c)
+void SolveRightTransposed(const Mat6& L, const Vec6& inv, Mat6& X) {
+  for (int c = 0; c < 6; ++c) {
+    for (int m = 0; m < c; ++m) X.col(c) -= L(c, m) * X.col(m);
+    X.col(c) *= inv(c);
+  }
+}
+
+// y <- L^-1 y
+void ForwardSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
+  for (int j = 0; j < 6; ++j) {
+    double s = y(j);
+    for (int m = 0; m < j; ++m) s -= L(j, m) * y(m);
+    y(j) = s * inv(j);
+  }
+}
+
+// y <- L^-T y
+void BackSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
+  for (int j = 5; j >= 0; --j) {
+    double s = y(j);
+    for (int m = j + 1; m < 6; ++m) s -= L(m, j) * y(m);
+    y(j) = s * inv(j);
+  }
+}
+
+// --- the group's block structure ---
+
+// orders the group's bodies by minimum degree on the graph of bodies that share a contact
+// (ties: lowest slot, so the order is deterministic), records the factor's non-zero blocks
+// (original couplings and fill-in) column by column, and numbers them. False if the fill-in
+// would exceed the scratch.
+bool Analyse(GroupSolverScratch& s, std::span<const int> slot,
+             std::span<const ImplicitContact> contacts, int nb) {
+  auto adj = [&](int i, int j) -> char& { return s.adj[static_cast<std::size_t>(i) * nb + j]; };
+  std::fill(s.adj.begin(), s.adj.begin() + static_cast<std::ptrdiff_t>(nb) * nb, 0);
+  std::fill(s.degree.begin(), s.degree.begin() + nb, 0);
+  std::fill(s.eliminated.begin(), s.eliminated.begin() + nb, 0);
+  for (const ImplicitContact& r : contacts) {
+    if (r.body_a < 0 || r.body_b < 0) continue;
+    const int a = slot[r.body_a], b = slot[r.body_b];
+    if (a == b || adj(a, b)) continue;
+    adj(a, b) = adj(b, a) = 1;
+    ++s.degree[a];
+    ++s.degree[b];
+  }
+  int nnz = 0;
+  for (int p = 0; p < nb; ++p) {
+    int v = -1;
+    for (int i = 0; i < nb; ++i) {
+      if (!s.eliminated[i] && (v < 0 || s.degree[i] < s.degree[v])) v = i;
+    }
+    s.order[p] = v;
+    s.pos[v] = p;
+    s.eliminated[v] = 1;
+    s.col_start[p] = nnz;
+    for (int i = 0; i < nb; ++i) {
+      if (!adj(v, i) || s.eliminated[i]) continue;
+      if (nnz == s.max_blocks) return false;
+      s.col_row[nnz++] = i;  // a slot for now; a position once every body has one
+      --s.degree[i];
+    }
+    // eliminating v connects its remaining neighbours (the fill-in)
+    for (int k = s.col_start[p]; k < nnz; ++k) {
+      for (int l = k + 1; l < nnz; ++l) {
+        const int i = s.col_row[k], j = s.col_row[l];
+        if (adj(i, j)) continue;
+        adj(i, j) = adj(j, i) = 1;
+        ++s.degree[i];
+        ++s.degree[j];
+      }
+    }
+  }
+  s.col_start[nb] = nnz;
+  for (int p = 0; p < nb; ++p) {
+    const auto begin = s.col_row.begin() + s.col_start[p];
+    const auto end = s.col_row.begin() + s.col_start[p + 1];
+    for (auto it = begin; it != end; ++it) *it = s.pos[*it];
+    std::sort(begin, end);
+    for (int k = s.col_start[p]; k < s.col_start[p + 1]; ++k) {
+      s.block[static_cast<std::size_t>(s.col_row[k]) * nb + p] = k;
+    }
+  }
+  return true;
+}
+
+// --- assembly ---
+
+Mat3 Skew(const Vec3& r) {  // [r]x
   Mat3 m;
   m << 0.0, -r.z(), r.y(), r.z(), 0.0, -r.x(), -r.y(), r.x(), 0.0;
   return m;
 }
 
-constexpr int kMaxPasses = 4;
+// A += sum_points J_p^T C J_q for the point Jacobians J_r = [I, -[r]x] and one 3 x 3
+// C = ct I + dc n n^T (ct = c_t for a sticking contact, t1 t1^T + t2 t2^T = I - n n^T; dc =
+// c_n - ct), from the points' moments P = sum p, Q = sum q, S = sum p q^T:
+//   [[count C, -C [Q]x], [[P]x C, ct ((tr S) I - S^T) + dc [n]x S [n]x^T]]
+// (-[p]x [q]x = (p.q) I - q p^T and -[p]x n n^T [q]x = [n]x p q^T [n]x^T), so a manifold of k
+// points costs k small outer products and one block update instead of 3 k rank-1 updates.
+void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, const Mat3& C,
+                   const Vec3& P, const Vec3& Q, const Mat3& S) {
+  A.topLeftCorner<3, 3>() += count * C;
+  A.topRightCorner<3, 3>().noalias() -= C * Skew(Q);
+  A.bottomLeftCorner<3, 3>().noalias() += Skew(P) * C;
+  Mat3 br = -ct * S.transpose();
+  br.diagonal().array() += ct * S.trace();
+  const Mat3 N = Skew(n);
+  br.noalias() += dc * (N * S * N.transpose());
+  A.bottomRightCorner<3, 3>() += br;
+}
 
-using Mat6 = Eigen::Matrix<double, 6, 6>;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
+// true if contacts i and j share their blocks' assembly: same bodies, normal and coefficients
+bool SamePatch(const ImplicitContact& i, const ImplicitContact& j) {
+  return i.body_a == j.body_a && i.body_b == j.body_b && i.n_W == j.n_W &&
+         i.c_n_Ns_per_m == j.c_n_Ns_per_m && i.stick == j.stick &&
+         (!i.stick || i.c_t_Ns_per_m == j.c_t_Ns_per_m);
+}
 
-// solves H x = b in place by a Cholesky factorisation over 6 x 6 body blocks, skipping the blocks
-// of bodies that share no contact (a column of boxes is block tridiagonal: the cost grows with
-// the bodies, not their cube). `mask` (nb x nb, row-major) marks the non-zero blocks and gains the
-// fill-in. Fixed-size kernels only: nothing allocates. False if H is not positive definite.
-bool BlockCholeskySolve(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> x, int nb,
-                        std::vector<char>& mask) {
-  auto M = [&](int i, int j) -> char& { return mask[static_cast<std::size_t>(i) * nb + j]; };
+// adds sign x contacts [begin, end) (one patch, all active) to the assembled system:
+// h sum c J^T d d^T J to the blocks, h sum phi J^T d to the right-hand side
+void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
+                   std::span<const ImplicitContact> contacts, int begin, int end, double h,
+                   double sign, int nb) {
+  const ImplicitContact& first = contacts[begin];
+  const int pa = first.body_a >= 0 ? s.pos[slot[first.body_a]] : -1;
+  const int pb = first.body_b >= 0 ? s.pos[slot[first.body_b]] : -1;
+  Vec3 Pa = Vec3::Zero(), Pb = Vec3::Zero();
+  Mat3 Saa = Mat3::Zero(), Sbb = Mat3::Zero(), Sab = Mat3::Zero();
+  for (int k = begin; k < end; ++k) {
+    const ImplicitContact& c = contacts[k];
+    Vec3 f = c.phi_n_N * c.n_W;
+    if (c.stick) f += c.phi_t1_N * c.t1_W + c.phi_t2_N * c.t2_W;
+    f *= sign * h;
+    if (pa >= 0) s.b[pa] += (Vec6() << f, c.r_a_W.cross(f)).finished();
+    if (pb >= 0) s.b[pb] -= (Vec6() << f, c.r_b_W.cross(f)).finished();
+    Pa += c.r_a_W;
+    Pb += c.r_b_W;
+    Saa.noalias() += c.r_a_W * c.r_a_W.transpose();
+    Sbb.noalias() += c.r_b_W * c.r_b_W.transpose();
+    Sab.noalias() += c.r_a_W * c.r_b_W.transpose();
+  }
+  const int count = end - begin;
+  const Vec3& n = first.n_W;
+  const double ct = first.stick ? sign * h * first.c_t_Ns_per_m : 0.0;
+  const double dc = sign * h * first.c_n_Ns_per_m - ct;
+  const Mat3 C = ct * Mat3::Identity() + dc * n * n.transpose();
+  if (pa >= 0) AddPatchBlock(s.diag_A[pa], count, ct, dc, n, C, Pa, Pa, Saa);
+  if (pb >= 0) AddPatchBlock(s.diag_A[pb], count, ct, dc, n, C, Pb, Pb, Sbb);
+  // the coupling H_ab = -h sum J_a^T C J_b; only the lower block (larger position first) is
+  // stored. Both points on one body: J = J_a - J_b adds both couplings to the diagonal.
+  if (pa >= 0 && pa == pb) {
+    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, -C, Pa, Pb, Sab);
+    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, -C, Pb, Pa, Sab.transpose());
+  } else if (pb >= 0 && pa > pb) {
+    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc, n, -C,
+                  Pa, Pb, Sab);
+  } else if (pa >= 0 && pb > pa) {
+    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc, n, -C,
+                  Pb, Pa, Sab.transpose());
+  }
+}
+
+// factors the assembled blocks into diag_L / off_L (right-looking block Cholesky over the
+// analysed structure) and solves for x
+bool FactorAndSolve(GroupSolverScratch& s, int nb) {
+  const int nnz = s.col_start[nb];
+  std::copy(s.diag_A.begin(), s.diag_A.begin() + nb, s.diag_L.begin());
+  std::copy(s.off_A.begin(), s.off_A.begin() + nnz, s.off_L.begin());
   for (int k = 0; k < nb; ++k) {
-    Eigen::LLT<Mat6> llt(H.block<6, 6>(6 * k, 6 * k));
-    if (llt.info() != Eigen::Success) return false;
-    const Mat6 L = llt.matrixL();
-    H.block<6, 6>(6 * k, 6 * k) = L;
-    for (int i = k + 1; i < nb; ++i) {
-      if (!M(i, k)) continue;
-      // L_ik = H_ik L_kk^-T
-      const Mat6 Lik = L.triangularView<Eigen::Lower>()
-                           .solve(H.block<6, 6>(6 * i, 6 * k).transpose())
-                           .transpose();
-      H.block<6, 6>(6 * i, 6 * k) = Lik;
-    }
-    for (int i = k + 1; i < nb; ++i) {
-      if (!M(i, k)) continue;
-      for (int j = k + 1; j <= i; ++j) {
-        if (!M(j, k)) continue;
-        if (!M(i, j)) {  // fill-in: a block that was structurally zero
-          H.block<6, 6>(6 * i, 6 * j).setZero();
-          M(i, j) = M(j, i) = 1;
-        }
-        H.block<6, 6>(6 * i, 6 * j).noalias() -=
-            H.block<6, 6>(6 * i, 6 * k) * H.block<6, 6>(6 * j, 6 * k).transpose();
+    if (!Cholesky6(s.diag_L[k], s.diag_inv[k])) return false;
+    const int begin = s.col_start[k], end = s.col_start[k + 1];
+    for (int e = begin; e < end; ++e) SolveRightTransposed(s.diag_L[k], s.diag_inv[k], s.off_L[e]);
+    // Schur complement: A_ij -= L_ik L_jk^T for every pair of rows i >= j of column k
+    for (int e = begin; e < end; ++e) {
+      const int i = s.col_row[e];
+      const Mat6& Lik = s.off_L[e];
+      s.diag_L[i].noalias() -= Lik * Lik.transpose();
+      for (int f = begin; f < e; ++f) {
+        const int j = s.col_row[f];
+        s.off_L[s.block[static_cast<std::size_t>(i) * nb + j]].noalias() -=
+            Lik * s.off_L[f].transpose();
       }
     }
   }
+  std::copy(s.b.begin(), s.b.begin() + nb, s.x.begin());
   for (int k = 0; k < nb; ++k) {  // L y = b
-    Vec6 r = x.segment<6>(6 * k);
-    for (int j = 0; j < k; ++j) {
-      if (M(k, j)) r.noalias() -= H.block<6, 6>(6 * k, 6 * j) * x.segment<6>(6 * j);
+    ForwardSubstitute(s.diag_L[k], s.diag_inv[k], s.x[k]);
+    for (int e = s.col_start[k]; e < s.col_start[k + 1]; ++e) {
+      s.x[s.col_row[e]].noalias() -= s.off_L[e] * s.x[k];
     }
-    x.segment<6>(6 * k) = H.block<6, 6>(6 * k, 6 * k).triangularView<Eigen::Lower>().solve(r);
   }
   for (int k = nb - 1; k >= 0; --k) {  // L^T x = y
-    Vec6 r = x.segment<6>(6 * k);
-    for (int i = k + 1; i < nb; ++i) {
-      if (M(i, k)) r.noalias() -= H.block<6, 6>(6 * i, 6 * k).transpose() * x.segment<6>(6 * i);
+    for (int e = s.col_start[k]; e < s.col_start[k + 1]; ++e) {
+      s.x[k].noalias() -= s.off_L[e].transpose() * s.x[s.col_row[e]];
     }
-    x.segment<6>(6 * k) =
-        H.block<6, 6>(6 * k, 6 * k).transpose().triangularView<Eigen::Upper>().solve(r);
+    BackSubstitute(s.diag_L[k], s.diag_inv[k], s.x[k]);
+  }
+  for (int k = 0; k < nb; ++k) {
+    if (!s.x[k].allFinite()) return false;
   }
   return true;
 }
 
 }  // namespace
 
-void GroupSolverScratch::Reserve(int max_group_bodies) {
-  H.setZero(6 * max_group_bodies, 6 * max_group_bodies);
-  x.setZero(6 * max_group_bodies);
-  v0.assign(max_group_bodies, Vec3::Zero());
-  mask.assign(static_cast<std::size_t>(max_group_bodies) * max_group_bodies, 0);
-  w0.assign(max_group_bodies, Vec3::Zero());
-}
-
-double RowVelocity(const Data& data, const ImplicitRow& row) {
-  double u = 0.0;
-  if (row.body_a >= 0) u += row.d_W.dot(PointVelocity(data.bodies[row.body_a], row.r_a_W));
-  if (row.body_b >= 0) u -= row.d_W.dot(PointVelocity(data.bodies[row.body_b], row.r_b_W));
-  return u;
+void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
+  max_bodies = max_group_bodies;
+  max_contacts = max_group_contacts;
+  // every pair of bodies could couple after fill-in, but a contact group is sparse: bound the
+  // factor's off-diagonal blocks by 32 per body
+  const long full = static_cast<long>(max_bodies) * (max_bodies - 1) / 2;
+  max_blocks = static_cast<int>(std::min<long>(full, 32L * max_bodies));
+  const auto n2 = static_cast<std::size_t>(max_bodies) * max_bodies;
+  diag_A.assign(max_bodies, Mat6::Zero());
+  diag_L.assign(max_bodies, Mat6::Zero());
+  diag_inv.assign(max_bodies, Vec6::Zero());
+  b.assign(max_bodies, Vec6::Zero());
+  x.assign(max_bodies, Vec6::Zero());
+  order.assign(max_bodies, 0);
+  pos.assign(max_bodies, 0);
+  col_start.assign(max_bodies + 1, 0);
+  col_row.assign(max_blocks, 0);
+  off_A.assign(max_blocks, Mat6::Zero());
+  off_L.assign(max_blocks, Mat6::Zero());
+  block.assign(n2, -1);
+  adj.assign(n2, 0);
+  degree.assign(max_bodies, 0);
+  eliminated.assign(max_bodies, 0);
 }
 
 bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
-                          std::span<const int> slot, std::span<ImplicitRow> rows,
+                          std::span<const int> slot, std::span<ImplicitContact> contacts,
                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
-                          GroupSolverScratch& scratch) {
+                          GroupSolverScratch& s) {
   const double h = model.timestep_s;
-  const int n = 6 * static_cast<int>(bodies.size());
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    scratch.v0[k] = data.bodies[bodies[k]].v_W;
-    scratch.w0[k] = data.bodies[bodies[k]].w_W;
+  const int nb = static_cast<int>(bodies.size());
+  const int nc = static_cast<int>(contacts.size());
+  if (nb > s.max_bodies || nc > s.max_contacts) return false;
+  if (!Analyse(s, slot, contacts, nb)) return false;
+
+  // assemble M + h sum c J^T J and M v + h F + h sum phi J^T once, a patch at a time
+  for (int k = 0; k < nb; ++k) {
+    const int i = bodies[k];
+    const BodyModel& bm = model.bodies[i];
+    const BodyState& st = data.bodies[i];
+    const int p = s.pos[k];
+    const Mat3 I = WorldInertia(bm, st);
+    Mat6& D = s.diag_A[p];
+    D.setZero();
+    D.topLeftCorner<3, 3>().diagonal().setConstant(bm.mass_kg);
+    D.bottomRightCorner<3, 3>() = I;
+    s.b[p] << bm.mass_kg * st.v_W + h * force_W[i], I * st.w_W + h * torque_W[i];
   }
+  for (int e = 0; e < s.col_start[nb]; ++e) s.off_A[e].setZero();
+  for (int begin = 0; begin < nc;) {
+    int end = begin + 1;
+    if (!contacts[begin].active) {
+      begin = end;
+      continue;
+    }
+    while (end < nc && contacts[end].active && SamePatch(contacts[begin], contacts[end])) ++end;
+    AssemblePatch(s, slot, contacts, begin, end, h, 1.0, nb);
+    begin = end;
+  }
+
   for (int pass = 0; pass < kMaxPasses; ++pass) {
-    auto H = scratch.H.topLeftCorner(n, n);
-    auto x = scratch.x.head(n);
-    // only the blocks of bodies that share a contact are non-zero (plus fill-in, zeroed when the
-    // factorisation creates it)
-    const int nb = static_cast<int>(bodies.size());
-    std::fill(scratch.mask.begin(), scratch.mask.begin() + nb * nb, 0);
-    for (int k = 0; k < nb; ++k) scratch.mask[k * nb + k] = 1;
-    for (const ImplicitRow& r : rows) {
-      if (r.active && r.body_a >= 0 && r.body_b >= 0) {
-        scratch.mask[slot[r.body_a] * nb + slot[r.body_b]] = 1;
-        scratch.mask[slot[r.body_b] * nb + slot[r.body_a]] = 1;
-      }
-    }
-    for (int i = 0; i < nb; ++i) {
-      for (int j = 0; j < nb; ++j) {
-        if (scratch.mask[i * nb + j]) H.block<6, 6>(6 * i, 6 * j).setZero();
-      }
-    }
-    for (std::size_t k = 0; k < bodies.size(); ++k) {
-      const int i = bodies[k];
-      const BodyModel& bm = model.bodies[i];
-      const BodyState& s = data.bodies[i];
-      const int o = 6 * static_cast<int>(k);
-      const Mat3 I = WorldInertia(bm, s);
-      H.block<3, 3>(o, o).diagonal().setConstant(bm.mass_kg);
-      H.block<3, 3>(o + 3, o + 3) = I;
-      x.segment<3>(o) = bm.mass_kg * scratch.v0[k] + h * force_W[i];
-      x.segment<3>(o + 3) = I * scratch.w0[k] + h * torque_W[i];
-    }
-    // per contact: its normal row and the tangential rows after it share the points, so
-    // sum_r c_r J_r^T J_r = J^T C J with C = sum_r c_r d_r d_r^T (3 x 3) and J = [I, -[r]x]:
-    // J_a^T C J_b = [[C, -C R_b], [R_a C, -R_a C R_b]] with R = [r]x, a few 3 x 3 products
-    // instead of one 6 x 6 outer product per row and body pair
-    for (std::size_t i = 0; i < rows.size();) {
-      std::size_t end = i + 1;
-      while (end < rows.size() && rows[end].normal_row == static_cast<int>(i)) ++end;
-      Mat3 C = Mat3::Zero();
-      Vec3 f = Vec3::Zero();
-      for (std::size_t k = i; k < end; ++k) {
-        const ImplicitRow& r = rows[k];
-        if (!r.active) continue;
-        C.noalias() += (h * r.c_Ns_per_m) * r.d_W * r.d_W.transpose();
-        f += (h * r.phi_N) * r.d_W;
-      }
-      const ImplicitRow& r = rows[i];
-      i = end;
-      if (f.isZero(0.0) && C.isZero(0.0)) continue;
-      const int sa = r.body_a >= 0 ? 6 * slot[r.body_a] : -1;
-      const int sb = r.body_b >= 0 ? 6 * slot[r.body_b] : -1;
-      const Mat3 Ra = Skew(r.r_a_W), Rb = Skew(r.r_b_W);
-      const Mat3 CRb = C * Rb, RaC = Ra * C;
-      if (sa >= 0) {
-        const Mat3 CRa = C * Ra;
-        H.block<3, 3>(sa, sa) += C;
-        H.block<3, 3>(sa, sa + 3) -= CRa;
-        H.block<3, 3>(sa + 3, sa) += RaC;
-        H.block<3, 3>(sa + 3, sa + 3).noalias() -= Ra * CRa;
-        x.segment<3>(sa) += f;
-        x.segment<3>(sa + 3) += Ra * f;  // r_a x f
-      }
-      if (sb >= 0) {
-        const Mat3 RbC = Rb * C;
-        H.block<3, 3>(sb, sb) += C;
-        H.block<3, 3>(sb, sb + 3) -= CRb;
-        H.block<3, 3>(sb + 3, sb) += RbC;
-        H.block<3, 3>(sb + 3, sb + 3).noalias() -= Rb * CRb;
-        x.segment<3>(sb) -= f;
-        x.segment<3>(sb + 3) -= Rb * f;
-      }
-      if (sa >= 0 && sb >= 0) {
-        // J_a^T C (-J_b) and its transpose
-        H.block<3, 3>(sa, sb) -= C;
-        H.block<3, 3>(sa, sb + 3) += CRb;
-        H.block<3, 3>(sa + 3, sb) -= RaC;
-        H.block<3, 3>(sa + 3, sb + 3).noalias() += Ra * CRb;
-        H.block<6, 6>(sb, sa) = H.block<6, 6>(sa, sb).transpose();
-      }
-    }
-    if (!BlockCholeskySolve(H, x, nb, scratch.mask) || !x.allFinite()) return false;
-    // write the candidate velocities, then check that no normal row pulls
-    for (std::size_t k = 0; k < bodies.size(); ++k) {
-      BodyState& s = data.bodies[bodies[k]];
-      s.v_W = x.segment<3>(6 * k);
-      s.w_W = x.segment<3>(6 * k + 3);
-    }
+    if (!FactorAndSolve(s, nb)) return false;
     bool pulled = false;
-    for (ImplicitRow& r : rows) {
-      if (!r.active || r.normal_row >= 0) continue;
-      if (r.phi_N - r.c_Ns_per_m * RowVelocity(data, r) < 0.0) {
-        r.active = false;
+    for (int k = 0; k < nc; ++k) {
+      ImplicitContact& c = contacts[k];
+      c.normal_force_N = 0.0;
+      c.friction_force_W.setZero();
+      if (!c.active) continue;
+      // relative velocity of the points at the new velocities
+      Vec3 u = Vec3::Zero();
+      if (c.body_a >= 0) {
+        const Vec6& v = s.x[s.pos[slot[c.body_a]]];
+        u += v.head<3>() + v.tail<3>().cross(c.r_a_W);
+      }
+      if (c.body_b >= 0) {
+        const Vec6& v = s.x[s.pos[slot[c.body_b]]];
+        u -= v.head<3>() + v.tail<3>().cross(c.r_b_W);
+      }
+      c.normal_force_N = c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W);
+      if (c.stick) {
+        c.friction_force_W = (c.phi_t1_N - c.c_t_Ns_per_m * u.dot(c.t1_W)) * c.t1_W +
+                             (c.phi_t2_N - c.c_t_Ns_per_m * u.dot(c.t2_W)) * c.t2_W;
+      }
+      if (pass + 1 < kMaxPasses && c.normal_force_N < 0.0) {
+        // a contact that stops pushing has no friction either: take it out and solve again
+        AssemblePatch(s, slot, contacts, k, k + 1, h, -1.0, nb);
+        c.active = false;
+        c.normal_force_N = 0.0;
+        c.friction_force_W.setZero();
         pulled = true;
       }
     }
-    if (!pulled) return true;
-    // a contact that stops pushing has no friction either; solve again without them
-    for (ImplicitRow& r : rows) {
-      if (r.normal_row >= 0 && !rows[r.normal_row].active) r.active = false;
-    }
+    if (!pulled) break;
   }
-  return true;  // the last pass's velocities stand; rows still pulling are reported as zero
+  for (int k = 0; k < nb; ++k) {
+    BodyState& st = data.bodies[bodies[k]];
+    const Vec6& v = s.x[s.pos[k]];
+    st.v_W = v.head<3>();
+    st.w_W = v.tail<3>();
+  }
+  return true;
 }
 
 }  // namespace rigidtouch::dynamics

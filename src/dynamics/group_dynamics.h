@@ -4,6 +4,13 @@
 // contacts are linearly implicit (backward Euler): a row with force phi - c (J v+) gives
 //   (M + h sum c J^T J) v+ = M v + h F + h sum phi J^T,
 // so a stack of 0.1 kg boxes can use a stiffness of 2e5 N/m at h = 1 ms without going unstable.
+//
+// Each contact is a normal row and, while it sticks, two tangential rows; the contacts of one
+// face-face manifold share their blocks' assembly (AssemblePatch). The system is solved by a
+// sparse Cholesky factorisation over 6 x 6 body blocks: only bodies
+// that share a contact couple, the bodies are eliminated in minimum-degree order (a column of
+// boxes is a chain and factors without fill-in; a leaning pile is a 3-D lattice where the order
+// keeps the fill small), and the kernels are fixed-size 6 x 6 loops that never allocate.
 #pragma once
 
 #include <Eigen/Core>
@@ -15,38 +22,57 @@
 
 namespace rigidtouch::dynamics {
 
-/// A force row of the implicit solve: force phi - c (J v+) along `d_W`, acting +d on a, -d on b.
-struct ImplicitRow {
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+/// One scene contact of the implicit solve, at a point with offsets r_a, r_b from the two
+/// centres of mass, along the unit normal n (from b towards a). Its normal force is
+/// phi_n - c_n u_n at the new relative velocity u_n; while it sticks, its tangential forces along
+/// t1, t2 (an orthonormal basis of the tangent plane) are phi_t - c_t u_t. Forces act +on a, -on b.
+struct ImplicitContact {
   int body_a = -1, body_b = -1;  // Model::bodies indices, -1 static
-  Vec3 d_W = Vec3::UnitZ();      // unit direction
-  Vec3 r_a_W = Vec3::Zero();     // application point from a's / b's centre of mass
-  Vec3 r_b_W = Vec3::Zero();
-  double phi_N = 0.0;       // force independent of the new velocity
-  double c_Ns_per_m = 0.0;  // h k + b: force per unit of new relative velocity along d
-  int contact = -1;         // index in data.contacts
-  int normal_row = -1;      // for a tangential row, index of its contact's normal row
-  bool active = true;
+  Vec3 n_W = Vec3::UnitZ();
+  Vec3 r_a_W = Vec3::Zero(), r_b_W = Vec3::Zero();
+  double phi_n_N = 0.0;       // normal force independent of the new velocity
+  double c_n_Ns_per_m = 0.0;  // h k + b: normal force per unit of new approach velocity
+  bool stick = false;         // tangential rows present
+  Vec3 t1_W = Vec3::UnitX(), t2_W = Vec3::UnitY();
+  double phi_t1_N = 0.0, phi_t2_N = 0.0;
+  double c_t_Ns_per_m = 0.0;
+  int contact = -1;    // index in data.contacts
+  bool active = true;  // false once dropped for pulling
+  // output at the solved velocities (zero for a dropped contact): the normal force (negative only
+  // if it still pulls after the last pass) and the tangential force on a
+  double normal_force_N = 0.0;
+  Vec3 friction_force_W = Vec3::Zero();
 };
 
-/// Dense scratch for one group's solve, sized for the largest allowed group.
+/// Scratch for one group's solve, sized once for the largest allowed group; reused every tick.
 struct GroupSolverScratch {
-  Eigen::MatrixXd H;         // (6 nb x 6 nb) system matrix
-  Eigen::VectorXd x;         // (6 nb) right-hand side, then the new velocities
-  std::vector<Vec3> v0, w0;  // (nb) start-of-step velocities, kept across passes
-  std::vector<char> mask;    // (nb x nb) non-zero 6 x 6 blocks of H, with fill-in
-  void Reserve(int max_group_bodies);
+  int max_bodies = 0, max_contacts = 0, max_blocks = 0;
+  // per body, by elimination position: assembled diagonal block, its factor, 1 / diag(L), the
+  // right-hand side and then the solution
+  std::vector<Mat6> diag_A, diag_L;
+  std::vector<Vec6> diag_inv, b, x;
+  std::vector<int> order, pos;  // position -> group slot; group slot -> position
+  // the factor's below-diagonal blocks, column by column (CSR over positions): rows ascending
+  std::vector<int> col_start, col_row;
+  std::vector<Mat6> off_A, off_L;  // (max_blocks) assembled and factored off-diagonal blocks
+  std::vector<int> block;          // (max_bodies^2) block index of (i, j), i > j positions; -1
+  std::vector<char> adj;           // (max_bodies^2) elimination graph over group slots
+  std::vector<int> degree;
+  std::vector<char> eliminated;
+  void Reserve(int max_group_bodies, int max_contacts);
 };
-
-/// Relative velocity along d of a row's points, (v_a + w_a x r_a) - (v_b + w_b x r_b).
-double RowVelocity(const Data& data, const ImplicitRow& row);
 
 /// Solves the new velocities of the group's bodies, in place in data.bodies. `force_W` and
 /// `torque_W` hold each body's explicit force (gravity, user, gyroscopic, explicit contacts).
-/// Normal rows that would pull after the solve are dropped and the solve repeated (at most a few
-/// times), so the penalty never pulls. Returns false if the factorisation failed (then nothing
-/// is written).
+/// Contacts whose normal force would pull after the solve are dropped (friction included) and
+/// the solve repeated (at most a few times), so the penalty never pulls. Each contact's forces at
+/// the new velocities are left in it. Returns false if the group exceeds the scratch's capacity
+/// or the factorisation failed (then nothing is written).
 bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
-                          std::span<const int> slot, std::span<ImplicitRow> rows,
+                          std::span<const int> slot, std::span<ImplicitContact> contacts,
                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
                           GroupSolverScratch& scratch);
 

@@ -52,8 +52,8 @@ Data MakeData(const Model& model) {
   ws.anchor_displacement.resize(ncap);
   ws.force_W.resize(nbody);
   ws.torque_W.resize(nbody);
-  ws.rows.resize(3 * ncap);
-  ws.group_solver.Reserve(model.max_group_bodies);
+  ws.implicit.resize(ncap);
+  ws.group_solver.Reserve(model.max_group_bodies, ncap);
   ws.solver_bodies.resize(nbody);
   ws.solver_rows.resize(ncap);
   ws.impulses.resize(ncap);

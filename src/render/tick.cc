@@ -106,51 +106,55 @@ void ExplicitContact(Data& data, Workspace& ws, int ci) {
   Accumulate(ws, c, fn * c.n_W + ft, r_a, r_b);
 }
 
-// the rows of one scene contact for the implicit solve; slipping friction stays explicit
-int ImplicitContactRows(const Model& model, Data& data, Workspace& ws, int ci, int nrow) {
+// one scene contact for the implicit solve (false: not penetrating, nothing to solve); slipping
+// friction stays explicit
+bool ImplicitContactFor(const Model& model, Data& data, Workspace& ws, int ci,
+                        dynamics::ImplicitContact& ic) {
   Contact& c = data.contacts[ci];
   const contact::PenaltyLaw& law = ws.laws[ci];
   const double h = model.timestep_s;
-  Vec3 r_a, r_b;
-  Offsets(data, c, &r_a, &r_b);
-  // backward Euler: depth after the step is d - h u_n+, so the force is k d - (h k + b) u_n+;
-  // every penetrating point enters the solve, and SolveGroupVelocities drops the rows that would
-  // pull at the new velocities (a trial on the old velocities would react to velocity noise)
-  const double c_n = h * law.k_N_per_m + law.b_Ns_per_m;
   c.normal_force_N = 0.0;
   c.friction_force_W.setZero();
   if (!(c.depth_m > 0.0)) {
     c.anchor_A = c.p_A;
     c.anchor_B = c.p_B;
     c.sticking = false;
-    return nrow;
+    return false;
   }
-  const int normal = nrow;
-  dynamics::ImplicitRow& rn = ws.rows[nrow++];
-  rn = dynamics::ImplicitRow{c.body_a, c.body_b, c.n_W, r_a, r_b, law.k_N_per_m * c.depth_m,
-                             c_n,      ci,       -1,    true};
+  Vec3 r_a, r_b;
+  Offsets(data, c, &r_a, &r_b);
+  // backward Euler: depth after the step is d - h u_n+, so the force is k d - (h k + b) u_n+;
+  // every penetrating point enters the solve, and SolveGroupVelocities drops the contacts that
+  // would pull at the new velocities (a trial on the old velocities would react to velocity noise)
+  ic = dynamics::ImplicitContact{};
+  ic.body_a = c.body_a;
+  ic.body_b = c.body_b;
+  ic.n_W = c.n_W;
+  ic.r_a_W = r_a;
+  ic.r_b_W = r_b;
+  ic.phi_n_N = law.k_N_per_m * c.depth_m;
+  ic.c_n_Ns_per_m = h * law.k_N_per_m + law.b_Ns_per_m;
+  ic.contact = ci;
   // stick or slip was decided for the whole geom pair (DecidePatchFriction)
   const Vec3 s = ws.anchor_displacement[ci];  // computed by DecidePatchFriction this tick
-  const double fn_spring = law.k_N_per_m * c.depth_m;
   if (c.sticking) {
-    // two tangential rows along an orthonormal basis of the tangent plane
-    const double c_t = h * law.kt_N_per_m + law.bt_Ns_per_m;
-    const Vec3 t1 = c.n_W.unitOrthogonal();
-    const Vec3 t2 = c.n_W.cross(t1);
-    for (const Vec3& t : {t1, t2}) {
-      ws.rows[nrow++] = dynamics::ImplicitRow{
-          c.body_a, c.body_b, t, r_a, r_b, -law.kt_N_per_m * s.dot(t), c_t, ci, normal, true};
-    }
+    // tangential rows along an orthonormal basis of the tangent plane
+    ic.stick = true;
+    ic.t1_W = c.n_W.unitOrthogonal();
+    ic.t2_W = c.n_W.cross(ic.t1_W);
+    ic.phi_t1_N = -law.kt_N_per_m * s.dot(ic.t1_W);
+    ic.phi_t2_N = -law.kt_N_per_m * s.dot(ic.t2_W);
+    ic.c_t_Ns_per_m = h * law.kt_N_per_m + law.bt_Ns_per_m;
   } else {
     // kinetic friction opposes the stretch of the anchor, which trails the sliding contact
     const double stretch = s.norm();
     const Vec3 ft =
-        stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * fn_spring / stretch)) : Vec3::Zero();
+        stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * ic.phi_n_N / stretch)) : Vec3::Zero();
     SlideAnchor(data, c, s, ft, law.kt_N_per_m);
     c.friction_force_W = ft;
     Accumulate(ws, c, ft, r_a, r_b);
   }
-  return nrow;
+  return true;
 }
 
 // stick or slip per geom pair, from the anchor springs alone: the points of one face are one
@@ -398,32 +402,29 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   for (int g = 0; g < G.ngroup; ++g) {
     const int nb = G.body_start[g + 1] - G.body_start[g];
     const std::span<const int> bodies(G.bodies.data() + G.body_start[g], nb);
-    int nrow = 0;
+    int nimplicit = 0;
     if (nb <= model.max_group_bodies) {
       for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
-        if (ws.laws[G.contacts[k]].implicit) {
-          nrow = ImplicitContactRows(model, data, ws, G.contacts[k], nrow);
+        const int ci = G.contacts[k];
+        if (ws.laws[ci].implicit &&
+            ImplicitContactFor(model, data, ws, ci, ws.implicit[nimplicit])) {
+          ++nimplicit;
         }
       }
     } else {
       Warn(data, Warning::kGroupTooLarge);
     }
     bool solved = false;
-    if (nrow > 0) {
-      const std::span<dynamics::ImplicitRow> rows(ws.rows.data(), nrow);
-      solved = dynamics::SolveGroupVelocities(model, data, bodies, G.slot, rows, ws.force_W,
+    if (nimplicit > 0) {
+      const std::span<dynamics::ImplicitContact> implicit(ws.implicit.data(), nimplicit);
+      solved = dynamics::SolveGroupVelocities(model, data, bodies, G.slot, implicit, ws.force_W,
                                               ws.torque_W, ws.group_solver);
       if (solved) {
         // report the implicit forces at the new velocities
-        for (const dynamics::ImplicitRow& r : rows) {
-          if (!r.active) continue;
-          const double f = r.phi_N - r.c_Ns_per_m * dynamics::RowVelocity(data, r);
-          Contact& c = data.contacts[r.contact];
-          if (r.normal_row < 0) {
-            c.normal_force_N = std::max(0.0, f);
-          } else {
-            c.friction_force_W += f * r.d_W;
-          }
+        for (const dynamics::ImplicitContact& ic : implicit) {
+          Contact& c = data.contacts[ic.contact];
+          c.normal_force_N = std::max(0.0, ic.normal_force_N);
+          c.friction_force_W += ic.friction_force_W;
         }
       } else {
         Warn(data, Warning::kSolverFailed);

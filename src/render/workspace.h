@@ -16,11 +16,11 @@ namespace rigidtouch {
 struct Workspace {
   geometry::CollisionScratch collision;  // broad and narrow phase scratch
   contact::Groups groups;
-  std::vector<contact::PenaltyLaw> laws;    // (max_contacts)
-  std::vector<Vec3> anchor_displacement;    // (max_contacts) stick-anchor stretch
-  std::vector<double> normal_velocity;      // (max_contacts) relative normal velocity
-  std::vector<Vec3> force_W, torque_W;      // (nbody) explicit force and torque this tick
-  std::vector<dynamics::ImplicitRow> rows;  // (3 max_contacts) implicit rows of one group
+  std::vector<contact::PenaltyLaw> laws;            // (max_contacts)
+  std::vector<Vec3> anchor_displacement;            // (max_contacts) stick-anchor stretch
+  std::vector<double> normal_velocity;              // (max_contacts) relative normal velocity
+  std::vector<Vec3> force_W, torque_W;              // (nbody) explicit force and torque this tick
+  std::vector<dynamics::ImplicitContact> implicit;  // (max_contacts) implicit contacts of a group
   dynamics::GroupSolverScratch group_solver;
   std::vector<contact::SolverBody> solver_bodies;  // (max_group_bodies)
   std::vector<contact::SolverRow> solver_rows;     // (max_contacts)
