@@ -119,28 +119,45 @@ bool Analyse(GroupSolverScratch& s, std::span<const int> slot,
 
 // --- assembly ---
 
-Mat3 Skew(const Vec3& r) {  // [r]x
-  Mat3 m;
-  m << 0.0, -r.z(), r.y(), r.z(), 0.0, -r.x(), -r.y(), r.x(), 0.0;
-  return m;
-}
-
 // A += sum_points J_p^T C J_q for the point Jacobians J_r = [I, -[r]x] and one 3 x 3
 // C = ct I + dc n n^T (ct = c_t for a sticking contact, t1 t1^T + t2 t2^T = I - n n^T; dc =
 // c_n - ct), from the points' moments P = sum p, Q = sum q, S = sum p q^T:
 //   [[count C, -C [Q]x], [[P]x C, ct ((tr S) I - S^T) + dc [n]x S [n]x^T]]
+// with C [Q]x = ct [Q]x + dc n (n x Q)^T and [P]x C = ct [P]x + dc (P x n) n^T
 // (-[p]x [q]x = (p.q) I - q p^T and -[p]x n n^T [q]x = [n]x p q^T [n]x^T), so a manifold of k
 // points costs k small outer products and one block update instead of 3 k rank-1 updates.
-void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, const Mat3& C,
-                   const Vec3& P, const Vec3& Q, const Mat3& S) {
-  A.topLeftCorner<3, 3>() += count * C;
-  A.topRightCorner<3, 3>().noalias() -= C * Skew(Q);
-  A.bottomLeftCorner<3, 3>().noalias() += Skew(P) * C;
-  Mat3 br = -ct * S.transpose();
-  br.diagonal().array() += ct * S.trace();
-  const Mat3 N = Skew(n);
-  br.noalias() += dc * (N * S * N.transpose());
-  A.bottomRightCorner<3, 3>() += br;
+void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, const Vec3& P,
+                   const Vec3& Q, const Mat3& S) {
+  const Vec3 nxQ = dc * n.cross(Q), Pxn = dc * P.cross(n), cn = count * dc * n;
+  // [n]x S [n]x^T = -[n]x S [n]x: columns of [n]x S are n x S_j; then rows against [n]x^T
+  Mat3 NS;
+  for (int j = 0; j < 3; ++j) NS.col(j) = n.cross(S.col(j));
+  Mat3 NSN;
+  for (int i = 0; i < 3; ++i) NSN.row(i) = n.cross(Vec3(NS.row(i).transpose())).transpose();
+  const double tr = ct * S.trace();
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      A(i, j) += cn(i) * n(j);
+      A(i, 3 + j) -= n(i) * nxQ(j);
+      A(3 + i, j) += Pxn(i) * n(j);
+      A(3 + i, 3 + j) += dc * NSN(i, j) - ct * S(j, i);
+    }
+    A(j, j) += count * ct;
+    A(3 + j, 3 + j) += tr;
+  }
+  // the ct [Q]x and ct [P]x terms
+  A(0, 4) += ct * Q.z();
+  A(0, 5) -= ct * Q.y();
+  A(1, 3) -= ct * Q.z();
+  A(1, 5) += ct * Q.x();
+  A(2, 3) += ct * Q.y();
+  A(2, 4) -= ct * Q.x();
+  A(3, 1) -= ct * P.z();
+  A(3, 2) += ct * P.y();
+  A(4, 0) += ct * P.z();
+  A(4, 2) -= ct * P.x();
+  A(5, 0) -= ct * P.y();
+  A(5, 1) += ct * P.x();
 }
 
 // true if contacts i and j share their blocks' assembly: same bodies, normal and coefficients
@@ -165,31 +182,36 @@ void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
     Vec3 f = c.phi_n_N * c.n_W;
     if (c.stick) f += c.phi_t1_N * c.t1_W + c.phi_t2_N * c.t2_W;
     f *= sign * h;
-    if (pa >= 0) s.b[pa] += (Vec6() << f, c.r_a_W.cross(f)).finished();
-    if (pb >= 0) s.b[pb] -= (Vec6() << f, c.r_b_W.cross(f)).finished();
-    Pa += c.r_a_W;
-    Pb += c.r_b_W;
-    Saa.noalias() += c.r_a_W * c.r_a_W.transpose();
-    Sbb.noalias() += c.r_b_W * c.r_b_W.transpose();
-    Sab.noalias() += c.r_a_W * c.r_b_W.transpose();
+    if (pa >= 0) {
+      s.b[pa].head<3>() += f;
+      s.b[pa].tail<3>() += c.r_a_W.cross(f);
+      Pa += c.r_a_W;
+      Saa.noalias() += c.r_a_W * c.r_a_W.transpose();
+    }
+    if (pb >= 0) {
+      s.b[pb].head<3>() -= f;
+      s.b[pb].tail<3>() -= c.r_b_W.cross(f);
+      Pb += c.r_b_W;
+      Sbb.noalias() += c.r_b_W * c.r_b_W.transpose();
+      if (pa >= 0) Sab.noalias() += c.r_a_W * c.r_b_W.transpose();
+    }
   }
   const int count = end - begin;
   const Vec3& n = first.n_W;
   const double ct = first.stick ? sign * h * first.c_t_Ns_per_m : 0.0;
   const double dc = sign * h * first.c_n_Ns_per_m - ct;
-  const Mat3 C = ct * Mat3::Identity() + dc * n * n.transpose();
-  if (pa >= 0) AddPatchBlock(s.diag_A[pa], count, ct, dc, n, C, Pa, Pa, Saa);
-  if (pb >= 0) AddPatchBlock(s.diag_A[pb], count, ct, dc, n, C, Pb, Pb, Sbb);
+  if (pa >= 0) AddPatchBlock(s.diag_A[pa], count, ct, dc, n, Pa, Pa, Saa);
+  if (pb >= 0) AddPatchBlock(s.diag_A[pb], count, ct, dc, n, Pb, Pb, Sbb);
   // the coupling H_ab = -h sum J_a^T C J_b; only the lower block (larger position first) is
   // stored. Both points on one body: J = J_a - J_b adds both couplings to the diagonal.
   if (pa >= 0 && pa == pb) {
-    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, -C, Pa, Pb, Sab);
-    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, -C, Pb, Pa, Sab.transpose());
+    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pa, Pb, Sab);
+    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pb, Pa, Sab.transpose());
   } else if (pb >= 0 && pa > pb) {
-    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc, n, -C,
+    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc, n,
                   Pa, Pb, Sab);
   } else if (pa >= 0 && pb > pa) {
-    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc, n, -C,
+    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc, n,
                   Pb, Pa, Sab.transpose());
   }
 }

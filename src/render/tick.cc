@@ -25,16 +25,15 @@ bool Finite(const DeviceState& s) {
          s.angular_velocity_radps.allFinite() && s.orientation.coeffs().allFinite();
 }
 
-Vec3 WorldPoint(const Data& data, int body, const Vec3& p_local) {
+// body frames are fixed until stage 7: each body's rotation matrix is computed once per tick
+Vec3 WorldPoint(const Data& data, const Workspace& ws, int body, const Vec3& p_local) {
   if (body < 0) return p_local;
-  const BodyState& s = data.bodies[body];
-  return s.x_W + s.q_WB * p_local;
+  return data.bodies[body].x_W + ws.R_WB[body] * p_local;
 }
 
-Vec3 LocalPoint(const Data& data, int body, const Vec3& p_W) {
+Vec3 LocalPoint(const Data& data, const Workspace& ws, int body, const Vec3& p_W) {
   if (body < 0) return p_W;
-  const BodyState& s = data.bodies[body];
-  return s.q_WB.conjugate() * (p_W - s.x_W);
+  return ws.R_WB[body].transpose() * (p_W - data.bodies[body].x_W);
 }
 
 // contact point offsets from the two centres of mass
@@ -51,17 +50,19 @@ Vec3 RelativeVelocity(const Data& data, const Contact& c, const Vec3& r_a, const
 }
 
 // tangential displacement of the stick anchor (a's anchor relative to b's, tangent plane)
-Vec3 AnchorDisplacement(const Data& data, const Contact& c) {
-  const Vec3 d = WorldPoint(data, c.body_a, c.anchor_A) - WorldPoint(data, c.body_b, c.anchor_B);
+Vec3 AnchorDisplacement(const Data& data, const Workspace& ws, const Contact& c) {
+  const Vec3 d =
+      WorldPoint(data, ws, c.body_a, c.anchor_A) - WorldPoint(data, ws, c.body_b, c.anchor_B);
   return d - d.dot(c.n_W) * c.n_W;
 }
 
 // moves b's anchor so the anchor spring alone would exert `f_t` on a (the slip limit)
-void SlideAnchor(Data& data, Contact& c, const Vec3& s, const Vec3& f_t, double kt) {
+void SlideAnchor(const Data& data, const Workspace& ws, Contact& c, const Vec3& s, const Vec3& f_t,
+                 double kt) {
   if (kt <= 0.0) return;
   const Vec3 s_target = -f_t / kt;
-  const Vec3 pb = WorldPoint(data, c.body_b, c.anchor_B) + (s - s_target);
-  c.anchor_B = LocalPoint(data, c.body_b, pb);
+  const Vec3 pb = WorldPoint(data, ws, c.body_b, c.anchor_B) + (s - s_target);
+  c.anchor_B = LocalPoint(data, ws, c.body_b, pb);
 }
 
 void Accumulate(Workspace& ws, const Contact& c, const Vec3& f_on_a, const Vec3& r_a,
@@ -81,20 +82,20 @@ void Accumulate(Workspace& ws, const Contact& c, const Vec3& f_on_a, const Vec3&
 void ExplicitContact(Data& data, Workspace& ws, int ci) {
   Contact& c = data.contacts[ci];
   const contact::PenaltyLaw& law = ws.laws[ci];
-  Vec3 r_a, r_b;
-  Offsets(data, c, &r_a, &r_b);
+  const Vec3& r_a = ws.r_a[ci];
+  const Vec3& r_b = ws.r_b[ci];
   const Vec3 u = RelativeVelocity(data, c, r_a, r_b);
   const double un = u.dot(c.n_W);
   const double fn = contact::NormalForce(law, c.depth_m, un);
   Vec3 ft = Vec3::Zero();
   if (fn > 0.0) {
-    const Vec3 s = AnchorDisplacement(data, c);
+    const Vec3 s = AnchorDisplacement(data, ws, c);
     const Vec3 ut = u - un * c.n_W;
     ft = -law.kt_N_per_m * s - law.bt_Ns_per_m * ut;
     c.sticking = ft.norm() <= law.mu_static * fn;
     if (!c.sticking) {
       ft *= law.mu_kinetic * fn / ft.norm();
-      SlideAnchor(data, c, s, ft, law.kt_N_per_m);
+      SlideAnchor(data, ws, c, s, ft, law.kt_N_per_m);
     }
   } else {
     c.anchor_A = c.p_A;  // no load: the anchor follows the contact point
@@ -121,8 +122,8 @@ bool ImplicitContactFor(const Model& model, Data& data, Workspace& ws, int ci,
     c.sticking = false;
     return false;
   }
-  Vec3 r_a, r_b;
-  Offsets(data, c, &r_a, &r_b);
+  const Vec3& r_a = ws.r_a[ci];
+  const Vec3& r_b = ws.r_b[ci];
   // backward Euler: depth after the step is d - h u_n+, so the force is k d - (h k + b) u_n+;
   // every penetrating point enters the solve, and SolveGroupVelocities drops the contacts that
   // would pull at the new velocities (a trial on the old velocities would react to velocity noise)
@@ -150,7 +151,7 @@ bool ImplicitContactFor(const Model& model, Data& data, Workspace& ws, int ci,
     const double stretch = s.norm();
     const Vec3 ft =
         stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * ic.phi_n_N / stretch)) : Vec3::Zero();
-    SlideAnchor(data, c, s, ft, law.kt_N_per_m);
+    SlideAnchor(data, ws, c, s, ft, law.kt_N_per_m);
     c.friction_force_W = ft;
     Accumulate(ws, c, ft, r_a, r_b);
   }
@@ -174,7 +175,7 @@ void DecidePatchFriction(Data& data, Workspace& ws) {
       for (int ci = begin; ci < end; ++ci) {
         const Contact& c = data.contacts[ci];
         fn += ws.laws[ci].k_N_per_m * c.depth_m;
-        ws.anchor_displacement[ci] = AnchorDisplacement(data, c);
+        ws.anchor_displacement[ci] = AnchorDisplacement(data, ws, c);
         ft += ws.laws[ci].kt_N_per_m * ws.anchor_displacement[ci].norm();
       }
       const bool stick = ft <= ws.laws[begin].mu_static * fn;
@@ -237,12 +238,14 @@ void GroupImpulse(const Model& model, Data& data, Workspace& ws, int g, WindowSt
   }
   bool tool = false;
   for (int k = 0; k < nc; ++k) {
-    const Contact& c = data.contacts[G.contacts[G.contact_start[g] + k]];
+    const int ci = G.contacts[G.contact_start[g] + k];
+    const Contact& c = data.contacts[ci];
     contact::SolverRow& row = ws.solver_rows[k];
     row.body_a = c.body_a >= 0 ? G.slot[c.body_a] : -1;
     row.body_b = c.body_b >= 0 ? G.slot[c.body_b] : -1;
     row.n_W = c.n_W;
-    Offsets(data, c, &row.r_a_W, &row.r_b_W);
+    row.r_a_W = ws.r_a[ci];
+    row.r_b_W = ws.r_b[ci];
     tool = tool || c.body_a == model.tool || c.body_b == model.tool;
   }
   const std::span<contact::SolverBody> bodies(ws.solver_bodies.data(), nb);
@@ -359,11 +362,11 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
 
   // 3. phases and groups
   contact::BuildGroups(data, ws.groups);
+  for (int i = 0; i < nbody; ++i) ws.R_WB[i] = data.bodies[i].q_WB.toRotationMatrix();
   for (int ci = 0; ci < data.ncontact; ++ci) {
     Contact& c = data.contacts[ci];
-    Vec3 r_a, r_b;
-    Offsets(data, c, &r_a, &r_b);
-    ws.normal_velocity[ci] = RelativeVelocity(data, c, r_a, r_b).dot(c.n_W);
+    Offsets(data, c, &ws.r_a[ci], &ws.r_b[ci]);
+    ws.normal_velocity[ci] = RelativeVelocity(data, c, ws.r_a[ci], ws.r_b[ci]).dot(c.n_W);
     ws.laws[ci] = contact::LawFor(model, c);
   }
   DecidePatchFriction(data, ws);
