@@ -17,7 +17,34 @@ std::string Millimetres(double metres) {
   return out.str();
 }
 
+// `iterations` dependent multiply-adds; the volatile seed keeps the compiler from folding it
+std::int64_t TimedKernel(long iterations) {
+  static volatile double seed = 1.0;
+  const auto start = Clock::now();
+  double y = seed;
+  for (long k = 0; k < iterations; ++k) y = y * 1.0000001 + 1e-9;
+  seed = y;
+  const auto stop = Clock::now();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(stop - start).count();
+}
+
 }  // namespace
+
+TimeSummary ConstantWorkProbe(double target_ns, int samples) {
+  // calibrate: the median of 201 runs of a trial length, scaled to the target (twice, so the
+  // clock's own cost and the loop's start-up are folded in)
+  long iterations = 1000;
+  for (int round = 0; round < 2; ++round) {
+    std::vector<std::int64_t> trial(201);
+    for (std::int64_t& t : trial) t = TimedKernel(iterations);
+    const double median = Summarize(trial).median_ns;
+    iterations = std::max(
+        1L, std::lround(static_cast<double>(iterations) * target_ns / std::max(median, 1.0)));
+  }
+  std::vector<std::int64_t> durations(static_cast<std::size_t>(std::max(samples, 1)));
+  for (std::int64_t& t : durations) t = TimedKernel(iterations);
+  return Summarize(durations);
+}
 
 double StrikeStartHeight(const Vec3& position_m, const Quat& orientation, double half_size_m,
                          double gap_m, double radius_m) {

@@ -77,6 +77,12 @@ class SceneRun {
   int last_strike_steps_ = 0;
 };
 
+/// Times a constant-work arithmetic kernel (a dependent floating-point chain, no memory traffic)
+/// calibrated to take about `target_ns`, `samples` times, exactly as steps are timed: what the
+/// machine alone (preemption, interrupts, a virtual machine's steal) does to a step of that
+/// length. Its p99.9 / median is the floor under any engine's at that step time.
+TimeSummary ConstantWorkProbe(double target_ns, int samples);
+
 /// Returns the height (world z) at which to place the centre of a sphere of radius `radius_m`
 /// straight above the centre of a cube (half-size `half_size_m`, centre `position_m`, orientation
 /// `orientation`) so that the gap between the sphere and the cube's upward face, measured along

@@ -131,6 +131,18 @@ int main(int argc, char** argv) {
               << "' is registered yet: its column stays n/a)\n";
   }
   if (peers.size() >= 2) std::cout << "\n" << FormatRatioTable(results, peers[1], {peers[0]});
+  // the machine's own tail at each of the reference engine's step times
+  std::cout << "\nmachine noise floor: a constant-work kernel timed like a step, calibrated to "
+            << kReferenceEngine << "'s median, as many samples as the scene's steps\n";
+  std::printf("%-13s %-14s %-14s %-24s %-24s\n", "scene", "median_us", "kernel_us",
+              "kernel p99.9/median", "engine p99.9/median");
+  for (const RunResult& r : results) {
+    if (r.engine != kReferenceEngine || r.time.count == 0) continue;
+    const TimeSummary probe = ConstantWorkProbe(r.time.median_ns, static_cast<int>(r.time.count));
+    std::printf("%-13s %-14.1f %-14.1f %-24.1f %-24.1f\n", r.scene.c_str(), r.time.median_ns * 1e-3,
+                probe.median_ns * 1e-3, probe.p999_ns / probe.median_ns,
+                r.time.p999_ns / r.time.median_ns);
+  }
   std::cout << "\nconfiguration:\n";
   std::vector<std::string> printed;
   for (const RunResult& result : results) {
