@@ -10,20 +10,25 @@ namespace {
 
 constexpr int kMaxPasses = 4;
 
-// --- 6 x 6 kernels (column-major, fixed size: unrolled, no allocation) ---
+// --- 6 x 6 kernels (column-major, fixed size, unrolled: GCC leaves triangular loops rolled
+// otherwise, measured at twice the instructions; no allocation) ---
 
 // in-place lower Cholesky factor of a symmetric block (reads the lower triangle); inv gets
 // 1 / L(j, j). False unless positive definite.
 bool Cholesky6(Mat6& A, Vec6& inv) {
+#pragma GCC unroll 6
   for (int j = 0; j < 6; ++j) {
     double d = A(j, j);
+#pragma GCC unroll 6
     for (int m = 0; m < j; ++m) d -= A(j, m) * A(j, m);
     if (!(d > 0.0)) return false;
     const double l = std::sqrt(d);
     A(j, j) = l;
     inv(j) = 1.0 / l;
+#pragma GCC unroll 6
     for (int i = j + 1; i < 6; ++i) {
       double s = A(i, j);
+#pragma GCC unroll 6
       for (int m = 0; m < j; ++m) s -= A(i, m) * A(j, m);
       A(i, j) = s * inv(j);
     }
@@ -33,7 +38,9 @@ bool Cholesky6(Mat6& A, Vec6& inv) {
 
 // X <- X L^-T (L lower triangular): column c of X L^T = B is (B_c - sum_{m<c} X_m L(c,m)) / L(c,c)
 void SolveRightTransposed(const Mat6& L, const Vec6& inv, Mat6& X) {
+#pragma GCC unroll 6
   for (int c = 0; c < 6; ++c) {
+#pragma GCC unroll 6
     for (int m = 0; m < c; ++m) X.col(c) -= L(c, m) * X.col(m);
     X.col(c) *= inv(c);
   }
@@ -41,8 +48,10 @@ void SolveRightTransposed(const Mat6& L, const Vec6& inv, Mat6& X) {
 
 // y <- L^-1 y
 void ForwardSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
+#pragma GCC unroll 6
   for (int j = 0; j < 6; ++j) {
     double s = y(j);
+#pragma GCC unroll 6
     for (int m = 0; m < j; ++m) s -= L(j, m) * y(m);
     y(j) = s * inv(j);
   }
@@ -50,8 +59,10 @@ void ForwardSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
 
 // y <- L^-T y
 void BackSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
+#pragma GCC unroll 6
   for (int j = 5; j >= 0; --j) {
     double s = y(j);
+#pragma GCC unroll 6
     for (int m = j + 1; m < 6; ++m) s -= L(m, j) * y(m);
     y(j) = s * inv(j);
   }
@@ -208,11 +219,11 @@ void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
     AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pa, Pb, Sab);
     AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pb, Pa, Sab.transpose());
   } else if (pb >= 0 && pa > pb) {
-    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc, n,
-                  Pa, Pb, Sab);
+    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc, n, Pa,
+                  Pb, Sab);
   } else if (pa >= 0 && pb > pa) {
-    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc, n,
-                  Pb, Pa, Sab.transpose());
+    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc, n, Pb,
+                  Pa, Sab.transpose());
   }
 }
 
