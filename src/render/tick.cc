@@ -367,7 +367,11 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
     Contact& c = data.contacts[ci];
     Offsets(data, c, &ws.r_a[ci], &ws.r_b[ci]);
     ws.normal_velocity[ci] = RelativeVelocity(data, c, ws.r_a[ci], ws.r_b[ci]).dot(c.n_W);
-    ws.laws[ci] = contact::LawFor(model, c);
+    // one law per geom pair: its points are consecutive
+    const bool same_pair = ci > 0 && data.contacts[ci - 1].geom_a == c.geom_a &&
+                           data.contacts[ci - 1].geom_b == c.geom_b &&
+                           data.contacts[ci - 1].pair_points == c.pair_points;
+    ws.laws[ci] = same_pair ? ws.laws[ci - 1] : contact::LawFor(model, c);
   }
   DecidePatchFriction(data, ws);
   const contact::Groups& G = ws.groups;
