@@ -178,11 +178,11 @@ bool SamePatch(const ImplicitContact& i, const ImplicitContact& j) {
          (!i.stick || i.c_t_Ns_per_m == j.c_t_Ns_per_m);
 }
 
-// adds sign x contacts [begin, end) (one patch, all active) to the assembled system:
+// adds contacts [begin, end) (one patch, all active) to the assembled system:
 // h sum c J^T d d^T J to the blocks, h sum phi J^T d to the right-hand side
 void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
                    std::span<const ImplicitContact> contacts, int begin, int end, double h,
-                   double sign, int nb) {
+                   int nb) {
   const ImplicitContact& first = contacts[begin];
   const int pa = first.body_a >= 0 ? s.pos[slot[first.body_a]] : -1;
   const int pb = first.body_b >= 0 ? s.pos[slot[first.body_b]] : -1;
@@ -192,7 +192,7 @@ void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
     const ImplicitContact& c = contacts[k];
     Vec3 f = c.phi_n_N * c.n_W;
     if (c.stick) f += c.phi_t1_N * c.t1_W + c.phi_t2_N * c.t2_W;
-    f *= sign * h;
+    f *= h;
     if (pa >= 0) {
       s.b[pa].head<3>() += f;
       s.b[pa].tail<3>() += c.r_a_W.cross(f);
@@ -209,8 +209,8 @@ void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
   }
   const int count = end - begin;
   const Vec3& n = first.n_W;
-  const double ct = first.stick ? sign * h * first.c_t_Ns_per_m : 0.0;
-  const double dc = sign * h * first.c_n_Ns_per_m - ct;
+  const double ct = first.stick ? h * first.c_t_Ns_per_m : 0.0;
+  const double dc = h * first.c_n_Ns_per_m - ct;
   if (pa >= 0) AddPatchBlock(s.diag_A[pa], count, ct, dc, n, Pa, Pa, Saa);
   if (pb >= 0) AddPatchBlock(s.diag_A[pb], count, ct, dc, n, Pb, Pb, Sbb);
   // the coupling H_ab = -h sum J_a^T C J_b; only the lower block (larger position first) is
@@ -227,40 +227,37 @@ void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
   }
 }
 
-// factors the assembled blocks into diag_L / off_L (right-looking block Cholesky over the
-// analysed structure) and solves for x
+// factors the assembled blocks in place (right-looking block Cholesky over the analysed
+// structure) and solves for x
 bool FactorAndSolve(GroupSolverScratch& s, int nb) {
-  const int nnz = s.col_start[nb];
-  std::copy(s.diag_A.begin(), s.diag_A.begin() + nb, s.diag_L.begin());
-  std::copy(s.off_A.begin(), s.off_A.begin() + nnz, s.off_L.begin());
   for (int k = 0; k < nb; ++k) {
-    if (!Cholesky6(s.diag_L[k], s.diag_inv[k])) return false;
+    if (!Cholesky6(s.diag_A[k], s.diag_inv[k])) return false;
     const int begin = s.col_start[k], end = s.col_start[k + 1];
-    for (int e = begin; e < end; ++e) SolveRightTransposed(s.diag_L[k], s.diag_inv[k], s.off_L[e]);
+    for (int e = begin; e < end; ++e) SolveRightTransposed(s.diag_A[k], s.diag_inv[k], s.off_A[e]);
     // Schur complement: A_ij -= L_ik L_jk^T for every pair of rows i >= j of column k
     for (int e = begin; e < end; ++e) {
       const int i = s.col_row[e];
-      const Mat6& Lik = s.off_L[e];
-      s.diag_L[i].noalias() -= Lik * Lik.transpose();
+      const Mat6& Lik = s.off_A[e];
+      s.diag_A[i].noalias() -= Lik * Lik.transpose();
       for (int f = begin; f < e; ++f) {
         const int j = s.col_row[f];
-        s.off_L[s.block[static_cast<std::size_t>(i) * nb + j]].noalias() -=
-            Lik * s.off_L[f].transpose();
+        s.off_A[s.block[static_cast<std::size_t>(i) * nb + j]].noalias() -=
+            Lik * s.off_A[f].transpose();
       }
     }
   }
   std::copy(s.b.begin(), s.b.begin() + nb, s.x.begin());
   for (int k = 0; k < nb; ++k) {  // L y = b
-    ForwardSubstitute(s.diag_L[k], s.diag_inv[k], s.x[k]);
+    ForwardSubstitute(s.diag_A[k], s.diag_inv[k], s.x[k]);
     for (int e = s.col_start[k]; e < s.col_start[k + 1]; ++e) {
-      s.x[s.col_row[e]].noalias() -= s.off_L[e] * s.x[k];
+      s.x[s.col_row[e]].noalias() -= s.off_A[e] * s.x[k];
     }
   }
   for (int k = nb - 1; k >= 0; --k) {  // L^T x = y
     for (int e = s.col_start[k]; e < s.col_start[k + 1]; ++e) {
-      s.x[k].noalias() -= s.off_L[e].transpose() * s.x[s.col_row[e]];
+      s.x[k].noalias() -= s.off_A[e].transpose() * s.x[s.col_row[e]];
     }
-    BackSubstitute(s.diag_L[k], s.diag_inv[k], s.x[k]);
+    BackSubstitute(s.diag_A[k], s.diag_inv[k], s.x[k]);
   }
   for (int k = 0; k < nb; ++k) {
     if (!s.x[k].allFinite()) return false;
@@ -268,44 +265,15 @@ bool FactorAndSolve(GroupSolverScratch& s, int nb) {
   return true;
 }
 
-}  // namespace
-
-void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
-  max_bodies = max_group_bodies;
-  max_contacts = max_group_contacts;
-  // every pair of bodies could couple after fill-in, but a contact group is sparse: bound the
-  // factor's off-diagonal blocks by 32 per body
-  const long full = static_cast<long>(max_bodies) * (max_bodies - 1) / 2;
-  max_blocks = static_cast<int>(std::min<long>(full, 32L * max_bodies));
-  const auto n2 = static_cast<std::size_t>(max_bodies) * max_bodies;
-  diag_A.assign(max_bodies, Mat6::Zero());
-  diag_L.assign(max_bodies, Mat6::Zero());
-  diag_inv.assign(max_bodies, Vec6::Zero());
-  b.assign(max_bodies, Vec6::Zero());
-  x.assign(max_bodies, Vec6::Zero());
-  order.assign(max_bodies, 0);
-  pos.assign(max_bodies, 0);
-  col_start.assign(max_bodies + 1, 0);
-  col_row.assign(max_blocks, 0);
-  off_A.assign(max_blocks, Mat6::Zero());
-  off_L.assign(max_blocks, Mat6::Zero());
-  block.assign(n2, -1);
-  adj.assign(n2, 0);
-  degree.assign(max_bodies, 0);
-  eliminated.assign(max_bodies, 0);
-}
-
-bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
-                          std::span<const int> slot, std::span<ImplicitContact> contacts,
-                          std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
-                          GroupSolverScratch& s) {
+// assembles M + h sum c J^T J and M v + h F + h sum phi J^T over the active contacts, a patch
+// at a time
+void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
+              std::span<const int> slot, std::span<const ImplicitContact> contacts,
+              std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+              GroupSolverScratch& s) {
   const double h = model.timestep_s;
   const int nb = static_cast<int>(bodies.size());
   const int nc = static_cast<int>(contacts.size());
-  if (nb > s.max_bodies || nc > s.max_contacts) return false;
-  if (!Analyse(s, slot, contacts, nb)) return false;
-
-  // assemble M + h sum c J^T J and M v + h F + h sum phi J^T once, a patch at a time
   for (int k = 0; k < nb; ++k) {
     const int i = bodies[k];
     const BodyModel& bm = model.bodies[i];
@@ -326,11 +294,50 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
       continue;
     }
     while (end < nc && contacts[end].active && SamePatch(contacts[begin], contacts[end])) ++end;
-    AssemblePatch(s, slot, contacts, begin, end, h, 1.0, nb);
+    AssemblePatch(s, slot, contacts, begin, end, h, nb);
     begin = end;
   }
+}
 
+}  // namespace
+
+void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
+  max_bodies = max_group_bodies;
+  max_contacts = max_group_contacts;
+  // every pair of bodies could couple after fill-in, but a contact group is sparse: bound the
+  // factor's off-diagonal blocks by 32 per body
+  const long full = static_cast<long>(max_bodies) * (max_bodies - 1) / 2;
+  max_blocks = static_cast<int>(std::min<long>(full, 32L * max_bodies));
+  const auto n2 = static_cast<std::size_t>(max_bodies) * max_bodies;
+  diag_A.assign(max_bodies, Mat6::Zero());
+  diag_inv.assign(max_bodies, Vec6::Zero());
+  b.assign(max_bodies, Vec6::Zero());
+  x.assign(max_bodies, Vec6::Zero());
+  order.assign(max_bodies, 0);
+  pos.assign(max_bodies, 0);
+  col_start.assign(max_bodies + 1, 0);
+  col_row.assign(max_blocks, 0);
+  off_A.assign(max_blocks, Mat6::Zero());
+  block.assign(n2, -1);
+  adj.assign(n2, 0);
+  degree.assign(max_bodies, 0);
+  eliminated.assign(max_bodies, 0);
+}
+
+bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
+                          std::span<const int> slot, std::span<ImplicitContact> contacts,
+                          std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+                          GroupSolverScratch& s) {
+  const int nb = static_cast<int>(bodies.size());
+  const int nc = static_cast<int>(contacts.size());
+  if (nb > s.max_bodies || nc > s.max_contacts) return false;
+  if (!Analyse(s, slot, contacts, nb)) return false;
+
+  bool assembled = false;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
+    // the factorisation overwrites the system: assemble again after contacts were dropped
+    if (!assembled) Assemble(model, data, bodies, slot, contacts, force_W, torque_W, s);
+    assembled = true;
     if (!FactorAndSolve(s, nb)) return false;
     bool pulled = false;
     for (int k = 0; k < nc; ++k) {
@@ -355,8 +362,8 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
       }
       if (pass + 1 < kMaxPasses && c.normal_force_N < 0.0) {
         // a contact that stops pushing has no friction either: take it out and solve again
-        AssemblePatch(s, slot, contacts, k, k + 1, h, -1.0, nb);
         c.active = false;
+        assembled = false;
         c.normal_force_N = 0.0;
         c.friction_force_W.setZero();
         pulled = true;

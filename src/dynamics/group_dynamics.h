@@ -50,16 +50,16 @@ struct ImplicitContact {
 /// Scratch for one group's solve, sized once for the largest allowed group; reused every tick.
 struct GroupSolverScratch {
   int max_bodies = 0, max_contacts = 0, max_blocks = 0;
-  // per body, by elimination position: assembled diagonal block, its factor, 1 / diag(L), the
-  // right-hand side and then the solution
-  std::vector<Mat6> diag_A, diag_L;
+  // per body, by elimination position: the assembled diagonal block (then its factor),
+  // 1 / diag(L), the right-hand side and then the solution
+  std::vector<Mat6> diag_A;
   std::vector<Vec6> diag_inv, b, x;
   std::vector<int> order, pos;  // position -> group slot; group slot -> position
   // the factor's below-diagonal blocks, column by column (CSR over positions): rows ascending
   std::vector<int> col_start, col_row;
-  std::vector<Mat6> off_A, off_L;  // (max_blocks) assembled and factored off-diagonal blocks
-  std::vector<int> block;          // (max_bodies^2) block index of (i, j), i > j positions; -1
-  std::vector<char> adj;           // (max_bodies^2) elimination graph over group slots
+  std::vector<Mat6> off_A;  // (max_blocks) assembled off-diagonal blocks, then the factor's
+  std::vector<int> block;   // (max_bodies^2) block index of (i, j), i > j positions; -1
+  std::vector<char> adj;    // (max_bodies^2) elimination graph over group slots
   std::vector<int> degree;
   std::vector<char> eliminated;
   void Reserve(int max_group_bodies, int max_contacts);
