@@ -140,19 +140,17 @@ bool Analyse(GroupSolverScratch& s, std::span<const int> slot,
 void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, const Vec3& P,
                    const Vec3& Q, const Mat3& S) {
   const Vec3 nxQ = dc * n.cross(Q), Pxn = dc * P.cross(n), cn = count * dc * n;
-  // [n]x S [n]x^T = -[n]x S [n]x: columns of [n]x S are n x S_j; then rows against [n]x^T
-  Mat3 NS;
-  for (int j = 0; j < 3; ++j) NS.col(j) = n.cross(S.col(j));
-  Mat3 NSN;
-  for (int i = 0; i < 3; ++i) NSN.row(i) = n.cross(Vec3(NS.row(i).transpose())).transpose();
+  // [n]x S [n]x^T: M = [n]x S column by column (n x S_j), then row i of M [n]x^T is n x M_i
+  Mat3 M, NSN;
+  for (int j = 0; j < 3; ++j) M.col(j) = n.cross(S.col(j));
+  for (int i = 0; i < 3; ++i) NSN.row(i) = n.cross(Vec3(M.row(i).transpose())).transpose();
+  const Mat3 BR = dc * NSN - ct * S.transpose();
   const double tr = ct * S.trace();
-  for (int j = 0; j < 3; ++j) {
-    for (int i = 0; i < 3; ++i) {
-      A(i, j) += cn(i) * n(j);
-      A(i, 3 + j) -= n(i) * nxQ(j);
-      A(3 + i, j) += Pxn(i) * n(j);
-      A(3 + i, 3 + j) += dc * NSN(i, j) - ct * S(j, i);
-    }
+  for (int j = 0; j < 3; ++j) {  // a column at a time (contiguous in A)
+    A.col(j).head<3>() += n(j) * cn;
+    A.col(j).tail<3>() += n(j) * Pxn;
+    A.col(3 + j).head<3>() -= nxQ(j) * n;
+    A.col(3 + j).tail<3>() += BR.col(j);
     A(j, j) += count * ct;
     A(3 + j, 3 + j) += tr;
   }
