@@ -5,7 +5,7 @@
 namespace rigidtouch::contact {
 namespace {
 
-int Find(std::vector<int>& parent, int i) {
+int Find(int* parent, int i) {
   while (parent[i] != i) {
     parent[i] = parent[parent[i]];  // path halving
     i = parent[i];
@@ -13,7 +13,7 @@ int Find(std::vector<int>& parent, int i) {
   return i;
 }
 
-void Unite(std::vector<int>& parent, int a, int b) {
+void Unite(int* parent, int a, int b) {
   a = Find(parent, a);
   b = Find(parent, b);
   if (a == b) return;
@@ -36,52 +36,72 @@ void Groups::Reserve(int nbody, int max_contacts) {
 
 void BuildGroups(Data& data, Groups& g) {
   const int nbody = static_cast<int>(data.bodies.size());
-  for (int i = 0; i < nbody; ++i) g.parent[i] = i;
-  std::fill(g.count.begin(), g.count.end(), 0);  // contacts per body, marks bodies in contact
-  for (int c = 0; c < data.ncontact; ++c) {
-    const Contact& con = data.contacts[c];
-    if (con.body_a >= 0) ++g.count[con.body_a];
-    if (con.body_b >= 0) ++g.count[con.body_b];
-    if (con.body_a >= 0 && con.body_b >= 0) Unite(g.parent, con.body_a, con.body_b);
-  }
-  // number the groups by their root (the lowest body index), in body order
-  g.ngroup = 0;
-  for (int i = 0; i < nbody; ++i) data.body_group[i] = -1;
+  const int ncontact = data.ncontact;
+  const Contact* contacts = data.contacts.data();
+  int* parent = g.parent.data();
+  int* count = g.count.data();
+  int* body_group = data.body_group.data();
   for (int i = 0; i < nbody; ++i) {
-    if (g.count[i] == 0) continue;
-    const int root = Find(g.parent, i);
-    if (root == i) data.body_group[i] = g.ngroup++;
+    parent[i] = i;
+    count[i] = 0;  // marks the bodies in contact
   }
+  // the points of one geom pair are contiguous and share their bodies: one union per run. Each
+  // root is the lowest index of its component whatever the order of the unions.
+  int last_a = -2, last_b = -2;
+  for (int c = 0; c < ncontact; ++c) {
+    const int a = contacts[c].body_a, b = contacts[c].body_b;
+    if (a == last_a && b == last_b) continue;
+    last_a = a;
+    last_b = b;
+    if (a >= 0) count[a] = 1;
+    if (b >= 0) count[b] = 1;
+    if (a >= 0 && b >= 0) Unite(parent, a, b);
+  }
+  // number the groups by their root (the lowest body index), in body order: a body's root comes
+  // no later than the body, so its group is known by then
+  int ngroup = 0;
   for (int i = 0; i < nbody; ++i) {
-    if (g.count[i] != 0) data.body_group[i] = data.body_group[Find(g.parent, i)];
+    if (count[i] == 0) {
+      body_group[i] = -1;
+      continue;
+    }
+    const int root = Find(parent, i);
+    body_group[i] = root == i ? ngroup++ : body_group[root];
   }
+  g.ngroup = ngroup;
   // bodies per group (counting sort keeps body order inside a group)
-  std::fill(g.body_start.begin(), g.body_start.begin() + g.ngroup + 1, 0);
+  int* body_start = g.body_start.data();
+  std::fill(body_start, body_start + ngroup + 1, 0);
   for (int i = 0; i < nbody; ++i) {
-    if (data.body_group[i] >= 0) ++g.body_start[data.body_group[i] + 1];
+    if (body_group[i] >= 0) ++body_start[body_group[i] + 1];
   }
-  for (int k = 0; k < g.ngroup; ++k) g.body_start[k + 1] += g.body_start[k];
-  for (int k = 0; k < g.ngroup; ++k) g.count[k] = g.body_start[k];
+  for (int k = 0; k < ngroup; ++k) {
+    body_start[k + 1] += body_start[k];
+    count[k] = body_start[k];
+  }
   for (int i = 0; i < nbody; ++i) {
-    const int k = data.body_group[i];
+    const int k = body_group[i];
     if (k < 0) {
       g.slot[i] = -1;
       continue;
     }
-    g.slot[i] = g.count[k] - g.body_start[k];
-    g.bodies[g.count[k]++] = i;
+    g.slot[i] = count[k] - body_start[k];
+    g.bodies[count[k]++] = i;
   }
   // contacts per group
-  std::fill(g.contact_start.begin(), g.contact_start.begin() + g.ngroup + 1, 0);
-  for (int c = 0; c < data.ncontact; ++c) {
+  int* contact_start = g.contact_start.data();
+  std::fill(contact_start, contact_start + ngroup + 1, 0);
+  for (int c = 0; c < ncontact; ++c) {
     Contact& con = data.contacts[c];
-    con.group = data.body_group[con.body_a >= 0 ? con.body_a : con.body_b];
-    ++g.contact_start[con.group + 1];
+    con.group = body_group[con.body_a >= 0 ? con.body_a : con.body_b];
+    ++contact_start[con.group + 1];
   }
-  for (int k = 0; k < g.ngroup; ++k) g.contact_start[k + 1] += g.contact_start[k];
-  for (int k = 0; k < g.ngroup; ++k) g.count[k] = g.contact_start[k];
-  for (int c = 0; c < data.ncontact; ++c) g.contacts[g.count[data.contacts[c].group]++] = c;
-  data.ngroup = g.ngroup;
+  for (int k = 0; k < ngroup; ++k) {
+    contact_start[k + 1] += contact_start[k];
+    count[k] = contact_start[k];
+  }
+  for (int c = 0; c < ncontact; ++c) g.contacts[count[contacts[c].group]++] = c;
+  data.ngroup = ngroup;
 }
 
 }  // namespace rigidtouch::contact

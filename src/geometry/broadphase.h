@@ -20,9 +20,16 @@ struct Aabb {
 
 /// Preallocated broad-phase state; the sort order persists across ticks.
 struct Broadphase {
-  std::vector<Aabb> boxes;                 // (ngeom)
-  std::vector<int> order;                  // (non-plane geoms) sorted by boxes[i].lo.x
-  std::vector<int> planes;                 // static plane geoms
+  std::vector<Aabb> boxes;  // (ngeom)
+  std::vector<int> order;   // (non-plane geoms) sorted by boxes[i].lo.x
+  std::vector<int> planes;  // static plane geoms
+  // the boxes in sweep order, one array per bound (order[i]'s at i), for a compact inner loop
+  std::vector<double> lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;  // (non-plane geoms)
+  // each geom's collision filter from the model (Reserve), read for every candidate pair
+  struct Filter {
+    int body = -1, contype = 0, conaffinity = 0;
+  };
+  std::vector<Filter> filters;             // (ngeom)
   std::vector<std::pair<int, int>> pairs;  // (capacity) candidate pairs, geom indices
   int npair = 0;
   int dropped = 0;  // candidates beyond capacity this tick

@@ -8,47 +8,63 @@
 namespace rigidtouch::geometry {
 namespace {
 
-Vec3 ToLocal(const Data& data, int body, const Vec3& p_W) {
-  if (body < 0) return p_W;
-  const BodyState& s = data.bodies[body];
-  return s.q_WB.conjugate() * (p_W - s.x_W);
-}
-
 // last tick's contacts become `previous` (the buffers trade places, no copy), and the runs of
-// their geom pairs are indexed for MatchPair
-void RememberPrevious(Data& data) {
+// their geom pairs are indexed for MatchPair: data.previous_runs sorted by pair, the runs whose
+// first geom is g at previous_runs[run_start[g] .. run_start[g + 1]). A counting sort on the first
+// geom replaces a comparison sort; DetectContacts writes each geom pair in one run at most, so
+// the order is the one a sort by pair gives.
+void RememberPrevious(Data& data, CollisionScratch& s) {
   std::swap(data.contacts, data.previous);
   data.nprevious = data.ncontact;
   data.ncontact = 0;
-  int nruns = 0;
-  for (int begin = 0; begin < data.nprevious;) {
-    const Contact& c = data.previous[begin];
-    int end = begin + 1;
-    while (end < data.nprevious && data.previous[end].geom_a == c.geom_a &&
-           data.previous[end].geom_b == c.geom_b) {
-      ++end;
+  const Contact* prev = data.previous.data();
+  const int nprev = data.nprevious;
+  // calls f(geom_a, geom_b, begin, count) for each run of one geom pair, in list order
+  auto for_each_run = [prev, nprev](auto&& f) {
+    for (int begin = 0; begin < nprev;) {
+      const int ga = prev[begin].geom_a, gb = prev[begin].geom_b;
+      int end = begin + 1;
+      while (end < nprev && prev[end].geom_a == ga && prev[end].geom_b == gb) ++end;
+      f(ga, gb, begin, end - begin);
+      begin = end;
     }
-    data.previous_runs[nruns++] = PairRun{c.geom_a, c.geom_b, begin, end - begin};
-    begin = end;
+  };
+  std::vector<int>& start = s.run_start;
+  std::vector<int>& fill = s.run_fill;
+  std::fill(start.begin(), start.end(), 0);
+  int nruns = 0;
+  for_each_run([&start, &nruns](int ga, int, int, int) {
+    ++start[ga + 1];
+    ++nruns;
+  });
+  const int ngeom = static_cast<int>(fill.size());
+  for (int g = 0; g < ngeom; ++g) {
+    start[g + 1] += start[g];
+    fill[g] = start[g];
   }
+  PairRun* runs = data.previous_runs.data();
+  for_each_run([&start, &fill, runs](int ga, int gb, int begin, int count) {
+    // insertion into geom ga's bucket, sorted by the second geom
+    int j = fill[ga]++;
+    for (; j > start[ga] && runs[j - 1].geom_b > gb; --j) runs[j] = runs[j - 1];
+    runs[j] = PairRun{ga, gb, begin, count};
+  });
   data.nprevious_runs = nruns;
-  std::sort(data.previous_runs.begin(), data.previous_runs.begin() + nruns,
-            [](const PairRun& x, const PairRun& y) {
-              return x.geom_a != y.geom_a ? x.geom_a < y.geom_a : x.geom_b < y.geom_b;
-            });
 }
 
 // matches the contacts of one geom pair [begin, end) in data.contacts against last tick's
-void MatchPair(Data& data, int begin, int end) {
+void MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
   const Contact& key = data.contacts[begin];
-  const auto runs_end = data.previous_runs.begin() + data.nprevious_runs;
-  const auto run = std::lower_bound(
-      data.previous_runs.begin(), runs_end, key, [](const PairRun& r, const Contact& c) {
-        return r.geom_a != c.geom_a ? r.geom_a < c.geom_a : r.geom_b < c.geom_b;
-      });
-  const bool found = run != runs_end && run->geom_a == key.geom_a && run->geom_b == key.geom_b;
-  const auto lo = data.previous.begin() + (found ? run->begin : 0);
-  const int nprev = found ? run->count : 0;
+  // last tick's run of this pair, if any
+  const PairRun* run = nullptr;
+  for (int r = s.run_start[key.geom_a]; r < s.run_start[key.geom_a + 1]; ++r) {
+    if (data.previous_runs[r].geom_b == key.geom_b) {
+      run = &data.previous_runs[r];
+      break;
+    }
+  }
+  const Contact* lo = data.previous.data() + (run != nullptr ? run->begin : 0);
+  const int nprev = run != nullptr ? run->count : 0;
   const int ncur = end - begin;
   // a pair with one point before and now is the same contact wherever it slid
   const bool single = nprev == 1 && ncur == 1;
@@ -66,6 +82,7 @@ void MatchPair(Data& data, int begin, int end) {
         best_d2 = d2;
       }
     }
+    con.pair_points = ncur;
     if (best >= 0) {
       used |= 1u << best;
       const Contact& prev = lo[best];
@@ -92,6 +109,15 @@ void CollisionScratch::Reserve(const Model& model) {
   poses.assign(model.geoms.size(), GeomPose{Vec3::Zero(), Mat3::Identity()});
   broadphase.Reserve(model, std::max(64, 8 * static_cast<int>(model.geoms.size())));
   mj_contacts.assign(mjMAXCONPAIR, mjContact{});
+  geom_kind.clear();
+  for (const GeomModel& g : model.geoms) {
+    geom_kind.push_back(!HasNarrowPhase(g.type, GeomType::kSphere) ? GeomCheck::kMuJoCo
+                        : SizeValid(g.type, g.size)                ? GeomCheck::kAccepted
+                                                                   : GeomCheck::kRejected);
+  }
+  geom_check = geom_kind;
+  run_start.assign(model.geoms.size() + 1, 0);
+  run_fill.assign(model.geoms.size(), 0);
   mj = mj_makeData(model.collision.get());
   if (mj == nullptr) throw Error("could not allocate the collision backend's data");
 }
@@ -106,33 +132,74 @@ CollisionScratch::~CollisionScratch() {
 
 namespace {
 
-// appends one contact point of geoms (ga, gb), normal from gb towards ga
-void AddContact(const Model& model, Data& data, int ga, int gb, const Vec3& p_W, Vec3 n_W,
-                double depth_m) {
+// q * v as Eigen computes it (QuaternionBase::_transformVector, uv = 2 q.vec x v, then
+// v + w uv + q.vec x uv), written out in scalars: the same operations in the same order give the
+// same bits, without the temporaries
+[[gnu::always_inline]] inline Vec3 Rotate(const Quat& q, const Vec3& v) {
+  const double qx = q.x(), qy = q.y(), qz = q.z(), qw = q.w();
+  double ux = qy * v.z() - qz * v.y();
+  double uy = qz * v.x() - qx * v.z();
+  double uz = qx * v.y() - qy * v.x();
+  ux += ux;
+  uy += uy;
+  uz += uz;
+  return Vec3(v.x() + qw * ux + (qy * uz - qz * uy), v.y() + qw * uy + (qz * ux - qx * uz),
+              v.z() + qw * uz + (qx * uy - qy * ux));
+}
+
+// one geom pair's points as they are written: geoms in contact order (a is dynamic, and the tool
+// when it takes part: its forces then act along +n), with the frames of p_A and p_B
+struct PairWriter {
+  int ga = -1, gb = -1;
+  int body_a = -1, body_b = -1;
+  bool flip = false;  // the caller's normal points from a towards b: reversed when written
+  Quat q_AW, q_BW;    // world-to-body rotations (conjugate orientations) of dynamic bodies
+  Vec3 x_A, x_B;      // body positions
+};
+
+// the writer for points of geoms (ga, gb) whose normals point from gb towards ga
+PairWriter BeginPair(const Model& model, const Data& data, int ga, int gb) {
+  PairWriter w;
+  const int tool = model.tool;
+  w.flip =
+      model.geoms[ga].body < 0 || (model.geoms[gb].body == tool && model.geoms[ga].body != tool);
+  if (w.flip) std::swap(ga, gb);
+  w.ga = ga;
+  w.gb = gb;
+  w.body_a = model.geoms[ga].body;
+  w.body_b = model.geoms[gb].body;
+  if (w.body_a >= 0) {
+    w.q_AW = data.bodies[w.body_a].q_WB.conjugate();
+    w.x_A = data.bodies[w.body_a].x_W;
+  }
+  if (w.body_b >= 0) {
+    w.q_BW = data.bodies[w.body_b].q_WB.conjugate();
+    w.x_B = data.bodies[w.body_b].x_W;
+  }
+  return w;
+}
+
+// appends one contact point of the pair; a full contact list counts Warning::kContactFull
+void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_W, double depth_m) {
   if (data.ncontact >= static_cast<int>(data.contacts.size())) {
-    auto& w = data.warnings[static_cast<int>(Warning::kContactFull)];
-    if (w.last_step != data.step) {
-      ++w.count;
-      w.last_step = data.step;
+    auto& warning = data.warnings[static_cast<int>(Warning::kContactFull)];
+    if (warning.last_step != data.step) {
+      ++warning.count;
+      warning.last_step = data.step;
     }
     return;
   }
-  // a is dynamic, and the tool when it takes part (its forces then act along +n)
-  const int tool = model.tool;
-  if (model.geoms[ga].body < 0 || (model.geoms[gb].body == tool && model.geoms[ga].body != tool)) {
-    std::swap(ga, gb);
-    n_W = -n_W;
-  }
   Contact& c = data.contacts[data.ncontact++];
-  c.geom_a = ga;
-  c.geom_b = gb;
-  c.body_a = model.geoms[ga].body;
-  c.body_b = model.geoms[gb].body;
+  c.geom_a = w.ga;
+  c.geom_b = w.gb;
+  c.body_a = w.body_a;
+  c.body_b = w.body_b;
   c.p_W = p_W;
-  c.n_W = n_W;
+  c.n_W = w.flip ? Vec3(-n_W) : n_W;
   c.depth_m = depth_m;
-  c.p_A = ToLocal(data, c.body_a, p_W);
-  c.p_B = ToLocal(data, c.body_b, p_W);
+  // in the bodies' frames (the world's for a static geom)
+  c.p_A = w.body_a >= 0 ? Rotate(w.q_AW, p_W - w.x_A) : p_W;
+  c.p_B = w.body_b >= 0 ? Rotate(w.q_BW, p_W - w.x_B) : p_W;
   c.normal_force_N = 0.0;
   c.friction_force_W.setZero();
   c.impulse_Ns = 0.0;
@@ -175,11 +242,12 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
   }
   const int n = fn(model.collision.get(), s.mj, s.mj_contacts.data(), model.geoms[g1].mj_geom,
                    model.geoms[g2].mj_geom, 0.0);
+  // MuJoCo's normal points from geom1 to geom2: ours from b to a, so a = g2
+  const PairWriter w = BeginPair(model, data, g2, g1);
   for (int i = 0; i < n; ++i) {
     const mjContact& mc = s.mj_contacts[i];
     if (!(mc.dist < 0.0)) continue;
-    // MuJoCo's normal points from geom1 to geom2: ours from b to a, so a = g2
-    AddContact(model, data, g2, g1, Vec3(mc.pos[0], mc.pos[1], mc.pos[2]),
+    AddContact(data, w, Vec3(mc.pos[0], mc.pos[1], mc.pos[2]),
                Vec3(mc.frame[0], mc.frame[1], mc.frame[2]), -mc.dist);
   }
 }
@@ -187,8 +255,15 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
 }  // namespace
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
-  RememberPrevious(data);
+  RememberPrevious(data, s);
   GeomPoses(model, data.bodies, s.poses);
+  // Collide's checks of its arguments, once per geom rather than once per pair
+  const int ngeom = static_cast<int>(model.geoms.size());
+  for (int g = 0; g < ngeom; ++g) {
+    const GeomCheck kind = s.geom_kind[g];
+    s.geom_check[g] =
+        kind == GeomCheck::kAccepted && !PoseFinite(s.poses[g]) ? GeomCheck::kRejected : kind;
+  }
   FindPairs(model, s.poses, s.broadphase);
   if (s.broadphase.dropped > 0) {
     auto& w = data.warnings[static_cast<int>(Warning::kContactFull)];
@@ -200,19 +275,25 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
     const GeomModel& a = model.geoms[g1];
     const GeomModel& b = model.geoms[g2];
     const int begin = data.ncontact;
-    if (HasNarrowPhase(a.type, b.type)) {
-      const int n = Collide(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
-                            s.points.data(), static_cast<int>(s.points.size()));
-      for (int i = 0; i < n; ++i) {
+    const GeomCheck c1 = s.geom_check[g1], c2 = s.geom_check[g2];
+    // HasNarrowPhase(a.type, b.type), and Collide's checks of its arguments
+    if (c1 != GeomCheck::kMuJoCo && c2 != GeomCheck::kMuJoCo &&
+        !(a.type == GeomType::kPlane && b.type == GeomType::kPlane)) {
+      const int n = c1 == GeomCheck::kAccepted && c2 == GeomCheck::kAccepted
+                        ? CollideAccepted(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
+                                          s.points.data(), kMaxPairContacts)
+                        : 0;
+      if (n > 0) {
         // the narrow phase's normal points from geom 2 towards geom 1
-        AddContact(model, data, g1, g2, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
+        const PairWriter w = BeginPair(model, data, g1, g2);
+        for (int i = 0; i < n; ++i) {
+          AddContact(data, w, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
+        }
       }
     } else {
       CollideWithMuJoCo(model, data, s, g1, g2);
     }
-    const int end = data.ncontact;
-    for (int c = begin; c < end; ++c) data.contacts[c].pair_points = end - begin;
-    if (end > begin) MatchPair(data, begin, end);
+    if (data.ncontact > begin) MatchPair(data, s, begin, data.ncontact);
   }
 }
 

@@ -18,13 +18,25 @@
 
 namespace rigidtouch::geometry {
 
+/// What the narrow phase makes of one geom this tick.
+enum class GeomCheck : unsigned char {
+  kMuJoCo,    // a type MuJoCo's per-pair functions collide
+  kAccepted,  // rigidtouch's narrow phase: SizeValid and (this tick) PoseFinite
+  kRejected,  // rigidtouch's narrow phase, which gives it no contact (non-finite pose, bad size)
+};
+
 /// Scratch of the collision stage, sized by Reserve.
 struct CollisionScratch {
-  std::vector<GeomPose> poses;  // (ngeom) world poses this tick
+  std::vector<GeomPose> poses;        // (ngeom) world poses this tick
+  std::vector<GeomCheck> geom_kind;   // (ngeom) from the model's types and sizes (Reserve)
+  std::vector<GeomCheck> geom_check;  // (ngeom) this tick, with the poses
   Broadphase broadphase;
   std::array<ContactPoint, kMaxPairContacts> points{};  // one pair's narrow-phase output
   std::vector<mjContact> mj_contacts;                   // one pair's MuJoCo output (mjMAXCONPAIR)
   mjData* mj = nullptr;                                 // MuJoCo data for the fallback functions
+  // last tick's pair runs of first geom g: data.previous_runs[run_start[g] .. run_start[g + 1])
+  std::vector<int> run_start;  // (ngeom + 1)
+  std::vector<int> run_fill;   // (ngeom) counting-sort scratch
 
   /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
   void Reserve(const Model& model);

@@ -33,15 +33,16 @@ double FiniteTest(const double* x, int n) {
   return sum;
 }
 
-bool PoseFinite(const GeomPose& pose) {
-  return FiniteTest(pose.p_W.data(), 3) + FiniteTest(pose.R_WG.data(), 9) == 0.0;
-}
-
 bool PointFinite(const ContactPoint& c) {
   return FiniteTest(c.p_W.data(), 3) + FiniteTest(c.n_W.data(), 3) + c.depth_m * 0.0 == 0.0;
 }
 
-// size components that a type uses must be positive (and finite)
+// the other two axes of axis k in cyclic order: (k + 1) % 3 and (k + 2) % 3
+constexpr int kNext1[3] = {1, 2, 0};
+constexpr int kNext2[3] = {2, 0, 1};
+
+}  // namespace
+
 bool SizeValid(GeomType type, const Vec3& size) {
   switch (type) {
     case GeomType::kPlane:
@@ -55,6 +56,8 @@ bool SizeValid(GeomType type, const Vec3& size) {
       return false;
   }
 }
+
+namespace {
 
 // sphere (geom 1) against plane (geom 2): the half-space below the plane is solid
 int SpherePlane(const Vec3& c_W, double radius_m, const GeomPose& plane, ContactPoint* out) {
@@ -162,18 +165,26 @@ struct FacePoint {
   double u, v, z;
 };
 
-// Sutherland-Hodgman step: keeps the part of polygon `in` with sign * coordinate <= limit;
-// vertices exactly on the line are kept and create no duplicate
-int ClipPolygon(const FacePoint* in, int n, bool along_v, double sign, double limit,
-                FacePoint* out) {
+// Sutherland-Hodgman step: keeps the part of polygon `in` with sign * coordinate <= limit, the
+// coordinate v if kAlongV else u, the sign -1 if kNegative else +1; vertices exactly on the line
+// are kept and create no duplicate
+template <bool kAlongV, bool kNegative>
+int ClipPolygon(const FacePoint* in, int n, double limit, FacePoint* out) {
+  // signed distances past the line (multiplying by -1 or 1 is exact: a negation or nothing)
+  double f[kClipBuffer];
+  for (int i = 0; i < n; ++i) {
+    const double x = kAlongV ? in[i].v : in[i].u;
+    f[i] = (kNegative ? -x : x) - limit;
+  }
   int m = 0;
   for (int i = 0; i < n; ++i) {
+    const int next = i + 1 < n ? i + 1 : 0;
     const FacePoint& p = in[i];
-    const FacePoint& q = in[i + 1 < n ? i + 1 : 0];
-    const double fp = sign * (along_v ? p.v : p.u) - limit;
-    const double fq = sign * (along_v ? q.v : q.u) - limit;
+    const double fp = f[i];
+    const double fq = f[next];
     if (fp <= 0.0 && m < kClipBuffer) out[m++] = p;
     if (((fp < 0.0 && fq > 0.0) || (fp > 0.0 && fq < 0.0)) && m < kClipBuffer) {
+      const FacePoint& q = in[next];
       const double t = fp / (fp - fq);
       out[m++] = {p.u + t * (q.u - p.u), p.v + t * (q.v - p.v), p.z + t * (q.z - p.z)};
     }
@@ -254,22 +265,24 @@ int FaceContact(const GeomPose& ref, const Vec3& ref_half_m, int k, double sign_
     if (std::abs(R_RI(k, j)) > std::abs(R_RI(k, l))) l = j;
   }
   const double sign_l = -Sign(sign_m * R_RI(k, l));
-  const int l1 = (l + 1) % 3, l2 = (l + 2) % 3;
+  const int l1 = kNext1[l], l2 = kNext2[l];
   const Vec3 centre_R = p_RI + sign_l * inc_half_m[l] * R_RI.col(l);
   const Vec3 e1_R = inc_half_m[l1] * R_RI.col(l1);
   const Vec3 e2_R = inc_half_m[l2] * R_RI.col(l2);
-  const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+  const int k1 = kNext1[k], k2 = kNext2[k];
   FacePoint a[kClipBuffer], b[kClipBuffer];
-  const double s1[4] = {1.0, -1.0, -1.0, 1.0}, s2[4] = {1.0, 1.0, -1.0, -1.0};
+  // the corners centre +- e1 +- e2 (the signs (+, +), (-, +), (-, -), (+, -) in turn)
+  const Vec3 plus_R = centre_R + e1_R, minus_R = centre_R - e1_R;
+  const Vec3 corners_R[4] = {plus_R + e2_R, minus_R + e2_R, minus_R - e2_R, plus_R - e2_R};
   for (int i = 0; i < 4; ++i) {
-    const Vec3 x_R = centre_R + s1[i] * e1_R + s2[i] * e2_R;
+    const Vec3& x_R = corners_R[i];
     a[i] = {x_R[k1], x_R[k2], sign_m * x_R[k] - ref_half_m[k]};
   }
   // clip against the reference face's four side planes
-  int n = ClipPolygon(a, 4, false, 1.0, ref_half_m[k1], b);
-  n = ClipPolygon(b, n, false, -1.0, ref_half_m[k1], a);
-  n = ClipPolygon(a, n, true, 1.0, ref_half_m[k2], b);
-  n = ClipPolygon(b, n, true, -1.0, ref_half_m[k2], a);
+  int n = ClipPolygon<false, false>(a, 4, ref_half_m[k1], b);
+  n = ClipPolygon<false, true>(b, n, ref_half_m[k1], a);
+  n = ClipPolygon<true, false>(a, n, ref_half_m[k2], b);
+  n = ClipPolygon<true, true>(b, n, ref_half_m[k2], a);
   // keep the points below the reference face
   int below = 0;
   for (int i = 0; i < n; ++i) {
@@ -331,9 +344,9 @@ int BoxBox(const GeomPose& box_a, const Vec3& a_m, const GeomPose& box_b, const 
   double sep_e = kAxisRelativeTolerance * sep_face + kAxisAbsoluteTolerance_m;
   int edge_i = -1, edge_j = -1;
   for (int i = 0; i < 3; ++i) {
-    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    const int i1 = kNext1[i], i2 = kNext2[i];
     for (int j = 0; j < 3; ++j) {
-      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const int j1 = kNext1[j], j2 = kNext2[j];
       const double length2 = C(i1, j) * C(i1, j) + C(i2, j) * C(i2, j);
       if (length2 < kMinEdgeAxisSine * kMinEdgeAxisSine) continue;
       const double centre_m = d_A[i2] * C(i1, j) - d_A[i1] * C(i2, j);
@@ -440,6 +453,11 @@ int Collide(GeomType t1, const Vec3& size1, const GeomPose& pose1, GeomType t2, 
   if (!PoseFinite(pose1) || !PoseFinite(pose2)) return 0;
   if (!SizeValid(t1, size1) || !SizeValid(t2, size2)) return 0;
   if (capacity > kMaxPairContacts) capacity = kMaxPairContacts;
+  return CollideAccepted(t1, size1, pose1, t2, size2, pose2, out, capacity);
+}
+
+int CollideAccepted(GeomType t1, const Vec3& size1, const GeomPose& pose1, GeomType t2,
+                    const Vec3& size2, const GeomPose& pose2, ContactPoint* out, int capacity) {
   int n = 0;
   if (Rank(t1) <= Rank(t2)) {
     n = CollideOrdered(t1, size1, pose1, t2, size2, pose2, out, capacity);

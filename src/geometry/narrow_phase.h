@@ -49,4 +49,20 @@ bool HasNarrowPhase(GeomType a, GeomType b);
 int Collide(GeomType t1, const Vec3& size1, const GeomPose& pose1, GeomType t2, const Vec3& size2,
             const GeomPose& pose2, ContactPoint* out, int capacity);
 
+/// Whether every number of a pose is finite (Collide gives no contact otherwise).
+inline bool PoseFinite(const GeomPose& pose) {
+  // x * 0 is 0 for a finite x and NaN otherwise, and a sum with a NaN term is NaN
+  return (pose.p_W.array() * 0.0).sum() + (pose.R_WG.array() * 0.0).sum() == 0.0;
+}
+
+/// Whether the size components that a type handled here uses are positive and finite (Collide
+/// gives no contact otherwise). False for the types not handled here.
+bool SizeValid(GeomType type, const Vec3& size);
+
+/// Collide without its argument checks, for a caller that checks each geom once rather than each
+/// pair: HasNarrowPhase(t1, t2), PoseFinite and SizeValid for both geoms, `out` not null and
+/// 0 < capacity <= kMaxPairContacts must hold. Gives then the same points as Collide.
+int CollideAccepted(GeomType t1, const Vec3& size1, const GeomPose& pose1, GeomType t2,
+                    const Vec3& size2, const GeomPose& pose2, ContactPoint* out, int capacity);
+
 }  // namespace rigidtouch::geometry

@@ -1,0 +1,172 @@
+// The broad phase against a brute-force check of every geom pair: the same candidate pairs, in
+// the sweep order that DetectContacts relies on for a deterministic contact order.
+#include "geometry/broadphase.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <utility>
+#include <vector>
+
+namespace rigidtouch::geometry {
+namespace {
+
+// a random scene of `ngeom` geoms: spheres, boxes and capsules on a few bodies (some share one,
+// some static), two planes, and collision filters that rule some pairs out
+Model RandomModel(std::mt19937_64& rng, int ngeom) {
+  std::uniform_real_distribution<double> size(0.005, 0.05);
+  std::uniform_int_distribution<int> type(0, 3), body(-1, ngeom / 2), bits(0, 3);
+  Model m;
+  for (int g = 0; g < ngeom; ++g) {
+    GeomModel geom;
+    const int t = g < 2 ? -1 : type(rng);
+    geom.type = t < 0    ? GeomType::kPlane
+                : t == 0 ? GeomType::kSphere
+                : t == 1 ? GeomType::kCapsule
+                         : GeomType::kBox;
+    geom.body = t < 0 ? -1 : body(rng);
+    geom.size = Vec3(size(rng), size(rng), size(rng));
+    geom.rbound_m = geom.size.norm();
+    geom.contype = bits(rng);
+    geom.conaffinity = bits(rng);
+    if (g % 3 == 0) geom.contype = geom.conaffinity = 1;
+    m.geoms.push_back(geom);
+  }
+  return m;
+}
+
+// random poses in a 0.3 m cube; the planes tilt a little about the floor at z = 0 and z = 0.1
+void RandomPoses(std::mt19937_64& rng, const Model& m, std::vector<GeomPose>& poses) {
+  std::uniform_real_distribution<double> x(-0.15, 0.15), tilt(-0.2, 0.2);
+  for (std::size_t g = 0; g < m.geoms.size(); ++g) {
+    if (m.geoms[g].type == GeomType::kPlane) {
+      const Quat q(Eigen::AngleAxisd(tilt(rng), Vec3::UnitX()));
+      poses[g] = GeomPose{Vec3(0.0, 0.0, 0.1 * static_cast<double>(g)), q.toRotationMatrix()};
+    } else {
+      poses[g] = GeomPose{Vec3(x(rng), x(rng), x(rng)), Quat::UnitRandom().toRotationMatrix()};
+    }
+  }
+}
+
+// every pair whose bounds overlap (or whose bound reaches below a plane), by brute force
+std::vector<std::pair<int, int>> BruteForce(const Model& m, const std::vector<GeomPose>& poses) {
+  auto half = [&m, &poses](int g) -> Vec3 {
+    const GeomModel& geom = m.geoms[g];
+    const Mat3& R = poses[g].R_WG;
+    switch (geom.type) {
+      case GeomType::kSphere:
+        return Vec3::Constant(geom.size.x());
+      case GeomType::kBox:
+        return R.cwiseAbs() * geom.size;
+      case GeomType::kCapsule:
+        return R.col(2).cwiseAbs() * geom.size.y() + Vec3::Constant(geom.size.x());
+      default:
+        return Vec3::Constant(geom.rbound_m);
+    }
+  };
+  std::vector<std::pair<int, int>> pairs;
+  const int n = static_cast<int>(m.geoms.size());
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      const bool pa = m.geoms[a].type == GeomType::kPlane;
+      const bool pb = m.geoms[b].type == GeomType::kPlane;
+      if ((pa && pb) || !CanCollide(m.geoms[a], m.geoms[b])) continue;
+      if (pa || pb) {
+        // the box's centre and half-size from its bounds, as the broad phase has them
+        const int g = pa ? b : a, p = pa ? a : b;
+        const Vec3 lo = poses[g].p_W - half(g), hi = poses[g].p_W + half(g);
+        const Vec3 n_W = poses[p].R_WG.col(2);
+        const Vec3 c = 0.5 * (lo + hi), h = 0.5 * (hi - lo);
+        if (n_W.dot(c - poses[p].p_W) - n_W.cwiseAbs().dot(h) <= 0.0) pairs.emplace_back(g, p);
+        continue;
+      }
+      const Vec3 lo_a = poses[a].p_W - half(a), hi_a = poses[a].p_W + half(a);
+      const Vec3 lo_b = poses[b].p_W - half(b), hi_b = poses[b].p_W + half(b);
+      if ((lo_a.array() <= hi_b.array()).all() && (lo_b.array() <= hi_a.array()).all()) {
+        pairs.emplace_back(a, b);
+      }
+    }
+  }
+  return pairs;
+}
+
+std::vector<std::pair<int, int>> Sorted(std::vector<std::pair<int, int>> pairs) {
+  for (auto& [a, b] : pairs) {
+    if (a > b) std::swap(a, b);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+// over coherent motion (small steps, the sort order carried over) and random jumps (a new order
+// each time), FindPairs gives the brute-force pair set, each pair once, in the sweep order: by
+// the first geom's place in the order sorted by lower x, its partners later in that order first,
+// then the planes
+TEST(BroadphaseTest, SamePairsAsBruteForceInSweepOrder) {
+  std::mt19937_64 rng(7);
+  int total = 0;
+  for (int scene = 0; scene < 40; ++scene) {
+    const Model m = RandomModel(rng, 10 + scene);
+    std::vector<GeomPose> poses(m.geoms.size());
+    RandomPoses(rng, m, poses);
+    Broadphase bp;
+    bp.Reserve(m, 4096);
+    std::normal_distribution<double> step(0.0, 0.002);
+    for (int tick = 0; tick < 30; ++tick) {
+      if (tick % 10 == 9) {
+        RandomPoses(rng, m, poses);
+      } else {
+        for (std::size_t g = 0; g < poses.size(); ++g) {
+          if (m.geoms[g].type != GeomType::kPlane) poses[g].p_W += Vec3(step(rng), step(rng), 0.0);
+        }
+      }
+      FindPairs(m, poses, bp);
+      ASSERT_EQ(bp.dropped, 0);
+      const std::vector<std::pair<int, int>> found(bp.pairs.begin(), bp.pairs.begin() + bp.npair);
+      ASSERT_EQ(Sorted(found), Sorted(BruteForce(m, poses))) << "scene " << scene;
+      total += bp.npair;
+      // the order: non-plane geoms sorted by lower x, and pairs by their place in it
+      std::vector<int> place(m.geoms.size(), -1);
+      for (std::size_t i = 0; i < bp.order.size(); ++i) {
+        place[bp.order[i]] = static_cast<int>(i);
+        if (i > 0) {
+          EXPECT_LE(bp.boxes[bp.order[i - 1]].lo.x(), bp.boxes[bp.order[i]].lo.x());
+        }
+      }
+      const int nplace = static_cast<int>(bp.order.size());
+      auto key = [&place, nplace](const std::pair<int, int>& p) {
+        return std::make_pair(place[p.first],
+                              place[p.second] >= 0 ? place[p.second] : nplace + p.second);
+      };
+      for (std::size_t k = 0; k < found.size(); ++k) {
+        EXPECT_GE(place[found[k].first], 0);
+        EXPECT_TRUE(place[found[k].second] < 0 || place[found[k].second] > place[found[k].first]);
+        if (k > 0) {
+          EXPECT_LT(key(found[k - 1]), key(found[k]));
+        }
+      }
+    }
+  }
+  EXPECT_GT(total, 1000);  // the scenes are dense enough to test something
+}
+
+// a full pair list keeps the first candidates and counts the rest
+TEST(BroadphaseTest, CapacityDropsAndCounts) {
+  std::mt19937_64 rng(8);
+  const Model m = RandomModel(rng, 40);
+  std::vector<GeomPose> poses(m.geoms.size());
+  RandomPoses(rng, m, poses);
+  Broadphase all, few;
+  all.Reserve(m, 4096);
+  few.Reserve(m, 5);
+  FindPairs(m, poses, all);
+  FindPairs(m, poses, few);
+  ASSERT_GT(all.npair, 5);
+  EXPECT_EQ(few.npair, 5);
+  EXPECT_EQ(few.dropped, all.npair - 5);
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(few.pairs[k], all.pairs[k]);
+}
+
+}  // namespace
+}  // namespace rigidtouch::geometry
