@@ -137,8 +137,10 @@ bool Analyse(GroupSolverScratch& s, std::span<const int> slot,
 // with C [Q]x = ct [Q]x + dc n (n x Q)^T and [P]x C = ct [P]x + dc (P x n) n^T
 // (-[p]x [q]x = (p.q) I - q p^T and -[p]x n n^T [q]x = [n]x p q^T [n]x^T), so a manifold of k
 // points costs k small outer products and one block update instead of 3 k rank-1 updates.
+// `diagonal`: A is a diagonal block, of which the factorisation reads only the lower triangle, so
+// its upper right 3 x 3 block is left out.
 void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, const Vec3& P,
-                   const Vec3& Q, const Mat3& S) {
+                   const Vec3& Q, const Mat3& S, bool diagonal) {
   const Vec3 nxQ = dc * n.cross(Q), Pxn = dc * P.cross(n), cn = count * dc * n;
   // [n]x S [n]x^T: M = [n]x S column by column (n x S_j), then row i of M [n]x^T is n x M_i
   Mat3 M, NSN;
@@ -149,18 +151,20 @@ void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, cons
   for (int j = 0; j < 3; ++j) {  // a column at a time (contiguous in A)
     A.col(j).head<3>() += n(j) * cn;
     A.col(j).tail<3>() += n(j) * Pxn;
-    A.col(3 + j).head<3>() -= nxQ(j) * n;
+    if (!diagonal) A.col(3 + j).head<3>() -= nxQ(j) * n;
     A.col(3 + j).tail<3>() += BR.col(j);
     A(j, j) += count * ct;
     A(3 + j, 3 + j) += tr;
   }
   // the ct [Q]x and ct [P]x terms
-  A(0, 4) += ct * Q.z();
-  A(0, 5) -= ct * Q.y();
-  A(1, 3) -= ct * Q.z();
-  A(1, 5) += ct * Q.x();
-  A(2, 3) += ct * Q.y();
-  A(2, 4) -= ct * Q.x();
+  if (!diagonal) {
+    A(0, 4) += ct * Q.z();
+    A(0, 5) -= ct * Q.y();
+    A(1, 3) -= ct * Q.z();
+    A(1, 5) += ct * Q.x();
+    A(2, 3) += ct * Q.y();
+    A(2, 4) -= ct * Q.x();
+  }
   A(3, 1) -= ct * P.z();
   A(3, 2) += ct * P.y();
   A(4, 0) += ct * P.z();
@@ -209,19 +213,19 @@ void AssemblePatch(GroupSolverScratch& s, std::span<const int> slot,
   const Vec3& n = first.n_W;
   const double ct = first.stick ? h * first.c_t_Ns_per_m : 0.0;
   const double dc = h * first.c_n_Ns_per_m - ct;
-  if (pa >= 0) AddPatchBlock(s.diag_A[pa], count, ct, dc, n, Pa, Pa, Saa);
-  if (pb >= 0) AddPatchBlock(s.diag_A[pb], count, ct, dc, n, Pb, Pb, Sbb);
+  if (pa >= 0) AddPatchBlock(s.diag_A[pa], count, ct, dc, n, Pa, Pa, Saa, true);
+  if (pb >= 0) AddPatchBlock(s.diag_A[pb], count, ct, dc, n, Pb, Pb, Sbb, true);
   // the coupling H_ab = -h sum J_a^T C J_b; only the lower block (larger position first) is
   // stored. Both points on one body: J = J_a - J_b adds both couplings to the diagonal.
   if (pa >= 0 && pa == pb) {
-    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pa, Pb, Sab);
-    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pb, Pa, Sab.transpose());
+    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pa, Pb, Sab, true);
+    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pb, Pa, Sab.transpose(), true);
   } else if (pb >= 0 && pa > pb) {
     AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc, n, Pa,
-                  Pb, Sab);
+                  Pb, Sab, false);
   } else if (pa >= 0 && pb > pa) {
     AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc, n, Pb,
-                  Pa, Sab.transpose());
+                  Pa, Sab.transpose(), false);
   }
 }
 
