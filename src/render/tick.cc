@@ -367,7 +367,9 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   for (int ci = 0; ci < data.ncontact; ++ci) {
     Contact& c = data.contacts[ci];
     Offsets(data, c, &ws.r_a[ci], &ws.r_b[ci]);
-    ws.normal_velocity[ci] = RelativeVelocity(data, c, ws.r_a[ci], ws.r_b[ci]).dot(c.n_W);
+    // the approach speed only matters for a new contact (a collision onset, GroupWindow)
+    ws.normal_velocity[ci] =
+        c.is_new ? RelativeVelocity(data, c, ws.r_a[ci], ws.r_b[ci]).dot(c.n_W) : 0.0;
     // one law per geom pair: its points are consecutive
     const bool same_pair = ci > 0 && data.contacts[ci - 1].geom_a == c.geom_a &&
                            data.contacts[ci - 1].geom_b == c.geom_b &&

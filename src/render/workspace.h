@@ -18,7 +18,7 @@ struct Workspace {
   contact::Groups groups;
   std::vector<contact::PenaltyLaw> laws;  // (max_contacts)
   std::vector<Vec3> anchor_displacement;  // (max_contacts) stick-anchor stretch
-  std::vector<double> normal_velocity;    // (max_contacts) relative normal velocity
+  std::vector<double> normal_velocity;    // (max_contacts) approach speed of new contacts
   std::vector<Vec3> r_a, r_b;  // (max_contacts) contact point from a's / b's centre of mass
   std::vector<Mat3> R_WB;      // (nbody) body rotations this tick
   std::vector<Vec3> force_W, torque_W;              // (nbody) explicit force and torque this tick
