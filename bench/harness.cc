@@ -148,6 +148,7 @@ RunResult SceneRun::Finish() {
   result.configuration = engine_.Configuration();
   result.mean_contacts =
       durations_ns_.empty() ? 0.0 : contact_sum_ / static_cast<double>(durations_ns_.size());
+  result.durations_ns = durations_ns_;
   std::vector<std::int64_t> sorted_ns = durations_ns_;
   result.time = Summarize(sorted_ns);
 

@@ -31,8 +31,9 @@ struct GateReport {
 struct RunResult {
   std::string scene;
   std::string engine;
-  TimeSummary time;            ///< per measured step
-  double mean_contacts = 0.0;  ///< contact points per measured step
+  TimeSummary time;                        ///< per measured step
+  std::vector<std::int64_t> durations_ns;  ///< every measured step, in measurement order
+  double mean_contacts = 0.0;              ///< contact points per measured step
   GateReport gates;
   std::string configuration;  ///< Engine::Configuration() of the run
 };

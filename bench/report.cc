@@ -1,5 +1,6 @@
 #include "bench/report.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <set>
 #include <sstream>
@@ -45,6 +46,45 @@ std::string RatioCell(const RunResult* reference, const RunResult* peer) {
 }
 
 }  // namespace
+
+std::vector<RunResult> MergeRepetitions(const std::vector<RunResult>& results,
+                                        const std::vector<std::string>& scenes,
+                                        const std::vector<std::string>& engines) {
+  std::vector<RunResult> merged;
+  for (const std::string& scene : scenes) {
+    for (const std::string& engine : engines) {
+      RunResult m;
+      double contact_steps = 0.0;
+      int repetitions = 0;
+      for (const RunResult& r : results) {
+        if (r.scene != scene || r.engine != engine) continue;
+        if (repetitions++ == 0) {
+          m = r;
+          m.durations_ns.clear();
+          m.gates.failures.clear();
+        }
+        m.durations_ns.insert(m.durations_ns.end(), r.durations_ns.begin(), r.durations_ns.end());
+        contact_steps += r.mean_contacts * static_cast<double>(r.durations_ns.size());
+        m.gates.deepest_penetration_m =
+            std::max(m.gates.deepest_penetration_m, r.gates.deepest_penetration_m);
+        m.gates.finite = m.gates.finite && r.gates.finite;
+        for (const std::string& failure : r.gates.failures) {
+          if (std::find(m.gates.failures.begin(), m.gates.failures.end(), failure) ==
+              m.gates.failures.end()) {
+            m.gates.failures.push_back(failure);
+          }
+        }
+      }
+      if (repetitions == 0) continue;
+      std::vector<std::int64_t> sorted_ns = m.durations_ns;
+      m.time = Summarize(sorted_ns);
+      m.mean_contacts =
+          m.durations_ns.empty() ? 0.0 : contact_steps / static_cast<double>(m.durations_ns.size());
+      merged.push_back(std::move(m));
+    }
+  }
+  return merged;
+}
 
 std::string FormatResultTable(const std::vector<RunResult>& results) {
   std::ostringstream out;

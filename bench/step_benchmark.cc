@@ -4,6 +4,9 @@
 // Extra flags (after Google Benchmark's own):
 //   --rigidtouch_scenes=DIR   folder with tap.xml, stack.xml, pile.xml (default: the source tree)
 //   --rigidtouch_scale=X      measure X (0 < X <= 1) of the specified steps, for smoke runs
+// With --benchmark_repetitions=N --benchmark_enable_random_interleaving=true every scene and
+// engine runs N times in random order and the tables pool the repetitions: each engine's steps
+// then spread over the same stretch of a shared machine's changing speed.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -117,12 +120,15 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
 
-  const std::vector<RunResult>& results = Results();
-  std::cout << "\n" << FormatResultTable(results) << "\n";
-  std::vector<std::string> peers;
+  std::vector<std::string> scene_names, engine_names, peers;
+  for (const Scene& scene : scenes) scene_names.push_back(scene.name);
   for (const EngineEntry& entry : Engines()) {
+    engine_names.push_back(entry.name);
     if (entry.name != kReferenceEngine) peers.push_back(entry.name);
   }
+  // repetitions (--benchmark_repetitions) of one scene and engine are pooled
+  const std::vector<RunResult> results = MergeRepetitions(Results(), scene_names, engine_names);
+  std::cout << "\n" << FormatResultTable(results) << "\n";
   std::cout << FormatRatioTable(results, kReferenceEngine, peers);
   bool has_reference = false;
   for (const EngineEntry& entry : Engines()) has_reference |= entry.name == kReferenceEngine;

@@ -46,6 +46,35 @@ TEST(Report, MissingRunsReadNotAvailableAndGateFailuresAreFlagged) {
   EXPECT_NE(runs.find("1.0"), std::string::npos) << runs;
 }
 
+TEST(Report, RepetitionsArePooledInSceneAndEngineOrder) {
+  // two repetitions of stack / rigidtouch, interleaved with a pile run: durations 1..3 and 4..6
+  // pool to six, whose median (nearest rank, the 3rd) is 3; contacts are weighted by steps
+  RunResult first = Result("stack", "rigidtouch", 2, 3);
+  first.durations_ns = {1, 2, 3};
+  first.mean_contacts = 10.0;
+  first.gates.failures = {"top box moved"};
+  RunResult second = Result("stack", "rigidtouch", 5, 6);
+  second.durations_ns = {4, 5, 6};
+  second.mean_contacts = 20.0;
+  second.gates.failures = {"top box moved", "NaN"};
+  second.gates.deepest_penetration_m = 2e-3;
+  RunResult pile = Result("pile", "rigidtouch", 7, 7);
+  pile.durations_ns = {7};
+  const std::vector<RunResult> merged =
+      MergeRepetitions({first, pile, second}, {"stack", "pile", "tap"}, {"rigidtouch", "bullet"});
+  ASSERT_EQ(merged.size(), 2u);  // tap and bullet never ran
+  EXPECT_EQ(merged[0].scene, "stack");
+  EXPECT_EQ(merged[1].scene, "pile");
+  EXPECT_EQ(merged[0].time.count, 6);
+  EXPECT_EQ(merged[0].time.median_ns, 3.0);
+  EXPECT_EQ(merged[0].time.max_ns, 6.0);
+  EXPECT_EQ(merged[0].durations_ns.size(), 6u);
+  EXPECT_DOUBLE_EQ(merged[0].mean_contacts, 15.0);
+  EXPECT_EQ(merged[0].gates.failures, (std::vector<std::string>{"top box moved", "NaN"}));
+  EXPECT_EQ(merged[0].gates.deepest_penetration_m, 2e-3);
+  EXPECT_EQ(merged[1].time.count, 1);
+}
+
 }  // namespace
 }  // namespace rigidtouch::bench
 
