@@ -76,7 +76,7 @@ void AddContact(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3
 }
 
 // four corner points of a face between a and b (b = -1: the floor), one normal
-void AddFace(std::vector<ImplicitContact>& rows, int a, int b, const Vec3& n, bool stick,
+void AddFace(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3& n, bool stick,
              std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
@@ -84,7 +84,7 @@ void AddFace(std::vector<ImplicitContact>& rows, int a, int b, const Vec3& n, bo
     const Vec3 corner = 0.025 * ((k & 1 ? 1.0 : -1.0) * t1 + (k & 2 ? 1.0 : -1.0) * t2);
     const Vec3 ra = -0.025 * n + corner + 1e-3 * Vec3(u(rng), u(rng), u(rng));
     const Vec3 rb = b >= 0 ? Vec3(0.025 * n + corner) : Vec3(ra + Vec3(0.1, 0.2, 0.0));
-    AddContact(rows, a, b, n, ra, rb, 20.0 + u(rng), stick);
+    AddContact(contacts, a, b, n, ra, rb, 20.0 + u(rng), stick);
   }
 }
 
@@ -147,11 +147,11 @@ Eigen::VectorXd Solved(const Fixture& f) {
   return v;
 }
 
-void ExpectMatchesDense(Fixture& f, std::vector<ImplicitContact> rows) {
-  const Eigen::VectorXd expected = DenseSolve(f, rows);
-  ASSERT_TRUE(
-      SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, rows, f.force, f.torque, f.scratch));
-  for (const ImplicitContact& c : rows) ASSERT_TRUE(c.active);  // none dropped: same system
+void ExpectMatchesDense(Fixture& f, std::vector<ImplicitContact> contacts) {
+  const Eigen::VectorXd expected = DenseSolve(f, contacts);
+  ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
+                                   f.scratch));
+  for (const ImplicitContact& c : contacts) ASSERT_TRUE(c.active);  // none dropped: same system
   const Eigen::VectorXd v = Solved(f);
   EXPECT_LE((v - expected).lpNorm<Eigen::Infinity>(),
             kTol * std::max(1.0, expected.lpNorm<Eigen::Infinity>()));
@@ -161,12 +161,12 @@ TEST(GroupDynamics, ColumnOfFacesMatchesDenseSolve) {
   // a stack of 4: floor-box faces and box-box faces, sticking and slipping patches
   Fixture f = MakeFixture(1, 1, 4, 1);
   std::mt19937 rng(7);
-  std::vector<ImplicitContact> rows;
-  AddFace(rows, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
-  AddFace(rows, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
-  AddFace(rows, f.bodies[2], f.bodies[1], Vec3(0.1, 0.0, 1.0).normalized(), false, rng);
-  AddFace(rows, f.bodies[1], f.bodies[3], -Vec3::UnitZ(), true, rng);  // b above a
-  ExpectMatchesDense(f, rows);
+  std::vector<ImplicitContact> contacts;
+  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
+  AddFace(contacts, f.bodies[2], f.bodies[1], Vec3(0.1, 0.0, 1.0).normalized(), false, rng);
+  AddFace(contacts, f.bodies[1], f.bodies[3], -Vec3::UnitZ(), true, rng);  // b above a
+  ExpectMatchesDense(f, contacts);
 }
 
 TEST(GroupDynamics, LatticeWithFillInMatchesDenseSolve) {
@@ -175,57 +175,57 @@ TEST(GroupDynamics, LatticeWithFillInMatchesDenseSolve) {
   Fixture f = MakeFixture(4, 3, 3, 2);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<ImplicitContact> rows;
+  std::vector<ImplicitContact> contacts;
   auto id = [&](int x, int y, int z) { return f.bodies[x + 4 * y + 12 * z]; };
   for (int z = 0; z < 3; ++z) {
     for (int y = 0; y < 3; ++y) {
       for (int x = 0; x < 4; ++x) {
-        if (z == 0) AddFace(rows, id(x, y, z), -1, Vec3::UnitZ(), (x + y) % 2 == 0, rng);
+        if (z == 0) AddFace(contacts, id(x, y, z), -1, Vec3::UnitZ(), (x + y) % 2 == 0, rng);
         if (z == 2 && x == 1) {  // a contact between two points of one body (J = J_a - J_b)
-          AddContact(rows, id(x, y, z), id(x, y, z), Vec3::UnitX(), Vec3(0.02, 0.0, 0.01),
+          AddContact(contacts, id(x, y, z), id(x, y, z), Vec3::UnitX(), Vec3(0.02, 0.0, 0.01),
                      Vec3(-0.01, 0.02, 0.0), 20.0, y == 1);
         }
-        if (z > 0) AddFace(rows, id(x, y, z), id(x, y, z - 1), Vec3::UnitZ(), true, rng);
+        if (z > 0) AddFace(contacts, id(x, y, z), id(x, y, z - 1), Vec3::UnitZ(), true, rng);
         if (x > 0) {
           const Vec3 n = Vec3(1.0, 0.05 * u(rng), 0.05 * u(rng)).normalized();
-          AddContact(rows, id(x, y, z), id(x - 1, y, z), n, Vec3(-0.025, 0.01 * u(rng), 0.0),
+          AddContact(contacts, id(x, y, z), id(x - 1, y, z), n, Vec3(-0.025, 0.01 * u(rng), 0.0),
                      Vec3(0.025, 0.0, 0.01 * u(rng)), 20.0, x % 2 == 0);
         }
         if (y > 0) {
-          AddContact(rows, id(x, y - 1, z), id(x, y, z), -Vec3::UnitY(),
+          AddContact(contacts, id(x, y - 1, z), id(x, y, z), -Vec3::UnitY(),
                      Vec3(0.0, 0.025, 0.01 * u(rng)), Vec3(0.0, -0.025, 0.0), 20.0, true);
         }
       }
     }
   }
-  ExpectMatchesDense(f, rows);
+  ExpectMatchesDense(f, contacts);
 }
 
-TEST(GroupDynamics, PullingRowIsDroppedWithItsFriction) {
-  // the face rows between two boxes would pull: they and their tangential rows drop out, and
-  // the result is the dense solve without them
+TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
+  // the face contacts between two boxes would pull: they drop out with their tangential rows,
+  // and the result is the dense solve without them
   Fixture f = MakeFixture(1, 1, 2, 3);
   std::mt19937 rng(5);
-  std::vector<ImplicitContact> rows;
-  AddFace(rows, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
-  AddFace(rows, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
+  std::vector<ImplicitContact> contacts;
+  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
   for (int i : f.bodies) {
     f.data.bodies[i].v_W.setZero();
     f.data.bodies[i].w_W.setZero();
     f.torque[i].setZero();
   }
-  // pulled apart: at the first pass the pair moves as one (the floor still pushes) and the rows
-  // between them pull; without those rows the lower box is pressed on the floor
+  // pulled apart: at the first pass the pair moves as one (the floor still pushes) and the contacts
+  // between them pull; without those contacts the lower box is pressed on the floor
   f.force[f.bodies[0]] = Vec3(0.0, 0.0, -5000.0);
   f.force[f.bodies[1]] = Vec3(0.0, 0.0, 5000.0);
-  std::vector<ImplicitContact> expected_rows = rows;
-  for (ImplicitContact& c : expected_rows) c.active = c.body_b != f.bodies[0];
-  const Eigen::VectorXd expected = DenseSolve(f, expected_rows);
-  ASSERT_TRUE(
-      SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, rows, f.force, f.torque, f.scratch));
+  std::vector<ImplicitContact> expected_contacts = contacts;
+  for (ImplicitContact& c : expected_contacts) c.active = c.body_b != f.bodies[0];
+  const Eigen::VectorXd expected = DenseSolve(f, expected_contacts);
+  ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
+                                   f.scratch));
   EXPECT_LE((Solved(f) - expected).lpNorm<Eigen::Infinity>(),
             kTol * expected.lpNorm<Eigen::Infinity>());
-  for (const ImplicitContact& c : rows) {
+  for (const ImplicitContact& c : contacts) {
     const bool upper = c.body_b == f.bodies[0];
     EXPECT_EQ(c.active, !upper);
     if (upper) {
@@ -237,15 +237,15 @@ TEST(GroupDynamics, PullingRowIsDroppedWithItsFriction) {
   }
 }
 
-TEST(GroupDynamics, ReportsRowForcesAtTheNewVelocities) {
+TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
   Fixture f = MakeFixture(1, 1, 1, 4);
   std::mt19937 rng(3);
-  std::vector<ImplicitContact> rows;
-  AddFace(rows, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
-  ASSERT_TRUE(
-      SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, rows, f.force, f.torque, f.scratch));
+  std::vector<ImplicitContact> contacts;
+  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
+                                   f.scratch));
   const BodyState& s = f.data.bodies[f.bodies[0]];
-  for (const ImplicitContact& c : rows) {
+  for (const ImplicitContact& c : contacts) {
     const Vec3 u = PointVelocity(s, c.r_a_W);
     EXPECT_NEAR(c.normal_force_N, c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W), 1e-12 * c.phi_n_N);
     const Vec3 ft = (c.phi_t1_N - c.c_t_Ns_per_m * u.dot(c.t1_W)) * c.t1_W +
@@ -258,11 +258,11 @@ TEST(GroupDynamics, RefusesAGroupBeyondItsCapacity) {
   Fixture f = MakeFixture(2, 2, 1, 6);
   f.scratch.Reserve(3, 12);  // three bodies, twelve contacts: the four-body group does not fit
   std::mt19937 rng(1);
-  std::vector<ImplicitContact> rows;
-  AddFace(rows, f.bodies[0], -1, Vec3::UnitZ(), false, rng);
+  std::vector<ImplicitContact> contacts;
+  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), false, rng);
   const BodyState before = f.data.bodies[f.bodies[0]];
-  EXPECT_FALSE(
-      SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, rows, f.force, f.torque, f.scratch));
+  EXPECT_FALSE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
+                                    f.scratch));
   EXPECT_EQ(f.data.bodies[f.bodies[0]].v_W, before.v_W);  // nothing written
 }
 
