@@ -94,7 +94,6 @@ bool Analyse(GroupSolverScratch& s, std::span<const int> slot,
     for (int i = 0; i < nb; ++i) {
       if (!s.eliminated[i] && (v < 0 || s.degree[i] < s.degree[v])) v = i;
     }
-    s.order[p] = v;
     s.pos[v] = p;
     s.eliminated[v] = 1;
     s.col_start[p] = nnz;
@@ -315,7 +314,6 @@ void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
   diag_inv.assign(max_bodies, Vec6::Zero());
   b.assign(max_bodies, Vec6::Zero());
   x.assign(max_bodies, Vec6::Zero());
-  order.assign(max_bodies, 0);
   pos.assign(max_bodies, 0);
   col_start.assign(max_bodies + 1, 0);
   col_row.assign(max_blocks, 0);

@@ -54,7 +54,7 @@ struct GroupSolverScratch {
   // 1 / diag(L), the right-hand side and then the solution
   std::vector<Mat6> diag_A;
   std::vector<Vec6> diag_inv, b, x;
-  std::vector<int> order, pos;  // position -> group slot; group slot -> position
+  std::vector<int> pos;  // group slot -> elimination position
   // the factor's below-diagonal blocks, column by column (CSR over positions): rows ascending
   std::vector<int> col_start, col_row;
   std::vector<Mat6> off_A;  // (max_blocks) assembled off-diagonal blocks, then the factor's

@@ -26,9 +26,19 @@ inline Vec3 PointVelocity(const BodyState& s, const Vec3& r_W) {
 /// Kinetic energy 1/2 m v.v + 1/2 w.I w  [J].
 double KineticEnergy(const BodyModel& b, const BodyState& s);
 
-/// Gyroscopic torque -w x (I w) of Eq. 1's B term  [N m].
-inline Vec3 GyroscopicTorque(const BodyModel& b, const BodyState& s) {
-  return -s.w_W.cross(WorldInertia(b, s) * s.w_W);
+/// I_W w = R diag(I) R^T w for the body's rotation R_WB (computed once per tick by the caller).
+inline Vec3 WorldInertiaTimes(const BodyModel& b, const Mat3& R_WB, const Vec3& w) {
+  return R_WB * (R_WB.transpose() * w).cwiseProduct(b.inertia_kgm2);
+}
+
+/// I_W^-1 tau = R diag(1/I) R^T tau for the body's rotation R_WB.
+inline Vec3 WorldInverseInertiaTimes(const BodyModel& b, const Mat3& R_WB, const Vec3& tau) {
+  return R_WB * (R_WB.transpose() * tau).cwiseQuotient(b.inertia_kgm2);
+}
+
+/// Gyroscopic torque -w x (I w) of Eq. 1's B term, for the body's rotation R_WB  [N m].
+inline Vec3 GyroscopicTorque(const BodyModel& b, const Mat3& R_WB, const Vec3& w) {
+  return -w.cross(WorldInertiaTimes(b, R_WB, w));
 }
 
 /// Semi-implicit Euler position update with the new velocities: x += h v, q = exp(h w) q, with

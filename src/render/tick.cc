@@ -189,8 +189,7 @@ void FreeMotion(const Model& model, Data& data, const Workspace& ws, int i) {
   const double h = model.timestep_s;
   BodyState& s = data.bodies[i];
   s.v_W += h / model.bodies[i].mass_kg * ws.force_W[i];
-  const Mat3& R = ws.R_WB[i];  // I_W^-1 tau = R diag(1/I) R^T tau
-  s.w_W += h * (R * (R.transpose() * ws.torque_W[i]).cwiseQuotient(model.bodies[i].inertia_kgm2));
+  s.w_W += h * dynamics::WorldInverseInertiaTimes(model.bodies[i], ws.R_WB[i], ws.torque_W[i]);
 }
 
 // the collision window of a group: restarted by an approaching new contact (METHOD.md
@@ -394,10 +393,7 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
     // a tool held through a device is gravity-compensated like the device itself
     const bool compensated = i == tool && model.device.coupling != Coupling::kNone;
     ws.force_W[i] = compensated ? Vec3::Zero() : Vec3(b.mass_kg * model.gravity_W);
-    // B of Eq. 1: -w x (I_W w), I_W w = R diag(I) R^T w
-    const Vec3& w = data.bodies[i].w_W;
-    const Mat3& R = ws.R_WB[i];
-    ws.torque_W[i] = -w.cross(R * (R.transpose() * w).cwiseProduct(b.inertia_kgm2));
+    ws.torque_W[i] = dynamics::GyroscopicTorque(b, ws.R_WB[i], data.bodies[i].w_W);
   }
   ws.force_W[tool] += user.force_N;
   ws.torque_W[tool] += user.torque_Nm;
