@@ -25,14 +25,15 @@ namespace rigidtouch::dynamics {
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-/// One scene contact of the implicit solve, at a point with offsets r_a, r_b from the two
-/// centres of mass, along the unit normal n (from b towards a). Its normal force is
-/// phi_n - c_n u_n at the new relative velocity u_n; while it sticks, its tangential forces along
-/// t1, t2 (an orthonormal basis of the tangent plane) are phi_t - c_t u_t. Forces act +on a, -on b.
+/// One scene contact of the implicit solve, at the point p (its offsets from the two bodies'
+/// centres of mass are p - x_a and p - x_b), along the unit normal n (from b towards a). Its normal
+/// force is phi_n - c_n u_n at the new relative velocity u_n; while it sticks, its tangential
+/// forces along t1, t2 (an orthonormal basis of the tangent plane) are phi_t - c_t u_t. Forces act
+/// +on a, -on b.
 struct ImplicitContact {
   int body_a = -1, body_b = -1;  // Model::bodies indices, -1 static
   Vec3 n_W = Vec3::UnitZ();
-  Vec3 r_a_W = Vec3::Zero(), r_b_W = Vec3::Zero();
+  Vec3 p_W = Vec3::Zero();
   double phi_n_N = 0.0;       // normal force independent of the new velocity
   double c_n_Ns_per_m = 0.0;  // h k + b: normal force per unit of new approach velocity
   bool stick = false;         // tangential rows present
@@ -62,6 +63,10 @@ struct GroupSolverScratch {
   std::vector<char> adj;    // (max_bodies^2) elimination graph over group slots
   std::vector<int> degree;
   std::vector<char> eliminated;
+  // the group's structure (slot pairs that share a contact, 2 per pair) and the structure the
+  // analysis above (pos, col_start, col_row, block) was made for: reused while they are equal
+  std::vector<int> pairs, analysed_pairs;
+  int npairs = 0, analysed_npairs = -1, analysed_nb = -1;
   void Reserve(int max_group_bodies, int max_contacts);
 };
 
@@ -70,7 +75,8 @@ struct GroupSolverScratch {
 /// Contacts whose normal force would pull after the solve are dropped (friction included) and
 /// the solve repeated (at most a few times), so the penalty never pulls. Each contact's forces at
 /// the new velocities are left in it. Returns false if the group exceeds the scratch's capacity
-/// or the factorisation failed (then nothing is written).
+/// or the factorisation failed (then nothing is written). The ordering and fill-in analysis is
+/// kept in the scratch and reused while the group's bodies touch the same neighbours.
 bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
                           std::span<const int> slot, std::span<ImplicitContact> contacts,
                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,

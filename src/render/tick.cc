@@ -131,8 +131,7 @@ bool ImplicitContactFor(const Model& model, Data& data, Workspace& ws, int ci,
   ic.body_a = c.body_a;
   ic.body_b = c.body_b;
   ic.n_W = c.n_W;
-  ic.r_a_W = r_a;
-  ic.r_b_W = r_b;
+  ic.p_W = c.p_W;
   ic.phi_n_N = law.k_N_per_m * c.depth_m;
   ic.c_n_Ns_per_m = h * law.k_N_per_m + law.b_Ns_per_m;
   ic.contact = ci;

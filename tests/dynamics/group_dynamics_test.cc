@@ -54,16 +54,15 @@ Fixture MakeFixture(int nx, int ny, int nz, unsigned seed) {
   return f;
 }
 
-// one contact point as the tick builds it: a normal row and, when sticking, two tangential rows
+// one contact point p as the tick builds it: a normal row and, when sticking, two tangential rows
 // along n.unitOrthogonal() and n x t1
-void AddContact(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3& n, const Vec3& ra,
-                const Vec3& rb, double phi, bool stick) {
+void AddContact(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3& n, const Vec3& p,
+                double phi, bool stick) {
   ImplicitContact c;
   c.body_a = a;
   c.body_b = b;
   c.n_W = n;
-  c.r_a_W = ra;
-  c.r_b_W = rb;
+  c.p_W = p;
   c.phi_n_N = phi;
   c.c_n_Ns_per_m = 300.0;
   c.stick = stick;
@@ -75,17 +74,21 @@ void AddContact(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3
   contacts.push_back(c);
 }
 
-// four corner points of a face between a and b (b = -1: the floor), one normal
-void AddFace(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3& n, bool stick,
-             std::mt19937& rng) {
+// four corner points of a's face towards -n, touching b (b = -1: the floor), one normal
+void AddFace(const Fixture& f, std::vector<ImplicitContact>& contacts, int a, int b, const Vec3& n,
+             bool stick, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
   for (int k = 0; k < 4; ++k) {
     const Vec3 corner = 0.025 * ((k & 1 ? 1.0 : -1.0) * t1 + (k & 2 ? 1.0 : -1.0) * t2);
     const Vec3 ra = -0.025 * n + corner + 1e-3 * Vec3(u(rng), u(rng), u(rng));
-    const Vec3 rb = b >= 0 ? Vec3(0.025 * n + corner) : Vec3(ra + Vec3(0.1, 0.2, 0.0));
-    AddContact(contacts, a, b, n, ra, rb, 20.0 + u(rng), stick);
+    AddContact(contacts, a, b, n, f.data.bodies[a].x_W + ra, 20.0 + u(rng), stick);
   }
+}
+
+// the contact point's offset from body i's centre of mass
+Vec3 Offset(const Fixture& f, int i, const ImplicitContact& c) {
+  return c.p_W - f.data.bodies[i].x_W;
 }
 
 // the rows of the active contacts: direction, force phi, coefficient c
@@ -126,11 +129,11 @@ Eigen::VectorXd DenseSolve(const Fixture& f, const std::vector<ImplicitContact>&
     Eigen::VectorXd j = Eigen::VectorXd::Zero(n);
     if (c.body_a >= 0) {
       j.segment<3>(6 * f.slot[c.body_a]) += r.d;
-      j.segment<3>(6 * f.slot[c.body_a] + 3) += c.r_a_W.cross(r.d);
+      j.segment<3>(6 * f.slot[c.body_a] + 3) += Offset(f, c.body_a, c).cross(r.d);
     }
     if (c.body_b >= 0) {
       j.segment<3>(6 * f.slot[c.body_b]) -= r.d;
-      j.segment<3>(6 * f.slot[c.body_b] + 3) -= c.r_b_W.cross(r.d);
+      j.segment<3>(6 * f.slot[c.body_b] + 3) -= Offset(f, c.body_b, c).cross(r.d);
     }
     H += h * r.c * j * j.transpose();
     rhs += h * r.phi * j;
@@ -162,10 +165,14 @@ TEST(GroupDynamics, ColumnOfFacesMatchesDenseSolve) {
   Fixture f = MakeFixture(1, 1, 4, 1);
   std::mt19937 rng(7);
   std::vector<ImplicitContact> contacts;
-  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
-  AddFace(contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
-  AddFace(contacts, f.bodies[2], f.bodies[1], Vec3(0.1, 0.0, 1.0).normalized(), false, rng);
-  AddFace(contacts, f.bodies[1], f.bodies[3], -Vec3::UnitZ(), true, rng);  // b above a
+  AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[2], f.bodies[1], Vec3(0.1, 0.0, 1.0).normalized(), false, rng);
+  AddFace(f, contacts, f.bodies[1], f.bodies[3], -Vec3::UnitZ(), true, rng);  // b above a
+  // the static world as body a: a ceiling pressing on the top box
+  const Vec3 top = f.data.bodies[f.bodies[3]].x_W;
+  AddContact(contacts, -1, f.bodies[3], Vec3::UnitZ(), top + Vec3(0.02, -0.01, 0.025), 5.0, true);
+  AddContact(contacts, -1, f.bodies[3], Vec3::UnitZ(), top + Vec3(-0.02, 0.01, 0.025), 6.0, true);
   ExpectMatchesDense(f, contacts);
 }
 
@@ -180,20 +187,21 @@ TEST(GroupDynamics, LatticeWithFillInMatchesDenseSolve) {
   for (int z = 0; z < 3; ++z) {
     for (int y = 0; y < 3; ++y) {
       for (int x = 0; x < 4; ++x) {
-        if (z == 0) AddFace(contacts, id(x, y, z), -1, Vec3::UnitZ(), (x + y) % 2 == 0, rng);
-        if (z == 2 && x == 1) {  // a contact between two points of one body (J = J_a - J_b)
-          AddContact(contacts, id(x, y, z), id(x, y, z), Vec3::UnitX(), Vec3(0.02, 0.0, 0.01),
-                     Vec3(-0.01, 0.02, 0.0), 20.0, y == 1);
+        const Vec3 x_W = f.data.bodies[id(x, y, z)].x_W;
+        if (z == 0) AddFace(f, contacts, id(x, y, z), -1, Vec3::UnitZ(), (x + y) % 2 == 0, rng);
+        if (z == 2 && x == 1) {  // a contact of a body with itself: J = J_a - J_b = 0, no effect
+          AddContact(contacts, id(x, y, z), id(x, y, z), Vec3::UnitX(), x_W + Vec3(0.02, 0.0, 0.01),
+                     20.0, y == 1);
         }
-        if (z > 0) AddFace(contacts, id(x, y, z), id(x, y, z - 1), Vec3::UnitZ(), true, rng);
+        if (z > 0) AddFace(f, contacts, id(x, y, z), id(x, y, z - 1), Vec3::UnitZ(), true, rng);
         if (x > 0) {
           const Vec3 n = Vec3(1.0, 0.05 * u(rng), 0.05 * u(rng)).normalized();
-          AddContact(contacts, id(x, y, z), id(x - 1, y, z), n, Vec3(-0.025, 0.01 * u(rng), 0.0),
-                     Vec3(0.025, 0.0, 0.01 * u(rng)), 20.0, x % 2 == 0);
+          AddContact(contacts, id(x, y, z), id(x - 1, y, z), n,
+                     x_W + Vec3(-0.025, 0.01 * u(rng), 0.01 * u(rng)), 20.0, x % 2 == 0);
         }
         if (y > 0) {
           AddContact(contacts, id(x, y - 1, z), id(x, y, z), -Vec3::UnitY(),
-                     Vec3(0.0, 0.025, 0.01 * u(rng)), Vec3(0.0, -0.025, 0.0), 20.0, true);
+                     x_W + Vec3(0.0, -0.025, 0.01 * u(rng)), 20.0, true);
         }
       }
     }
@@ -207,8 +215,8 @@ TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
   Fixture f = MakeFixture(1, 1, 2, 3);
   std::mt19937 rng(5);
   std::vector<ImplicitContact> contacts;
-  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
-  AddFace(contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
   for (int i : f.bodies) {
     f.data.bodies[i].v_W.setZero();
     f.data.bodies[i].w_W.setZero();
@@ -241,12 +249,12 @@ TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
   Fixture f = MakeFixture(1, 1, 1, 4);
   std::mt19937 rng(3);
   std::vector<ImplicitContact> contacts;
-  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
                                    f.scratch));
   const BodyState& s = f.data.bodies[f.bodies[0]];
   for (const ImplicitContact& c : contacts) {
-    const Vec3 u = PointVelocity(s, c.r_a_W);
+    const Vec3 u = PointVelocity(s, Offset(f, f.bodies[0], c));
     EXPECT_NEAR(c.normal_force_N, c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W), 1e-12 * c.phi_n_N);
     const Vec3 ft = (c.phi_t1_N - c.c_t_Ns_per_m * u.dot(c.t1_W)) * c.t1_W +
                     (c.phi_t2_N - c.c_t_Ns_per_m * u.dot(c.t2_W)) * c.t2_W;
@@ -259,7 +267,7 @@ TEST(GroupDynamics, RefusesAGroupBeyondItsCapacity) {
   f.scratch.Reserve(3, 12);  // three bodies, twelve contacts: the four-body group does not fit
   std::mt19937 rng(1);
   std::vector<ImplicitContact> contacts;
-  AddFace(contacts, f.bodies[0], -1, Vec3::UnitZ(), false, rng);
+  AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), false, rng);
   const BodyState before = f.data.bodies[f.bodies[0]];
   EXPECT_FALSE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
                                     f.scratch));
