@@ -176,29 +176,21 @@ bool Analyse(GroupSolverScratch& s, int nb) {
 // its upper right 3 x 3 block is left out.
 void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, const Vec3& P,
                    const Vec3& Q, const Mat3& S, bool diagonal) {
-  const Vec3 nxQ = dc * n.cross(Q), Pxn = dc * P.cross(n), cn = count * dc * n;
-  // [n]x S [n]x^T: M = [n]x S column by column (n x S_j), then row i of M [n]x^T is n x M_i
-  Mat3 M, NSN;
-  for (int j = 0; j < 3; ++j) M.col(j) = n.cross(S.col(j));
-  for (int i = 0; i < 3; ++i) NSN.row(i) = n.cross(Vec3(M.row(i).transpose())).transpose();
-  const Mat3 BR = dc * NSN - ct * S.transpose();
-  const double tr = ct * S.trace();
-  for (int j = 0; j < 3; ++j) {  // a column at a time (contiguous in A)
-    A.col(j).head<3>() += n(j) * cn;
-    A.col(j).tail<3>() += n(j) * Pxn;
-    if (!diagonal) A.col(3 + j).head<3>() -= nxQ(j) * n;
-    A.col(3 + j).tail<3>() += BR.col(j);
-    A(j, j) += count * ct;
-    A(3 + j, 3 + j) += tr;
+  // written out in scalars: Eigen's 3-vector cross products on matrix rows cost twice as much
+  const double nx = n.x(), ny = n.y(), nz = n.z();
+  const double kct = count * ct, kdc = count * dc;
+  // top left: count C
+  const double c_nn[3][3] = {
+      {nx * nx, nx * ny, nx * nz}, {ny * nx, ny * ny, ny * nz}, {nz * nx, nz * ny, nz * nz}};
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) A(i, j) += kdc * c_nn[i][j];
+    A(j, j) += kct;
   }
-  // the ct [Q]x and ct [P]x terms
-  if (!diagonal) {
-    A(0, 4) += ct * Q.z();
-    A(0, 5) -= ct * Q.y();
-    A(1, 3) -= ct * Q.z();
-    A(1, 5) += ct * Q.x();
-    A(2, 3) += ct * Q.y();
-    A(2, 4) -= ct * Q.x();
+  // bottom left: [P]x C = ct [P]x + dc (P x n) n^T
+  const double pn[3] = {dc * (P.y() * nz - P.z() * ny), dc * (P.z() * nx - P.x() * nz),
+                        dc * (P.x() * ny - P.y() * nx)};
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) A(3 + i, j) += pn[i] * n(j);
   }
   A(3, 1) -= ct * P.z();
   A(3, 2) += ct * P.y();
@@ -206,6 +198,35 @@ void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, cons
   A(4, 2) -= ct * P.x();
   A(5, 0) -= ct * P.y();
   A(5, 1) += ct * P.x();
+  // top right: -C [Q]x = -ct [Q]x - dc n (n x Q)^T (a diagonal block's upper triangle is unread)
+  if (!diagonal) {
+    const double nq[3] = {dc * (ny * Q.z() - nz * Q.y()), dc * (nz * Q.x() - nx * Q.z()),
+                          dc * (nx * Q.y() - ny * Q.x())};
+    for (int j = 0; j < 3; ++j) {
+      for (int i = 0; i < 3; ++i) A(i, 3 + j) -= n(i) * nq[j];
+    }
+    A(0, 4) += ct * Q.z();
+    A(0, 5) -= ct * Q.y();
+    A(1, 3) -= ct * Q.z();
+    A(1, 5) += ct * Q.x();
+    A(2, 3) += ct * Q.y();
+    A(2, 4) -= ct * Q.x();
+  }
+  // bottom right: ct ((tr S) I - S^T) + dc [n]x S [n]x^T; U = [n]x S a column at a time, then
+  // row i of U [n]x^T is (n x U_i)^T
+  double U[3][3];
+  for (int j = 0; j < 3; ++j) {
+    U[0][j] = ny * S(2, j) - nz * S(1, j);
+    U[1][j] = nz * S(0, j) - nx * S(2, j);
+    U[2][j] = nx * S(1, j) - ny * S(0, j);
+  }
+  const double tr = ct * (S(0, 0) + S(1, 1) + S(2, 2));
+  for (int i = 0; i < 3; ++i) {
+    const double nsn[3] = {ny * U[i][2] - nz * U[i][1], nz * U[i][0] - nx * U[i][2],
+                           nx * U[i][1] - ny * U[i][0]};
+    for (int j = 0; j < 3; ++j) A(3 + i, 3 + j) += dc * nsn[j] - ct * S(j, i);
+    A(3 + i, 3 + i) += tr;
+  }
 }
 
 // true if contacts i and j share their blocks' assembly: same bodies, normal and coefficients
@@ -232,7 +253,7 @@ void AssemblePatch(GroupSolverScratch& s, const Data& data, std::span<const int>
   for (int k = begin; k < end; ++k) {
     const ImplicitContact& c = contacts[k];
     Vec3 f = c.phi_n_N * c.n_W;
-    if (c.stick) f += c.phi_t1_N * c.t1_W + c.phi_t2_N * c.t2_W;
+    if (c.stick) f += c.phi_t_W;
     const Vec3 r = c.p_W - origin;
     F += f;
     T += r.cross(f);
@@ -344,6 +365,7 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
     s.b[p] << bm.mass_kg * st.v_W + h * force_W[i], I * st.w_W + h * torque_W[i];
   }
   for (int e = 0; e < s.col_start[nb]; ++e) s.off_A[e].setZero();
+  s.npatch = 0;
   for (int begin = 0; begin < nc;) {
     int end = begin + 1;
     if (!contacts[begin].active) {
@@ -352,8 +374,49 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
     }
     while (end < nc && contacts[end].active && SamePatch(contacts[begin], contacts[end])) ++end;
     AssemblePatch(s, data, slot, contacts, begin, end, h, nb);
+    s.patch_start[s.npatch] = begin;
+    s.patch_start[++s.npatch] = end;
     begin = end;
   }
+}
+
+// the forces of patch [begin, end) at the solved velocities. With r = p - x_a and d = x_a - x_b,
+// a point's relative velocity is (v_a - v_b - w_b x d) + (w_a - w_b) x r: one cross product per
+// point. `may_drop`: a contact whose normal force would pull is taken out (active = false, no
+// force) and true returned, so the system is solved again without it.
+bool PatchForces(const GroupSolverScratch& s, const Data& data, std::span<const int> slot,
+                 std::span<ImplicitContact> contacts, int begin, int end, bool may_drop) {
+  const ImplicitContact& first = contacts[begin];
+  const bool has_a = first.body_a >= 0, has_b = first.body_b >= 0;
+  const Vec3& origin = data.bodies[has_a ? first.body_a : first.body_b].x_W;
+  Vec3 v0 = Vec3::Zero(), w = Vec3::Zero();
+  if (has_a) {
+    const Vec6& x = s.x[s.pos[slot[first.body_a]]];
+    v0 += x.head<3>();
+    w += x.tail<3>();
+  }
+  if (has_b) {
+    const Vec6& x = s.x[s.pos[slot[first.body_b]]];
+    v0 -= x.head<3>();
+    w -= x.tail<3>();
+    if (has_a) v0 -= x.tail<3>().cross(origin - data.bodies[first.body_b].x_W);
+  }
+  bool pulled = false;
+  for (int k = begin; k < end; ++k) {
+    ImplicitContact& c = contacts[k];
+    const Vec3 u = v0 + w.cross(c.p_W - origin);
+    const double un = u.dot(c.n_W);
+    const double fn = c.phi_n_N - c.c_n_Ns_per_m * un;
+    if (may_drop && fn < 0.0) {
+      // a contact that stops pushing has no friction either
+      c.active = false;
+      pulled = true;
+      continue;
+    }
+    c.normal_force_N = fn;
+    if (c.stick) c.friction_force_W = c.phi_t_W - c.c_t_Ns_per_m * (u - un * c.n_W);
+  }
+  return pulled;
 }
 
 }  // namespace
@@ -382,6 +445,8 @@ void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
   analysed_pairs.assign(2 * static_cast<std::size_t>(max_contacts), 0);
   npairs = 0;
   analysed_npairs = analysed_nb = -1;
+  patch_start.assign(static_cast<std::size_t>(max_contacts) + 1, 0);
+  npatch = 0;
 }
 
 bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
@@ -402,41 +467,18 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
     s.analysed_nb = nb;
   }
 
-  bool assembled = false;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
-    // the factorisation overwrites the system: assemble again after contacts were dropped
-    if (!assembled) Assemble(model, data, bodies, slot, contacts, force_W, torque_W, s);
-    assembled = true;
+    // the factorisation overwrites the system: each pass assembles it over the contacts left
+    Assemble(model, data, bodies, slot, contacts, force_W, torque_W, s);
     if (!FactorAndSolve(s, nb)) return false;
-    bool pulled = false;
-    for (int k = 0; k < nc; ++k) {
-      ImplicitContact& c = contacts[k];
+    for (ImplicitContact& c : contacts) {
       c.normal_force_N = 0.0;
       c.friction_force_W.setZero();
-      if (!c.active) continue;
-      // relative velocity of the points at the new velocities
-      Vec3 u = Vec3::Zero();
-      if (c.body_a >= 0) {
-        const Vec6& v = s.x[s.pos[slot[c.body_a]]];
-        u += v.head<3>() + v.tail<3>().cross(c.p_W - data.bodies[c.body_a].x_W);
-      }
-      if (c.body_b >= 0) {
-        const Vec6& v = s.x[s.pos[slot[c.body_b]]];
-        u -= v.head<3>() + v.tail<3>().cross(c.p_W - data.bodies[c.body_b].x_W);
-      }
-      c.normal_force_N = c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W);
-      if (c.stick) {
-        c.friction_force_W = (c.phi_t1_N - c.c_t_Ns_per_m * u.dot(c.t1_W)) * c.t1_W +
-                             (c.phi_t2_N - c.c_t_Ns_per_m * u.dot(c.t2_W)) * c.t2_W;
-      }
-      if (pass + 1 < kMaxPasses && c.normal_force_N < 0.0) {
-        // a contact that stops pushing has no friction either: take it out and solve again
-        c.active = false;
-        assembled = false;
-        c.normal_force_N = 0.0;
-        c.friction_force_W.setZero();
-        pulled = true;
-      }
+    }
+    bool pulled = false;
+    for (int q = 0; q < s.npatch; ++q) {
+      pulled |= PatchForces(s, data, slot, contacts, s.patch_start[q], s.patch_start[q + 1],
+                            pass + 1 < kMaxPasses);
     }
     if (!pulled) break;
   }

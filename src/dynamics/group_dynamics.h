@@ -28,8 +28,9 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 /// One scene contact of the implicit solve, at the point p (its offsets from the two bodies'
 /// centres of mass are p - x_a and p - x_b), along the unit normal n (from b towards a). Its normal
 /// force is phi_n - c_n u_n at the new relative velocity u_n; while it sticks, its tangential
-/// forces along t1, t2 (an orthonormal basis of the tangent plane) are phi_t - c_t u_t. Forces act
-/// +on a, -on b.
+/// force is phi_t - c_t u_t (phi_t and the tangential velocity u_t both in the tangent plane, so
+/// this is the two tangential rows of any orthonormal tangent basis at once). Forces act +on a,
+/// -on b.
 struct ImplicitContact {
   int body_a = -1, body_b = -1;  // Model::bodies indices, -1 static
   Vec3 n_W = Vec3::UnitZ();
@@ -37,8 +38,8 @@ struct ImplicitContact {
   double phi_n_N = 0.0;       // normal force independent of the new velocity
   double c_n_Ns_per_m = 0.0;  // h k + b: normal force per unit of new approach velocity
   bool stick = false;         // tangential rows present
-  Vec3 t1_W = Vec3::UnitX(), t2_W = Vec3::UnitY();
-  double phi_t1_N = 0.0, phi_t2_N = 0.0;
+  Vec3 phi_t_W =
+      Vec3::Zero();  // tangential force independent of the new velocity, on a (n . phi_t = 0)
   double c_t_Ns_per_m = 0.0;
   int contact = -1;    // index in data.contacts
   bool active = true;  // false once dropped for pulling
@@ -66,6 +67,8 @@ struct GroupSolverScratch {
   // the group's structure (slot pairs that share a contact, 2 per pair) and the structure the
   // analysis above (pos, col_start, col_row, block) was made for: reused while they are equal
   std::vector<int> pairs, analysed_pairs;
+  std::vector<int> patch_start;  // (max_contacts + 1) the assembled patches' contact ranges
+  int npatch = 0;
   int npairs = 0, analysed_npairs = -1, analysed_nb = -1;
   void Reserve(int max_group_bodies, int max_contacts);
 };

@@ -138,12 +138,9 @@ bool ImplicitContactFor(const Model& model, Data& data, Workspace& ws, int ci,
   // stick or slip was decided for the whole geom pair (DecidePatchFriction)
   const Vec3 s = ws.anchor_displacement[ci];  // computed by DecidePatchFriction this tick
   if (c.sticking) {
-    // tangential rows along an orthonormal basis of the tangent plane
+    // the anchor spring (s lies in the tangent plane) with implicit tangential damping
     ic.stick = true;
-    ic.t1_W = c.n_W.unitOrthogonal();
-    ic.t2_W = c.n_W.cross(ic.t1_W);
-    ic.phi_t1_N = -law.kt_N_per_m * s.dot(ic.t1_W);
-    ic.phi_t2_N = -law.kt_N_per_m * s.dot(ic.t2_W);
+    ic.phi_t_W = -law.kt_N_per_m * s;
     ic.c_t_Ns_per_m = h * law.kt_N_per_m + law.bt_Ns_per_m;
   } else {
     // kinetic friction opposes the stretch of the anchor, which trails the sliding contact

@@ -54,8 +54,8 @@ Fixture MakeFixture(int nx, int ny, int nz, unsigned seed) {
   return f;
 }
 
-// one contact point p as the tick builds it: a normal row and, when sticking, two tangential rows
-// along n.unitOrthogonal() and n x t1
+// one contact point p as the tick builds it: a normal row and, when sticking, a tangential force
+// in the tangent plane (the dense reference turns it into two tangential rows)
 void AddContact(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3& n, const Vec3& p,
                 double phi, bool stick) {
   ImplicitContact c;
@@ -66,10 +66,7 @@ void AddContact(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3
   c.phi_n_N = phi;
   c.c_n_Ns_per_m = 300.0;
   c.stick = stick;
-  c.t1_W = n.unitOrthogonal();
-  c.t2_W = n.cross(c.t1_W);
-  c.phi_t1_N = 0.3;
-  c.phi_t2_N = -0.2;
+  c.phi_t_W = 0.3 * n.unitOrthogonal() - 0.2 * n.cross(n.unitOrthogonal());
   c.c_t_Ns_per_m = 150.0;
   contacts.push_back(c);
 }
@@ -103,8 +100,12 @@ std::vector<Row> RowsOf(const std::vector<ImplicitContact>& contacts) {
     if (!c.active) continue;
     rows.push_back(Row{&c, c.n_W, c.phi_n_N, c.c_n_Ns_per_m});
     if (!c.stick) continue;
-    rows.push_back(Row{&c, c.t1_W, c.phi_t1_N, c.c_t_Ns_per_m});
-    rows.push_back(Row{&c, c.t2_W, c.phi_t2_N, c.c_t_Ns_per_m});
+    // any orthonormal tangent basis: one not aligned with the one phi_t was built in
+    const Vec3 t1 =
+        (c.n_W.unitOrthogonal() + 0.5 * c.n_W.cross(c.n_W.unitOrthogonal())).normalized();
+    const Vec3 t2 = c.n_W.cross(t1);
+    rows.push_back(Row{&c, t1, c.phi_t_W.dot(t1), c.c_t_Ns_per_m});
+    rows.push_back(Row{&c, t2, c.phi_t_W.dot(t2), c.c_t_Ns_per_m});
   }
   return rows;
 }
@@ -269,18 +270,28 @@ TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
 }
 
 TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
-  Fixture f = MakeFixture(1, 1, 1, 4);
+  // a box on the floor, a box on it (spinning, so the lower face's points move differently on the
+  // two boxes) and a ceiling point pressing the top box: each contact's reported forces are its
+  // rows' forces at the relative velocity of its point on the two solved bodies
+  Fixture f = MakeFixture(1, 1, 2, 4);
   std::mt19937 rng(3);
   std::vector<ImplicitContact> contacts;
   AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[1], f.bodies[0], Vec3(0.1, 0.0, 1.0).normalized(), true, rng);
+  const Vec3 top = f.data.bodies[f.bodies[1]].x_W;
+  AddContact(contacts, -1, f.bodies[1], Vec3::UnitZ(), top + Vec3(0.01, 0.02, 0.025), 20.0, true);
+  for (int i : f.bodies) f.data.bodies[i].w_W = Vec3(0.3, -0.2, 0.5);
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
                                    f.scratch));
-  const BodyState& s = f.data.bodies[f.bodies[0]];
   for (const ImplicitContact& c : contacts) {
-    const Vec3 u = PointVelocity(s, Offset(f, f.bodies[0], c));
+    ASSERT_TRUE(c.active);
+    Vec3 u = Vec3::Zero();
+    if (c.body_a >= 0) u += PointVelocity(f.data.bodies[c.body_a], Offset(f, c.body_a, c));
+    if (c.body_b >= 0) u -= PointVelocity(f.data.bodies[c.body_b], Offset(f, c.body_b, c));
     EXPECT_NEAR(c.normal_force_N, c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W), 1e-12 * c.phi_n_N);
-    const Vec3 ft = (c.phi_t1_N - c.c_t_Ns_per_m * u.dot(c.t1_W)) * c.t1_W +
-                    (c.phi_t2_N - c.c_t_Ns_per_m * u.dot(c.t2_W)) * c.t2_W;
+    const Vec3 t1 = c.n_W.unitOrthogonal(), t2 = c.n_W.cross(t1);
+    const Vec3 ft = (c.phi_t_W.dot(t1) - c.c_t_Ns_per_m * u.dot(t1)) * t1 +
+                    (c.phi_t_W.dot(t2) - c.c_t_Ns_per_m * u.dot(t2)) * t2;
     EXPECT_LE((c.friction_force_W - ft).norm(), 1e-12 * c.phi_n_N);
   }
 }
