@@ -82,8 +82,8 @@ void Accumulate(Workspace& ws, const Contact& c, const Vec3& f_on_a, const Vec3&
 void ExplicitContact(Data& data, Workspace& ws, int ci) {
   Contact& c = data.contacts[ci];
   const contact::PenaltyLaw& law = ws.laws[ci];
-  const Vec3& r_a = ws.r_a[ci];
-  const Vec3& r_b = ws.r_b[ci];
+  Vec3 r_a, r_b;
+  Offsets(data, c, &r_a, &r_b);
   const Vec3 u = RelativeVelocity(data, c, r_a, r_b);
   const double un = u.dot(c.n_W);
   const double fn = contact::NormalForce(law, c.depth_m, un);
@@ -122,8 +122,6 @@ bool ImplicitContactFor(const Model& model, Data& data, Workspace& ws, int ci,
     c.sticking = false;
     return false;
   }
-  const Vec3& r_a = ws.r_a[ci];
-  const Vec3& r_b = ws.r_b[ci];
   // backward Euler: depth after the step is d - h u_n+, so the force is k d - (h k + b) u_n+;
   // every penetrating point enters the solve, and SolveGroupVelocities drops the contacts that
   // would pull at the new velocities (a trial on the old velocities would react to velocity noise)
@@ -149,6 +147,8 @@ bool ImplicitContactFor(const Model& model, Data& data, Workspace& ws, int ci,
         stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * ic.phi_n_N / stretch)) : Vec3::Zero();
     SlideAnchor(data, ws, c, s, ft, law.kt_N_per_m);
     c.friction_force_W = ft;
+    Vec3 r_a, r_b;
+    Offsets(data, c, &r_a, &r_b);
     Accumulate(ws, c, ft, r_a, r_b);
   }
   return true;
@@ -240,8 +240,7 @@ void GroupImpulse(const Model& model, Data& data, Workspace& ws, int g, WindowSt
     row.body_a = c.body_a >= 0 ? G.slot[c.body_a] : -1;
     row.body_b = c.body_b >= 0 ? G.slot[c.body_b] : -1;
     row.n_W = c.n_W;
-    row.r_a_W = ws.r_a[ci];
-    row.r_b_W = ws.r_b[ci];
+    Offsets(data, c, &row.r_a_W, &row.r_b_W);
     tool = tool || c.body_a == model.tool || c.body_b == model.tool;
   }
   const std::span<contact::SolverBody> bodies(ws.solver_bodies.data(), nb);
@@ -361,10 +360,13 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   for (int i = 0; i < nbody; ++i) ws.R_WB[i] = data.bodies[i].q_WB.toRotationMatrix();
   for (int ci = 0; ci < data.ncontact; ++ci) {
     Contact& c = data.contacts[ci];
-    Offsets(data, c, &ws.r_a[ci], &ws.r_b[ci]);
     // the approach speed only matters for a new contact (a collision onset, GroupWindow)
-    ws.normal_velocity[ci] =
-        c.is_new ? RelativeVelocity(data, c, ws.r_a[ci], ws.r_b[ci]).dot(c.n_W) : 0.0;
+    ws.normal_velocity[ci] = 0.0;
+    if (c.is_new) {
+      Vec3 r_a, r_b;
+      Offsets(data, c, &r_a, &r_b);
+      ws.normal_velocity[ci] = RelativeVelocity(data, c, r_a, r_b).dot(c.n_W);
+    }
     // one law per geom pair: its points are consecutive
     const bool same_pair = ci > 0 && data.contacts[ci - 1].geom_a == c.geom_a &&
                            data.contacts[ci - 1].geom_b == c.geom_b &&
