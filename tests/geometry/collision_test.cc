@@ -3,6 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
@@ -66,6 +73,66 @@ TEST(CollisionTest, IdentitySurvivesSlidingAndEndsOnSeparation) {
   ASSERT_EQ(d.ncontact, 1);
   EXPECT_NE(d.contacts[0].id, id);
   EXPECT_TRUE(d.contacts[0].is_new);
+}
+
+// DetectContacts sets the static geoms' poses once and, for a sphere that takes no MuJoCo pair,
+// only the centre: every pose part that is read, and every geom's check, must still be what
+// GeomPoses and PoseFinite give for the bodies as they are now, however they moved, and with
+// non-finite or huge (finite, unnormalised) quaternions
+TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
+  using geometry::GeomCheck;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const char* scene :
+       {"stack3.xml", "two_spheres.xml", "capsule_mesh.xml", "sphere_plane.xml"}) {
+    SCOPED_TRACE(scene);
+    const Model m = LoadModel(test::TestScene(scene), {});
+    Data d = MakeData(m);
+    geometry::CollisionScratch s;
+    s.Reserve(m);
+    const int ngeom = static_cast<int>(m.geoms.size());
+    std::vector<geometry::GeomPose> expected(ngeom);
+    for (int trial = 0; trial < 200; ++trial) {
+      if (trial == 100) s.Reset(m);
+      for (BodyState& b : d.bodies) {
+        b.x_W = 0.05 * Vec3(u(rng), u(rng), u(rng));
+        b.q_WB = Quat(u(rng), u(rng), u(rng), u(rng)).normalized();
+        switch (trial % 10) {
+          case 7:
+            b.q_WB.x() = nan;
+            break;
+          case 8:
+            b.q_WB.coeffs() *= 1e200;  // finite, but its rotation matrix overflows
+            break;
+          case 9:
+            b.x_W.y() = inf;
+            break;
+          default:
+            break;
+        }
+      }
+      geometry::DetectContacts(m, d, s);
+      geometry::GeomPoses(m, d.bodies, expected);
+      for (int g = 0; g < ngeom; ++g) {
+        const bool centre_only = m.geoms[g].type == GeomType::kSphere && m.geoms[g].body >= 0 &&
+                                 std::string(scene) != "capsule_mesh.xml";
+        // bitwise: NaN compares unequal to itself
+        EXPECT_EQ(std::memcmp(s.poses[g].p_W.data(), expected[g].p_W.data(), sizeof(Vec3)), 0)
+            << "geom " << g << " trial " << trial;
+        if (!centre_only) {
+          EXPECT_EQ(std::memcmp(s.poses[g].R_WG.data(), expected[g].R_WG.data(), sizeof(Mat3)), 0)
+              << "geom " << g << " trial " << trial;
+        }
+        const GeomCheck kind = s.geom_kind[g];
+        const GeomCheck check = kind == GeomCheck::kAccepted && !geometry::PoseFinite(expected[g])
+                                    ? GeomCheck::kRejected
+                                    : kind;
+        EXPECT_EQ(s.geom_check[g], check) << "geom " << g << " trial " << trial;
+      }
+    }
+  }
 }
 
 }  // namespace
