@@ -142,7 +142,11 @@ void CollisionScratch::Reserve(const Model& model) {
     // sufficient for a finite rotation matrix; MuJoCo gives unit quaternions
     const bool centre_only = geom.type == GeomType::kSphere && !any_mujoco &&
                              geom.quat_B.coeffs().cwiseAbs().maxCoeff() <= 2.0;
-    moving.push_back(MovingGeom{static_cast<int>(g), centre_only});
+    // +0 in every component, not -0
+    const bool at_origin = geom.pos_B.x() == 0.0 && geom.pos_B.y() == 0.0 &&
+                           geom.pos_B.z() == 0.0 && !std::signbit(geom.pos_B.x()) &&
+                           !std::signbit(geom.pos_B.y()) && !std::signbit(geom.pos_B.z());
+    moving.push_back(MovingGeom{static_cast<int>(g), centre_only, centre_only && at_origin});
   }
   SetStaticPoses(model, *this);
   run_start.assign(model.geoms.size() + 1, 0);
@@ -293,17 +297,21 @@ void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
     const GeomModel& geom = model.geoms[m.geom];
     const BodyState& b = data.bodies[geom.body];
     GeomPose& pose = s.poses[m.geom];
-    pose.p_W = b.x_W + b.q_WB * geom.pos_B;
     const GeomCheck kind = s.geom_kind[m.geom];
     if (m.centre_only && std::abs(b.q_WB.x()) <= kBoundedQuat &&
         std::abs(b.q_WB.y()) <= kBoundedQuat && std::abs(b.q_WB.z()) <= kBoundedQuat &&
         std::abs(b.q_WB.w()) <= kBoundedQuat) {
+      // a finite q turns (+0, +0, +0) into (+0, +0, +0): every product is a signed zero, and the
+      // sums start from +0 (+0 + -0 is +0); adding +0 keeps x_W's bits but for -0, as the full
+      // expression does
+      pose.p_W = m.at_body_origin ? Vec3(b.x_W + Vec3::Zero()) : Vec3(b.x_W + b.q_WB * geom.pos_B);
       // the rotation matrix would be finite, so PoseFinite is whether the centre is
       s.geom_check[m.geom] =
           kind == GeomCheck::kAccepted && !((pose.p_W.array() * 0.0).sum() == 0.0)
               ? GeomCheck::kRejected
               : kind;
     } else {
+      pose.p_W = b.x_W + b.q_WB * geom.pos_B;
       pose.R_WG = (b.q_WB * geom.quat_B).toRotationMatrix();
       s.geom_check[m.geom] = CheckPose(kind, pose);
     }

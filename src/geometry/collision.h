@@ -31,6 +31,8 @@ struct MovingGeom {
   // a sphere whose rotation matrix nothing reads (no geom of the model takes MuJoCo's path, which
   // copies both geoms' rotations): its pose is its centre, R_WG is left as it was
   bool centre_only = false;
+  // a centre-only sphere at its body's origin (pos_B is +0): its centre is the body's position
+  bool at_body_origin = false;
 };
 
 /// Scratch of the collision stage, sized by Reserve.

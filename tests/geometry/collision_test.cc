@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rigidtouch/rigidtouch.h"
@@ -75,20 +76,41 @@ TEST(CollisionTest, IdentitySurvivesSlidingAndEndsOnSeparation) {
   EXPECT_TRUE(d.contacts[0].is_new);
 }
 
+// bitwise equal (so -0 differs from +0), or both NaN: the sign and payload of a NaN depend on
+// the order the compiler gives a commutative operation's operands
+bool SameBits(const double* a, const double* b, int n) {
+  for (int i = 0; i < n; ++i) {
+    if (std::memcmp(&a[i], &b[i], sizeof(double)) != 0 && !(std::isnan(a[i]) && std::isnan(b[i]))) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // DetectContacts sets the static geoms' poses once and, for a sphere that takes no MuJoCo pair,
-// only the centre: every pose part that is read, and every geom's check, must still be what
-// GeomPoses and PoseFinite give for the bodies as they are now, however they moved, and with
-// non-finite or huge (finite, unnormalised) quaternions
+// only the centre (the body's position when the sphere sits at its origin): every pose part that
+// is read, and every geom's check, must still be bitwise what GeomPoses and PoseFinite give for
+// the bodies as they are now, however they moved, with signed zeros, and with non-finite or huge
+// (finite, unnormalised) quaternions; spheres also off their body's origin, and at -0
 TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
   using geometry::GeomCheck;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
-  for (const char* scene :
-       {"stack3.xml", "two_spheres.xml", "capsule_mesh.xml", "sphere_plane.xml"}) {
+  const std::vector<std::pair<const char*, Vec3>> variants = {
+      {"stack3.xml", Vec3::Zero()},
+      {"two_spheres.xml", Vec3::Zero()},
+      {"capsule_mesh.xml", Vec3::Zero()},
+      {"sphere_plane.xml", Vec3::Zero()},
+      {"two_spheres.xml", Vec3(0.002, -0.001, 0.0)},
+      {"sphere_plane.xml", Vec3(-0.0, 0.0, 0.0)}};
+  for (const auto& [scene, sphere_offset] : variants) {
     SCOPED_TRACE(scene);
-    const Model m = LoadModel(test::TestScene(scene), {});
+    Model m = LoadModel(test::TestScene(scene), {});
+    for (GeomModel& g : m.geoms) {
+      if (g.type == GeomType::kSphere && g.body >= 0) g.pos_B = sphere_offset;
+    }
     Data d = MakeData(m);
     geometry::CollisionScratch s;
     s.Reserve(m);
@@ -109,6 +131,9 @@ TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
           case 9:
             b.x_W.y() = inf;
             break;
+          case 6:
+            b.x_W = Vec3(-0.0, 0.0, -0.0);
+            break;
           default:
             break;
         }
@@ -118,11 +143,10 @@ TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
       for (int g = 0; g < ngeom; ++g) {
         const bool centre_only = m.geoms[g].type == GeomType::kSphere && m.geoms[g].body >= 0 &&
                                  std::string(scene) != "capsule_mesh.xml";
-        // bitwise: NaN compares unequal to itself
-        EXPECT_EQ(std::memcmp(s.poses[g].p_W.data(), expected[g].p_W.data(), sizeof(Vec3)), 0)
+        EXPECT_TRUE(SameBits(s.poses[g].p_W.data(), expected[g].p_W.data(), 3))
             << "geom " << g << " trial " << trial;
         if (!centre_only) {
-          EXPECT_EQ(std::memcmp(s.poses[g].R_WG.data(), expected[g].R_WG.data(), sizeof(Mat3)), 0)
+          EXPECT_TRUE(SameBits(s.poses[g].R_WG.data(), expected[g].R_WG.data(), 9))
               << "geom " << g << " trial " << trial;
         }
         const GeomCheck kind = s.geom_kind[g];
