@@ -289,18 +289,16 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
 // the moving geoms' poses as GeomPoses gives them, and Collide's checks of its arguments, once
 // per geom rather than once per pair (the static geoms' are set by Reserve)
 void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
-  // a quaternion whose components are at most this (and finite) gives a finite rotation matrix,
-  // even times a geom quaternion of components at most 2 (Reserve): no product in toRotationMatrix
-  // overflows
-  constexpr double kBoundedQuat = 1e100;
+  // a quaternion whose squared norm is at most this (so finite, its components at most 1e100)
+  // gives a finite rotation matrix, even times a geom quaternion of components at most 2
+  // (Reserve): no product in toRotationMatrix overflows. A NaN fails the comparison.
+  constexpr double kBoundedQuatSquaredNorm = 1e200;
   for (const MovingGeom& m : s.moving) {
     const GeomModel& geom = model.geoms[m.geom];
     const BodyState& b = data.bodies[geom.body];
     GeomPose& pose = s.poses[m.geom];
     const GeomCheck kind = s.geom_kind[m.geom];
-    if (m.centre_only && std::abs(b.q_WB.x()) <= kBoundedQuat &&
-        std::abs(b.q_WB.y()) <= kBoundedQuat && std::abs(b.q_WB.z()) <= kBoundedQuat &&
-        std::abs(b.q_WB.w()) <= kBoundedQuat) {
+    if (m.centre_only && b.q_WB.coeffs().squaredNorm() <= kBoundedQuatSquaredNorm) {
       // a finite q turns (+0, +0, +0) into (+0, +0, +0): every product is a signed zero, and the
       // sums start from +0 (+0 + -0 is +0); adding +0 keeps x_W's bits but for -0, as the full
       // expression does
