@@ -1,6 +1,6 @@
 #include "contact/groups.h"
 
-#include <algorithm>
+#include <utility>
 
 namespace rigidtouch::contact {
 namespace {
@@ -88,8 +88,8 @@ void BuildGroups(Data& data, Groups& g) {
   g.ngroup = ngroup;
   data.ngroup = ngroup;
   if (ngroup == 1) {
-    // one group (the usual case of a small scene) holds every body in contact and every contact,
-    // in index order: no offsets to sum
+    // one group (the usual case of a small scene) holds every body in contact and every contact
+    // (each has a dynamic body), in index order: no offsets to sum
     for (int i = 0; i < nbody; ++i) {
       if (slot[i] >= 0) g.bodies[slot[i]] = i;
     }

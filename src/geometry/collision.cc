@@ -138,7 +138,7 @@ void CollisionScratch::Reserve(const Model& model) {
   for (std::size_t g = 0; g < model.geoms.size(); ++g) {
     const GeomModel& geom = model.geoms[g];
     if (geom.body < 0) continue;
-    // the bound on the geom's own rotation keeps the tick's test of the body's (DetectContacts)
+    // the bound on the geom's own rotation keeps the tick's test of the body's (UpdatePoses)
     // sufficient for a finite rotation matrix; MuJoCo gives unit quaternions
     const bool centre_only = geom.type == GeomType::kSphere && !any_mujoco &&
                              geom.quat_B.coeffs().cwiseAbs().maxCoeff() <= 2.0;
