@@ -1,6 +1,6 @@
 #include "contact/groups.h"
 
-#include <algorithm>
+#include <utility>
 
 namespace rigidtouch::contact {
 namespace {
@@ -58,39 +58,54 @@ void BuildGroups(Data& data, Groups& g) {
     if (a >= 0 && b >= 0) Unite(parent, a, b);
   }
   // number the groups by their root (the lowest body index), in body order: a body's root comes
-  // no later than the body, so its group is known by then
+  // no later than the body, so its group is known by then. A body's slot is the number of bodies
+  // of its group before it, counted in body_start[k + 1] (zeroed as group k is made: the arrays'
+  // capacity is nbody + 1, their used part ngroup + 1)
+  int* body_start = g.body_start.data();
+  int* contact_start = g.contact_start.data();
+  int* slot = g.slot.data();
   int ngroup = 0;
   for (int i = 0; i < nbody; ++i) {
     if (count[i] == 0) {
       body_group[i] = -1;
+      slot[i] = -1;
       continue;
     }
     const int root = Find(parent, i);
-    body_group[i] = root == i ? ngroup++ : body_group[root];
-  }
-  g.ngroup = ngroup;
-  // bodies per group (counting sort keeps body order inside a group)
-  int* body_start = g.body_start.data();
-  std::fill(body_start, body_start + ngroup + 1, 0);
-  for (int i = 0; i < nbody; ++i) {
-    if (body_group[i] >= 0) ++body_start[body_group[i] + 1];
-  }
-  for (int k = 0; k < ngroup; ++k) {
-    body_start[k + 1] += body_start[k];
-    count[k] = body_start[k];
-  }
-  for (int i = 0; i < nbody; ++i) {
-    const int k = body_group[i];
-    if (k < 0) {
-      g.slot[i] = -1;
-      continue;
+    int k;
+    if (root == i) {
+      k = ngroup++;
+      body_start[k + 1] = 0;
+      contact_start[k + 1] = 0;
+    } else {
+      k = body_group[root];
     }
-    g.slot[i] = count[k] - body_start[k];
-    g.bodies[count[k]++] = i;
+    body_group[i] = k;
+    slot[i] = body_start[k + 1]++;
   }
-  // contacts per group
-  int* contact_start = g.contact_start.data();
-  std::fill(contact_start, contact_start + ngroup + 1, 0);
+  body_start[0] = 0;
+  contact_start[0] = 0;
+  g.ngroup = ngroup;
+  data.ngroup = ngroup;
+  if (ngroup == 1) {
+    // one group (the usual case of a small scene) holds every body in contact and every contact
+    // (each has a dynamic body), in index order: no offsets to sum
+    for (int i = 0; i < nbody; ++i) {
+      if (slot[i] >= 0) g.bodies[slot[i]] = i;
+    }
+    for (int c = 0; c < ncontact; ++c) {
+      data.contacts[c].group = 0;
+      g.contacts[c] = c;
+    }
+    contact_start[1] = ncontact;
+    return;
+  }
+  // bodies per group, at their slots after the group's offset
+  for (int k = 0; k < ngroup; ++k) body_start[k + 1] += body_start[k];
+  for (int i = 0; i < nbody; ++i) {
+    if (body_group[i] >= 0) g.bodies[body_start[body_group[i]] + slot[i]] = i;
+  }
+  // contacts per group (counting sort keeps contact order inside a group)
   for (int c = 0; c < ncontact; ++c) {
     Contact& con = data.contacts[c];
     con.group = body_group[con.body_a >= 0 ? con.body_a : con.body_b];
@@ -101,7 +116,6 @@ void BuildGroups(Data& data, Groups& g) {
     count[k] = contact_start[k];
   }
   for (int c = 0; c < ncontact; ++c) g.contacts[count[contacts[c].group]++] = c;
-  data.ngroup = ngroup;
 }
 
 }  // namespace rigidtouch::contact

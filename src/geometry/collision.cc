@@ -3,6 +3,7 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace rigidtouch::geometry {
@@ -103,6 +104,21 @@ void MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
   }
 }
 
+// what the narrow phase makes of a geom of this kind at this pose
+GeomCheck CheckPose(GeomCheck kind, const GeomPose& pose) {
+  return kind == GeomCheck::kAccepted && !PoseFinite(pose) ? GeomCheck::kRejected : kind;
+}
+
+// the static geoms' poses (as GeomPoses gives them) and checks, which only the model changes
+void SetStaticPoses(const Model& model, CollisionScratch& s) {
+  for (std::size_t g = 0; g < model.geoms.size(); ++g) {
+    const GeomModel& geom = model.geoms[g];
+    if (geom.body >= 0) continue;
+    s.poses[g] = GeomPose{geom.pos_B, geom.quat_B.toRotationMatrix()};
+    s.geom_check[g] = CheckPose(s.geom_kind[g], s.poses[g]);
+  }
+}
+
 }  // namespace
 
 void CollisionScratch::Reserve(const Model& model) {
@@ -116,6 +132,23 @@ void CollisionScratch::Reserve(const Model& model) {
                                                                    : GeomCheck::kRejected);
   }
   geom_check = geom_kind;
+  const bool any_mujoco =
+      std::find(geom_kind.begin(), geom_kind.end(), GeomCheck::kMuJoCo) != geom_kind.end();
+  moving.clear();
+  for (std::size_t g = 0; g < model.geoms.size(); ++g) {
+    const GeomModel& geom = model.geoms[g];
+    if (geom.body < 0) continue;
+    // the bound on the geom's own rotation keeps the tick's test of the body's (UpdatePoses)
+    // sufficient for a finite rotation matrix; MuJoCo gives unit quaternions
+    const bool centre_only = geom.type == GeomType::kSphere && !any_mujoco &&
+                             geom.quat_B.coeffs().cwiseAbs().maxCoeff() <= 2.0;
+    // +0 in every component, not -0
+    const bool at_origin = geom.pos_B.x() == 0.0 && geom.pos_B.y() == 0.0 &&
+                           geom.pos_B.z() == 0.0 && !std::signbit(geom.pos_B.x()) &&
+                           !std::signbit(geom.pos_B.y()) && !std::signbit(geom.pos_B.z());
+    moving.push_back(MovingGeom{static_cast<int>(g), centre_only, centre_only && at_origin});
+  }
+  SetStaticPoses(model, *this);
   run_start.assign(model.geoms.size() + 1, 0);
   run_fill.assign(model.geoms.size(), 0);
   mj = mj_makeData(model.collision.get());
@@ -124,6 +157,7 @@ void CollisionScratch::Reserve(const Model& model) {
 
 void CollisionScratch::Reset(const Model& model) {
   broadphase.Reserve(model, static_cast<int>(broadphase.pairs.size()));
+  SetStaticPoses(model, *this);
 }
 
 CollisionScratch::~CollisionScratch() {
@@ -252,18 +286,41 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
   }
 }
 
+// the moving geoms' poses as GeomPoses gives them, and Collide's checks of its arguments, once
+// per geom rather than once per pair (the static geoms' are set by Reserve)
+void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
+  // a quaternion whose squared norm is at most this (so finite, its components at most 1e100)
+  // gives a finite rotation matrix, even times a geom quaternion of components at most 2
+  // (Reserve): no product in toRotationMatrix overflows. A NaN fails the comparison.
+  constexpr double kBoundedQuatSquaredNorm = 1e200;
+  for (const MovingGeom& m : s.moving) {
+    const GeomModel& geom = model.geoms[m.geom];
+    const BodyState& b = data.bodies[geom.body];
+    GeomPose& pose = s.poses[m.geom];
+    const GeomCheck kind = s.geom_kind[m.geom];
+    if (m.centre_only && b.q_WB.coeffs().squaredNorm() <= kBoundedQuatSquaredNorm) {
+      // a finite q turns (+0, +0, +0) into (+0, +0, +0): every product is a signed zero, and the
+      // sums start from +0 (+0 + -0 is +0); adding +0 keeps x_W's bits but for -0, as the full
+      // expression does
+      pose.p_W = m.at_body_origin ? Vec3(b.x_W + Vec3::Zero()) : Vec3(b.x_W + b.q_WB * geom.pos_B);
+      // the rotation matrix would be finite, so PoseFinite is whether the centre is
+      s.geom_check[m.geom] =
+          kind == GeomCheck::kAccepted && !((pose.p_W.array() * 0.0).sum() == 0.0)
+              ? GeomCheck::kRejected
+              : kind;
+    } else {
+      pose.p_W = b.x_W + b.q_WB * geom.pos_B;
+      pose.R_WG = (b.q_WB * geom.quat_B).toRotationMatrix();
+      s.geom_check[m.geom] = CheckPose(kind, pose);
+    }
+  }
+}
+
 }  // namespace
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
   RememberPrevious(data, s);
-  GeomPoses(model, data.bodies, s.poses);
-  // Collide's checks of its arguments, once per geom rather than once per pair
-  const int ngeom = static_cast<int>(model.geoms.size());
-  for (int g = 0; g < ngeom; ++g) {
-    const GeomCheck kind = s.geom_kind[g];
-    s.geom_check[g] =
-        kind == GeomCheck::kAccepted && !PoseFinite(s.poses[g]) ? GeomCheck::kRejected : kind;
-  }
+  UpdatePoses(model, data, s);
   FindPairs(model, s.poses, s.broadphase);
   if (s.broadphase.dropped > 0) {
     auto& w = data.warnings[static_cast<int>(Warning::kContactFull)];

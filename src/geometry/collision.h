@@ -25,11 +25,24 @@ enum class GeomCheck : unsigned char {
   kRejected,  // rigidtouch's narrow phase, which gives it no contact (non-finite pose, bad size)
 };
 
+/// A geom on a dynamic body, whose pose DetectContacts computes every tick.
+struct MovingGeom {
+  int geom = -1;
+  // a sphere whose rotation matrix nothing reads (no geom of the model takes MuJoCo's path, which
+  // copies both geoms' rotations): its pose is its centre, R_WG is left as it was
+  bool centre_only = false;
+  // a centre-only sphere at its body's origin (pos_B is +0): its centre is the body's position
+  bool at_body_origin = false;
+};
+
 /// Scratch of the collision stage, sized by Reserve.
 struct CollisionScratch {
-  std::vector<GeomPose> poses;        // (ngeom) world poses this tick
+  // (ngeom) world poses: a static geom's are set by Reserve and Reset (the model is constant), the
+  // moving geoms' every tick
+  std::vector<GeomPose> poses;
   std::vector<GeomCheck> geom_kind;   // (ngeom) from the model's types and sizes (Reserve)
-  std::vector<GeomCheck> geom_check;  // (ngeom) this tick, with the poses
+  std::vector<GeomCheck> geom_check;  // (ngeom) with the poses, as the poses are set
+  std::vector<MovingGeom> moving;     // geoms on dynamic bodies, in geom order
   Broadphase broadphase;
   std::array<ContactPoint, kMaxPairContacts> points{};  // one pair's narrow-phase output
   std::vector<mjContact> mj_contacts;                   // one pair's MuJoCo output (mjMAXCONPAIR)
@@ -40,7 +53,8 @@ struct CollisionScratch {
 
   /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
   void Reserve(const Model& model);
-  /// Puts the persistent sort order back to its initial state.
+  /// Puts the persistent sort order back to its initial state; sets the static geoms' poses
+  /// again.
   void Reset(const Model& model);
   CollisionScratch() = default;
   CollisionScratch(const CollisionScratch&) = delete;

@@ -3,6 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
@@ -66,6 +74,89 @@ TEST(CollisionTest, IdentitySurvivesSlidingAndEndsOnSeparation) {
   ASSERT_EQ(d.ncontact, 1);
   EXPECT_NE(d.contacts[0].id, id);
   EXPECT_TRUE(d.contacts[0].is_new);
+}
+
+// bitwise equal (so -0 differs from +0), or both NaN: the sign and payload of a NaN depend on
+// the order the compiler gives a commutative operation's operands
+bool SameBits(const double* a, const double* b, int n) {
+  for (int i = 0; i < n; ++i) {
+    if (std::memcmp(&a[i], &b[i], sizeof(double)) != 0 && !(std::isnan(a[i]) && std::isnan(b[i]))) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// DetectContacts sets the static geoms' poses once and, for a sphere that takes no MuJoCo pair,
+// only the centre (the body's position when the sphere sits at its origin): every pose part that
+// is read, and every geom's check, must still be bitwise what GeomPoses and PoseFinite give for
+// the bodies as they are now, however they moved, with signed zeros, and with non-finite or huge
+// (finite, unnormalised) quaternions; spheres also off their body's origin, and at -0
+TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
+  using geometry::GeomCheck;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<const char*, Vec3>> variants = {
+      {"stack3.xml", Vec3::Zero()},
+      {"two_spheres.xml", Vec3::Zero()},
+      {"capsule_mesh.xml", Vec3::Zero()},
+      {"sphere_plane.xml", Vec3::Zero()},
+      {"two_spheres.xml", Vec3(0.002, -0.001, 0.0)},
+      {"sphere_plane.xml", Vec3(-0.0, 0.0, 0.0)}};
+  for (const auto& [scene, sphere_offset] : variants) {
+    SCOPED_TRACE(scene);
+    Model m = LoadModel(test::TestScene(scene), {});
+    for (GeomModel& g : m.geoms) {
+      if (g.type == GeomType::kSphere && g.body >= 0) g.pos_B = sphere_offset;
+    }
+    Data d = MakeData(m);
+    geometry::CollisionScratch s;
+    s.Reserve(m);
+    const int ngeom = static_cast<int>(m.geoms.size());
+    std::vector<geometry::GeomPose> expected(ngeom);
+    for (int trial = 0; trial < 200; ++trial) {
+      if (trial == 100) s.Reset(m);
+      for (BodyState& b : d.bodies) {
+        b.x_W = 0.05 * Vec3(u(rng), u(rng), u(rng));
+        b.q_WB = Quat(u(rng), u(rng), u(rng), u(rng)).normalized();
+        switch (trial % 10) {
+          case 7:
+            b.q_WB.x() = nan;
+            break;
+          case 8:
+            b.q_WB.coeffs() *= 1e200;  // finite, but its rotation matrix overflows
+            break;
+          case 9:
+            b.x_W.y() = inf;
+            break;
+          case 6:
+            b.x_W = Vec3(-0.0, 0.0, -0.0);
+            break;
+          default:
+            break;
+        }
+      }
+      geometry::DetectContacts(m, d, s);
+      geometry::GeomPoses(m, d.bodies, expected);
+      for (int g = 0; g < ngeom; ++g) {
+        const bool centre_only = m.geoms[g].type == GeomType::kSphere && m.geoms[g].body >= 0 &&
+                                 std::string(scene) != "capsule_mesh.xml";
+        EXPECT_TRUE(SameBits(s.poses[g].p_W.data(), expected[g].p_W.data(), 3))
+            << "geom " << g << " trial " << trial;
+        if (!centre_only) {
+          EXPECT_TRUE(SameBits(s.poses[g].R_WG.data(), expected[g].R_WG.data(), 9))
+              << "geom " << g << " trial " << trial;
+        }
+        const GeomCheck kind = s.geom_kind[g];
+        const GeomCheck check = kind == GeomCheck::kAccepted && !geometry::PoseFinite(expected[g])
+                                    ? GeomCheck::kRejected
+                                    : kind;
+        EXPECT_EQ(s.geom_check[g], check) << "geom " << g << " trial " << trial;
+      }
+    }
+  }
 }
 
 }  // namespace
