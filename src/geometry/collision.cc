@@ -305,9 +305,7 @@ void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
       pose.p_W = m.at_body_origin ? Vec3(b.x_W + Vec3::Zero()) : Vec3(b.x_W + b.q_WB * geom.pos_B);
       // the rotation matrix would be finite, so PoseFinite is whether the centre is
       s.geom_check[m.geom] =
-          kind == GeomCheck::kAccepted && !((pose.p_W.array() * 0.0).sum() == 0.0)
-              ? GeomCheck::kRejected
-              : kind;
+          kind == GeomCheck::kAccepted && !pose.p_W.allFinite() ? GeomCheck::kRejected : kind;
     } else {
       pose.p_W = b.x_W + b.q_WB * geom.pos_B;
       pose.R_WG = (b.q_WB * geom.quat_B).toRotationMatrix();
