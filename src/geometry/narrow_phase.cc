@@ -406,11 +406,23 @@ struct EdgeAxes {
 // box A (geom 1) against box B (geom 2), separating axis test over 15 axes in A's frame
 int BoxBox(const GeomPose& box_a, const Vec3& a_m, const GeomPose& box_b, const Vec3& b_m,
            ContactPoint* out, int max_points) {
-  const Mat3 C = box_a.R_WG.transpose() * box_b.R_WG;  // C(i, j) = a_i . b_j
-  const Mat3 absC = C.cwiseAbs();
+  // C(i, j) = a_i . b_j and the centre offset in both frames, each a 3-term dot product summed
+  // left to right (as Eigen's products do), written out to spare their packing and unpacking
+  const Mat3& Ra = box_a.R_WG;
+  const Mat3& Rb = box_b.R_WG;
+  Mat3 C, absC;
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      C(i, j) = Ra(0, i) * Rb(0, j) + Ra(1, i) * Rb(1, j) + Ra(2, i) * Rb(2, j);
+      absC(i, j) = std::abs(C(i, j));
+    }
+  }
   const Vec3 d_W = box_b.p_W - box_a.p_W;
-  const Vec3 d_A = box_a.R_WG.transpose() * d_W;
-  const Vec3 d_B = box_b.R_WG.transpose() * d_W;
+  Vec3 d_A, d_B;
+  for (int i = 0; i < 3; ++i) {
+    d_A[i] = Ra(0, i) * d_W[0] + Ra(1, i) * d_W[1] + Ra(2, i) * d_W[2];
+    d_B[i] = Rb(0, i) * d_W[0] + Rb(1, i) * d_W[1] + Rb(2, i) * d_W[2];
+  }
   // separations (negative: penetration) along A's face normals, then B's
   constexpr double kNone = -std::numeric_limits<double>::infinity();
   double sep_a = kNone, sep_b = kNone;
