@@ -169,8 +169,8 @@ int BoxPlane(const GeomPose& box, const Vec3& half_m, const GeomPose& plane, Con
 }
 
 // a polygon in reference-face coordinates: (u, v) along the face's tangent axes, z the height
-// above the face (negative below). Stored as separate coordinate arrays so that a clip step reads
-// only the coordinate it tests and copies no padding.
+// above the face (negative below). Stored as separate coordinate arrays so that a clip step's
+// distance loop reads only the coordinate it tests.
 struct FacePolygon {
   double u[kClipBuffer], v[kClipBuffer], z[kClipBuffer];
   int n = 0;
