@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace rigidtouch::geometry {
 namespace {
@@ -33,8 +34,16 @@ double FiniteTest(const double* x, int n) {
   return sum;
 }
 
-bool PointFinite(const ContactPoint& c) {
-  return FiniteTest(c.p_W.data(), 3) + FiniteTest(c.n_W.data(), 3) + c.depth_m * 0.0 == 0.0;
+// whether every number of the n points is finite: x * 0 is 0 for a finite x and NaN otherwise,
+// and the NaN survives every later sum. Summed per coordinate over all points, with one test.
+bool PointsFinite(const ContactPoint* c, int n) {
+  Vec3 zero = Vec3::Zero();
+  double zero_depth = 0.0;
+  for (int i = 0; i < n; ++i) {
+    zero += c[i].p_W * 0.0 + c[i].n_W * 0.0;
+    zero_depth += c[i].depth_m * 0.0;
+  }
+  return zero.sum() + zero_depth == 0.0;
 }
 
 // the other two axes of axis k in cyclic order: (k + 1) % 3 and (k + 2) % 3
@@ -159,67 +168,72 @@ int BoxPlane(const GeomPose& box, const Vec3& half_m, const GeomPose& plane, Con
   return n;
 }
 
-// a polygon vertex in reference-face coordinates: (u, v) along the face's tangent axes, z the
-// height above the face (negative below)
-struct FacePoint {
-  double u, v, z;
+// a polygon in reference-face coordinates: (u, v) along the face's tangent axes, z the height
+// above the face (negative below). Stored as separate coordinate arrays so that a clip step's
+// distance loop reads only the coordinate it tests.
+struct FacePolygon {
+  double u[kClipBuffer], v[kClipBuffer], z[kClipBuffer];
+  int n = 0;
 };
 
 // Sutherland-Hodgman step: keeps the part of polygon `in` with sign * coordinate <= limit, the
 // coordinate v if kAlongV else u, the sign -1 if kNegative else +1; vertices exactly on the line
-// are kept and create no duplicate
+// are kept and create no duplicate. Returns false, leaving `out` untouched, when every vertex is
+// kept: then the step would copy `in` unchanged (a crossing needs a vertex past the line), and
+// most steps on a resting pair are such copies.
 template <bool kAlongV, bool kNegative>
-int ClipPolygon(const FacePoint* in, int n, double limit, FacePoint* out) {
+bool ClipPolygon(const FacePolygon& in, double limit, FacePolygon& out) {
+  const int n = in.n;
+  const double* x = kAlongV ? in.v : in.u;
   // signed distances past the line (multiplying by -1 or 1 is exact: a negation or nothing)
   double f[kClipBuffer];
+  bool all_kept = true;
   for (int i = 0; i < n; ++i) {
-    const double x = kAlongV ? in[i].v : in[i].u;
-    f[i] = (kNegative ? -x : x) - limit;
+    f[i] = (kNegative ? -x[i] : x[i]) - limit;
+    // written as "kept" rather than "not past" so that a NaN distance still takes the full step,
+    // which drops that vertex; & rather than && needs no branch per vertex
+    all_kept = all_kept & (f[i] <= 0.0);
   }
+  if (all_kept) return false;
   int m = 0;
   for (int i = 0; i < n; ++i) {
     const int next = i + 1 < n ? i + 1 : 0;
-    const FacePoint& p = in[i];
     const double fp = f[i];
     const double fq = f[next];
-    if (fp <= 0.0 && m < kClipBuffer) out[m++] = p;
+    if (fp <= 0.0 && m < kClipBuffer) {
+      out.u[m] = in.u[i];
+      out.v[m] = in.v[i];
+      out.z[m] = in.z[i];
+      ++m;
+    }
     if (((fp < 0.0 && fq > 0.0) || (fp > 0.0 && fq < 0.0)) && m < kClipBuffer) {
-      const FacePoint& q = in[next];
       const double t = fp / (fp - fq);
-      out[m++] = {p.u + t * (q.u - p.u), p.v + t * (q.v - p.v), p.z + t * (q.z - p.z)};
+      out.u[m] = in.u[i] + t * (in.u[next] - in.u[i]);
+      out.v[m] = in.v[i] + t * (in.v[next] - in.v[i]);
+      out.z[m] = in.z[i] + t * (in.z[next] - in.z[i]);
+      ++m;
     }
   }
-  return m;
+  out.n = m;
+  return true;
 }
 
-// twice the signed area of triangle (a, b, c) in the face plane
-double Cross2(const FacePoint& a, const FacePoint& b, const FacePoint& c) {
-  return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
-}
-
-// twice the area of the convex hull of 4 points in convex position: the largest of the three
-// quadrilaterals through them
-double QuadArea2(const FacePoint& a, const FacePoint& b, const FacePoint& c, const FacePoint& d) {
-  const double abcd = std::abs(Cross2(a, b, c) + Cross2(a, c, d));
-  const double abdc = std::abs(Cross2(a, b, d) + Cross2(a, d, c));
-  const double acbd = std::abs(Cross2(a, c, b) + Cross2(a, b, d));
-  return std::max(abcd, std::max(abdc, acbd));
-}
-
-// chooses at most `max_points` of the n points: the deepest, the farthest from it, then those
-// that maximise the spanned area; marks them in `keep`. First index wins every tie.
-void ReduceManifold(const FacePoint* p, int n, int max_points, bool* keep) {
+// chooses at most `max_points` of the n points of `p`: the deepest, the farthest from it, then
+// those that maximise the spanned area; marks them in `keep`. First index wins every tie.
+void ReduceManifold(const FacePolygon& p, int max_points, bool* keep) {
+  const int n = p.n;
   for (int i = 0; i < n; ++i) keep[i] = false;
   int i0 = 0;
   for (int i = 1; i < n; ++i) {
-    if (p[i].z < p[i0].z) i0 = i;
+    if (p.z[i] < p.z[i0]) i0 = i;
   }
   keep[i0] = true;
   if (max_points < 2) return;
+  const double u0 = p.u[i0], v0 = p.v[i0];
   int i1 = -1;
   double best = -1.0;
   for (int i = 0; i < n; ++i) {
-    const double du = p[i].u - p[i0].u, dv = p[i].v - p[i0].v;
+    const double du = p.u[i] - u0, dv = p.v[i] - v0;
     const double d2 = du * du + dv * dv;
     if (!keep[i] && d2 > best) {
       best = d2;
@@ -229,10 +243,15 @@ void ReduceManifold(const FacePoint* p, int n, int max_points, bool* keep) {
   if (i1 < 0) return;
   keep[i1] = true;
   if (max_points < 3) return;
+  // twice the signed area of the triangle (p0, p1, p_i): the third point's score, and reused by
+  // the fourth point's quadrilaterals below
+  const double u01 = p.u[i1] - u0, v01 = p.v[i1] - v0;
+  double area01[kClipBuffer];
   int i2 = -1;
   best = -1.0;
   for (int i = 0; i < n; ++i) {
-    const double a = std::abs(Cross2(p[i0], p[i1], p[i]));
+    area01[i] = u01 * (p.v[i] - v0) - v01 * (p.u[i] - u0);
+    const double a = std::abs(area01[i]);
     if (!keep[i] && a > best) {
       best = a;
       i2 = i;
@@ -241,10 +260,19 @@ void ReduceManifold(const FacePoint* p, int n, int max_points, bool* keep) {
   if (i2 < 0) return;
   keep[i2] = true;
   if (max_points < 4) return;
+  // twice the area of the hull of p0, p1, p2 and candidate p_i (in convex position): the largest
+  // of the quadrilaterals p0 p1 p2 p_i, p0 p1 p_i p2 and p0 p2 p1 p_i. With the signed triangle
+  // areas A012, A02i and A01i, those are |A012 + A02i|, |A01i - A02i| and |A01i - A012|: swapping
+  // two vertices of a triangle negates its area exactly, since each product commutes exactly.
+  const double a012 = area01[i2];
+  const double u02 = p.u[i2] - u0, v02 = p.v[i2] - v0;
   int i3 = -1;
   best = -1.0;
   for (int i = 0; i < n; ++i) {
-    const double a = QuadArea2(p[i0], p[i1], p[i2], p[i]);
+    const double a02i = u02 * (p.v[i] - v0) - v02 * (p.u[i] - u0);
+    const double a01i = area01[i];
+    const double a =
+        std::max(std::abs(a012 + a02i), std::max(std::abs(a01i - a02i), std::abs(a01i - a012)));
     if (!keep[i] && a > best) {
       best = a;
       i3 = i;
@@ -266,55 +294,135 @@ int FaceContact(const GeomPose& ref, const Vec3& ref_half_m, int k, double sign_
   }
   const double sign_l = -Sign(sign_m * R_RI(k, l));
   const int l1 = kNext1[l], l2 = kNext2[l];
-  const Vec3 centre_R = p_RI + sign_l * inc_half_m[l] * R_RI.col(l);
-  const Vec3 e1_R = inc_half_m[l1] * R_RI.col(l1);
-  const Vec3 e2_R = inc_half_m[l2] * R_RI.col(l2);
   const int k1 = kNext1[k], k2 = kNext2[k];
-  FacePoint a[kClipBuffer], b[kClipBuffer];
-  // the corners centre +- e1 +- e2 (the signs (+, +), (-, +), (-, -), (+, -) in turn)
-  const Vec3 plus_R = centre_R + e1_R, minus_R = centre_R - e1_R;
-  const Vec3 corners_R[4] = {plus_R + e2_R, minus_R + e2_R, minus_R - e2_R, plus_R - e2_R};
+  // the incident face's corners centre +- e1 +- e2 (the signs (+, +), (-, +), (-, -), (+, -) in
+  // turn) in R's frame, only the three coordinates the clipping needs: u along k1, v along k2,
+  // the height along k
+  FacePolygon poly[2];
+  FacePolygon* cur = &poly[0];
+  FacePolygon* next = &poly[1];
+  const double centre_scale = sign_l * inc_half_m[l];
+  const int axes[3] = {k1, k2, k};
+  double corner[3][4];
+  for (int c = 0; c < 3; ++c) {
+    const int r = axes[c];
+    const double centre = p_RI[r] + centre_scale * R_RI(r, l);
+    const double e1 = inc_half_m[l1] * R_RI(r, l1);
+    const double e2 = inc_half_m[l2] * R_RI(r, l2);
+    const double plus = centre + e1, minus = centre - e1;
+    corner[c][0] = plus + e2;
+    corner[c][1] = minus + e2;
+    corner[c][2] = minus - e2;
+    corner[c][3] = plus - e2;
+  }
   for (int i = 0; i < 4; ++i) {
-    const Vec3& x_R = corners_R[i];
-    a[i] = {x_R[k1], x_R[k2], sign_m * x_R[k] - ref_half_m[k]};
+    cur->u[i] = corner[0][i];
+    cur->v[i] = corner[1][i];
+    cur->z[i] = sign_m * corner[2][i] - ref_half_m[k];
   }
-  // clip against the reference face's four side planes
-  int n = ClipPolygon<false, false>(a, 4, ref_half_m[k1], b);
-  n = ClipPolygon<false, true>(b, n, ref_half_m[k1], a);
-  n = ClipPolygon<true, false>(a, n, ref_half_m[k2], b);
-  n = ClipPolygon<true, true>(b, n, ref_half_m[k2], a);
-  // keep the points below the reference face
+  cur->n = 4;
+  // clip against the reference face's four side planes. On a resting pair every corner usually
+  // passes all four tests already, and then no step changes the polygon: the same 16 tests (in
+  // the same arithmetic as ClipPolygon's) decide that at once
+  const double limit1 = ref_half_m[k1], limit2 = ref_half_m[k2];
+  bool inside = true;
+  for (int i = 0; i < 4; ++i) {
+    const double u = cur->u[i], v = cur->v[i];
+    inside = inside & (u - limit1 <= 0.0) & (-u - limit1 <= 0.0) & (v - limit2 <= 0.0) &
+             (-v - limit2 <= 0.0);
+  }
+  if (!inside) {
+    // a step that keeps every vertex leaves the polygon where it is
+    if (ClipPolygon<false, false>(*cur, limit1, *next)) std::swap(cur, next);
+    if (ClipPolygon<false, true>(*cur, limit1, *next)) std::swap(cur, next);
+    if (ClipPolygon<true, false>(*cur, limit2, *next)) std::swap(cur, next);
+    if (ClipPolygon<true, true>(*cur, limit2, *next)) std::swap(cur, next);
+  }
+  // keep the points below the reference face, in place (a point moves only to a lower index)
+  FacePolygon& b = *cur;
   int below = 0;
-  for (int i = 0; i < n; ++i) {
-    if (a[i].z < 0.0) b[below++] = a[i];
+  for (int i = 0; i < b.n; ++i) {
+    b.u[below] = b.u[i];
+    b.v[below] = b.v[i];
+    b.z[below] = b.z[i];
+    below += b.z[i] < 0.0 ? 1 : 0;
   }
+  b.n = below;
   bool keep[kClipBuffer];
-  if (below > max_points) {
-    ReduceManifold(b, below, max_points, keep);
-  } else {
-    for (int i = 0; i < below; ++i) keep[i] = true;
-  }
+  const bool reduce = below > max_points;
+  if (reduce) ReduceManifold(b, max_points, keep);
   int count = 0;
   for (int i = 0; i < below; ++i) {
-    if (!keep[i]) continue;
+    if (reduce && !keep[i]) continue;
     Vec3 x_R;
-    x_R[k1] = b[i].u;
-    x_R[k2] = b[i].v;
+    x_R[k1] = b.u[i];
+    x_R[k2] = b.v[i];
     // midpoint between the incident point (height z) and its projection on the face
-    x_R[k] = sign_m * (ref_half_m[k] + 0.5 * b[i].z);
-    out[count++] = {ref.p_W + ref.R_WG * x_R, n_W, -b[i].z};
+    x_R[k] = sign_m * (ref_half_m[k] + 0.5 * b.z[i]);
+    out[count++] = {ref.p_W + ref.R_WG * x_R, n_W, -b.z[i]};
   }
   return count;
 }
 
+// the 9 edge axes a_i x b_j of a box pair, written in A's frame as e_i x C.col(j), with the
+// best one so far. Separates<i, j> takes the indices as template arguments so that every matrix
+// entry it reads is at a fixed offset: the 9 tests then need no index arithmetic.
+struct EdgeAxes {
+  const Mat3& C;     // C(i, j) = a_i . b_j
+  const Mat3& absC;  // |C|
+  const Vec3& d_A;   // B's centre minus A's, in A's frame
+  const Vec3& a_m;   // half-extents
+  const Vec3& b_m;
+  double sep;  // the separation to beat, then the best edge axis's
+  int edge_i = -1, edge_j = -1;
+
+  // true if axis a_i x b_j separates the boxes; otherwise records it if it beats `sep`
+  template <int i, int j>
+  bool Separates() {
+    constexpr int i1 = kNext1[i], i2 = kNext2[i];
+    constexpr int j1 = kNext1[j], j2 = kNext2[j];
+    const double length2 = C(i1, j) * C(i1, j) + C(i2, j) * C(i2, j);
+    if (length2 < kMinEdgeAxisSine * kMinEdgeAxisSine) return false;
+    const double centre_m = d_A[i2] * C(i1, j) - d_A[i1] * C(i2, j);
+    const double radius_a_m = a_m[i1] * absC(i2, j) + a_m[i2] * absC(i1, j);
+    const double radius_b_m = b_m[j1] * absC(i, j2) + b_m[j2] * absC(i, j1);
+    // separation times the axis length
+    const double s_scaled = std::abs(centre_m) - radius_a_m - radius_b_m;
+    if (s_scaled >= 0.0) return true;
+    // both negative: s_scaled / length > sep iff s_scaled^2 < sep^2 length^2, so only such
+    // candidates need their normalised separation
+    if (sep < 0.0 && s_scaled * s_scaled < sep * sep * length2) {
+      const double s = s_scaled / std::sqrt(length2);
+      if (s > sep) {
+        sep = s;
+        edge_i = i;
+        edge_j = j;
+      }
+    }
+    return false;
+  }
+};
+
 // box A (geom 1) against box B (geom 2), separating axis test over 15 axes in A's frame
 int BoxBox(const GeomPose& box_a, const Vec3& a_m, const GeomPose& box_b, const Vec3& b_m,
            ContactPoint* out, int max_points) {
-  const Mat3 C = box_a.R_WG.transpose() * box_b.R_WG;  // C(i, j) = a_i . b_j
-  const Mat3 absC = C.cwiseAbs();
+  // C(i, j) = a_i . b_j and the centre offset in both frames, each a 3-term dot product summed
+  // left to right (as Eigen's products do), written out to spare their packing and unpacking
+  const Mat3& Ra = box_a.R_WG;
+  const Mat3& Rb = box_b.R_WG;
+  Mat3 C, absC;
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      C(i, j) = Ra(0, i) * Rb(0, j) + Ra(1, i) * Rb(1, j) + Ra(2, i) * Rb(2, j);
+      absC(i, j) = std::abs(C(i, j));
+    }
+  }
   const Vec3 d_W = box_b.p_W - box_a.p_W;
-  const Vec3 d_A = box_a.R_WG.transpose() * d_W;
-  const Vec3 d_B = box_b.R_WG.transpose() * d_W;
+  Vec3 d_A, d_B;
+  for (int i = 0; i < 3; ++i) {
+    d_A[i] = Ra(0, i) * d_W[0] + Ra(1, i) * d_W[1] + Ra(2, i) * d_W[2];
+    d_B[i] = Rb(0, i) * d_W[0] + Rb(1, i) * d_W[1] + Rb(2, i) * d_W[2];
+  }
   // separations (negative: penetration) along A's face normals, then B's
   constexpr double kNone = -std::numeric_limits<double>::infinity();
   double sep_a = kNone, sep_b = kNone;
@@ -338,34 +446,18 @@ int BoxBox(const GeomPose& box_a, const Vec3& a_m, const GeomPose& box_b, const 
   // prefer A's faces, then B's, then edges (Box2D's and ODE's bias for stable manifolds)
   const bool use_b = sep_b > kAxisRelativeTolerance * sep_a + kAxisAbsoluteTolerance_m;
   const double sep_face = use_b ? sep_b : sep_a;
-  // edge axes a_i x b_j, written in A's frame as e_i x C.col(j). Each is tested for separation;
-  // one replaces the face axis only if it separates more than kAxisRelativeTolerance * sep_face +
-  // kAxisAbsoluteTolerance_m, so only such candidates need their normalised separation
-  double sep_e = kAxisRelativeTolerance * sep_face + kAxisAbsoluteTolerance_m;
-  int edge_i = -1, edge_j = -1;
-  for (int i = 0; i < 3; ++i) {
-    const int i1 = kNext1[i], i2 = kNext2[i];
-    for (int j = 0; j < 3; ++j) {
-      const int j1 = kNext1[j], j2 = kNext2[j];
-      const double length2 = C(i1, j) * C(i1, j) + C(i2, j) * C(i2, j);
-      if (length2 < kMinEdgeAxisSine * kMinEdgeAxisSine) continue;
-      const double centre_m = d_A[i2] * C(i1, j) - d_A[i1] * C(i2, j);
-      const double radius_a_m = a_m[i1] * absC(i2, j) + a_m[i2] * absC(i1, j);
-      const double radius_b_m = b_m[j1] * absC(i, j2) + b_m[j2] * absC(i, j1);
-      // separation times the axis length
-      const double s_scaled = std::abs(centre_m) - radius_a_m - radius_b_m;
-      if (s_scaled >= 0.0) return 0;
-      // both negative: s_scaled / length > sep_e iff s_scaled^2 < sep_e^2 length^2
-      if (sep_e < 0.0 && s_scaled * s_scaled < sep_e * sep_e * length2) {
-        const double s = s_scaled / std::sqrt(length2);
-        if (s > sep_e) {
-          sep_e = s;
-          edge_i = i;
-          edge_j = j;
-        }
-      }
-    }
+  // edge axes a_i x b_j: each is tested for separation; one replaces the face axis only if it
+  // separates more than kAxisRelativeTolerance * sep_face + kAxisAbsoluteTolerance_m
+  const double to_beat = kAxisRelativeTolerance * sep_face + kAxisAbsoluteTolerance_m;
+  EdgeAxes edges{C, absC, d_A, a_m, b_m, to_beat};
+  // in the order i = 0..2, j = 0..2 within, which decides ties
+  if (edges.Separates<0, 0>() || edges.Separates<0, 1>() || edges.Separates<0, 2>() ||
+      edges.Separates<1, 0>() || edges.Separates<1, 1>() || edges.Separates<1, 2>() ||
+      edges.Separates<2, 0>() || edges.Separates<2, 1>() || edges.Separates<2, 2>()) {
+    return 0;
   }
+  const double sep_e = edges.sep;
+  const int edge_i = edges.edge_i, edge_j = edges.edge_j;
   if (edge_i >= 0) {
     const Vec3 ua_W = box_a.R_WG.col(edge_i), ub_W = box_b.R_WG.col(edge_j);
     // normal from B to A
@@ -467,10 +559,7 @@ int CollideAccepted(GeomType t1, const Vec3& size1, const GeomPose& pose1, GeomT
     for (int i = 0; i < n; ++i) out[i].n_W = -out[i].n_W;
   }
   // finite input can still overflow (e.g. sizes near the largest double)
-  for (int i = 0; i < n; ++i) {
-    if (!PointFinite(out[i])) return 0;
-  }
-  return n;
+  return PointsFinite(out, n) ? n : 0;
 }
 
 }  // namespace rigidtouch::geometry

@@ -333,6 +333,134 @@ TEST(NarrowPhaseTest, CrossedEdgesGiveOnePointBetweenThem) {
   EXPECT_LT((r.c[0].p_W - Vec3(0, 0, 0.5 * z_b)).norm(), kExact);
 }
 
+// a small box overhanging the edge of a larger one, in both geom orders: with the larger box as
+// the reference the clipping cuts the incident face at one side plane only (the other three
+// steps keep every vertex), with the smaller one at three. The points are the corners of the
+// overlap rectangle, closed form to kExact; the whole pair is tilted so that no coordinate is
+// exact.
+TEST(NarrowPhaseTest, OverhangingBoxIsClippedToTheOverlapRectangle) {
+  const Mat3 R = Rot(Vec3(1, 2, 3), 0.7);
+  const GeomPose bottom = Pose(Vec3(0.3, -0.1, 0.2), R);
+  const Vec3 bottom_half(0.05, 0.05, 0.02);
+  const double depth = 3e-5;
+  for (bool quarter_turn : {false, true}) {
+    // the top box's x and y extents in bottom's frame: 0.02 and 0.015 either way
+    const Vec3 top_half = quarter_turn ? Vec3(0.015, 0.02, 0.01) : Vec3(0.02, 0.015, 0.01);
+    const Mat3 R_top = quarter_turn ? Mat3(R * Rot(Vec3::UnitZ(), 90 * kDeg)) : R;
+    const GeomPose top =
+        Pose(bottom.p_W + R * Vec3(0.04, 0.005, bottom_half.z() + top_half.z() - depth), R_top);
+    // overlap in bottom's frame: x in [0.02, 0.05] (cut by bottom's side at 0.05), y in
+    // [-0.01, 0.02]
+    for (bool top_first : {true, false}) {
+      const Points r =
+          top_first ? Hit(GeomType::kBox, top_half, top, GeomType::kBox, bottom_half, bottom)
+                    : Hit(GeomType::kBox, bottom_half, bottom, GeomType::kBox, top_half, top);
+      ExpectFaceManifold(r, 4, top, top_half, bottom, bottom_half, depth, top_first);
+      bool seen[2][2] = {};
+      for (int i = 0; i < r.n; ++i) {
+        const Vec3 x_B = R.transpose() * (r.c[i].p_W - bottom.p_W);
+        const bool high_x = std::abs(x_B.x() - 0.05) < kExact;
+        const bool high_y = std::abs(x_B.y() - 0.02) < kExact;
+        EXPECT_TRUE(high_x || std::abs(x_B.x() - 0.02) < kExact) << x_B.transpose();
+        EXPECT_TRUE(high_y || std::abs(x_B.y() + 0.01) < kExact) << x_B.transpose();
+        seen[high_x][high_y] = true;
+      }
+      EXPECT_TRUE(seen[0][0] && seen[0][1] && seen[1][0] && seen[1][1]);
+    }
+  }
+}
+
+// a box tilted on one bottom edge into a wide flat box: its own face axes penetrate far deeper
+// (the wide box projects long on them), so the flat box (geom 2) gives the reference face, and
+// the incident face's two corners below it are the points
+TEST(NarrowPhaseTest, TiltedBoxOnWideBoxUsesGeom2ReferenceFace) {
+  const Mat3 R = Rot(Vec3(-1, 1, 2), 0.4);
+  const GeomPose wide = Pose(Vec3(-0.2, 0.1, 0.05), R);
+  const Vec3 wide_half(0.2, 0.2, 0.01);
+  const Vec3 half(0.02, 0.03, 0.01);
+  const double tilt = 0.2, depth = 4e-5;
+  // the tilted box's lowest edge (along its x) sits at y = -half.y, z = -half.z before the tilt
+  const Mat3 T = Rot(Vec3::UnitX(), tilt);
+  const Vec3 edge_T = T * Vec3(0, -half.y(), -half.z());
+  const Vec3 centre_W = Vec3(0.01, -0.02, wide_half.z() - depth) - edge_T;
+  const GeomPose box = Pose(wide.p_W + R * centre_W, R * T);
+  const Points r = Hit(GeomType::kBox, half, box, GeomType::kBox, wide_half, wide);
+  ASSERT_EQ(r.n, 2);
+  for (int i = 0; i < r.n; ++i) {
+    EXPECT_NEAR(r.c[i].depth_m, depth, kExact);
+    EXPECT_LT((r.c[i].n_W - R.col(2)).norm(), kExact);  // from the wide box (geom 2) up
+    const Vec3 x_wide = R.transpose() * (r.c[i].p_W - wide.p_W);
+    EXPECT_NEAR(std::abs(x_wide.x() - 0.01), half.x(), kExact);
+    EXPECT_NEAR(x_wide.y(), -0.02, kExact);
+    EXPECT_NEAR(x_wide.z(), wide_half.z() - 0.5 * depth, kExact);
+  }
+  EXPECT_GT((r.c[0].p_W - r.c[1].p_W).norm(), 2.0 * half.x() - kExact);
+}
+
+// crossed edges of unequal boxes whose edges miss both centres: A (half 0.3, 0.4, 0.5) turned
+// 45 degrees about x has its top edge along x at y = -0.1 / sqrt(2), z = 0.9 / sqrt(2); B (half
+// 0.2, 0.6, 0.25) turned 45 degrees about y has its bottom edge along y at x = -0.05 / sqrt(2),
+// z = z_B - 0.45 / sqrt(2). One point where they cross, depth and position closed form to
+// kExact, in both geom orders; lifted by `gap` instead, only the edge axis separates them.
+TEST(NarrowPhaseTest, OffCentreCrossedEdgesOfUnequalBoxes) {
+  const double r2 = std::sqrt(0.5);
+  const Vec3 half_a(0.3, 0.4, 0.5), half_b(0.2, 0.6, 0.25);
+  const GeomPose a = Pose(Vec3(0.1, 0.2, 0.3), Rot(Vec3::UnitX(), 45 * kDeg));
+  const double depth = 2e-3;
+  const double top_a = 0.3 + 0.9 * r2;
+  const Vec3 cross_W(0.1 - 0.05 * r2, 0.2 - 0.1 * r2, top_a);
+  const auto b_at = [&](double z_edge) {
+    return Pose(Vec3(0.1, 0.2, z_edge + 0.45 * r2), Rot(Vec3::UnitY(), 45 * kDeg));
+  };
+  const GeomPose b = b_at(top_a - depth);
+  for (bool a_first : {true, false}) {
+    const Points r = a_first ? Hit(GeomType::kBox, half_a, a, GeomType::kBox, half_b, b)
+                             : Hit(GeomType::kBox, half_b, b, GeomType::kBox, half_a, a);
+    ASSERT_EQ(r.n, 1);
+    EXPECT_NEAR(r.c[0].depth_m, depth, kExact);
+    // from geom 2 towards geom 1: down when A (below) is geom 1
+    EXPECT_LT((r.c[0].n_W - Vec3(0, 0, a_first ? -1.0 : 1.0)).norm(), kExact);
+    EXPECT_LT((r.c[0].p_W - (cross_W - Vec3(0, 0, 0.5 * depth))).norm(), kExact);
+  }
+  // separated by 1 um along z = a_x cross b_y only: every face axis still overlaps
+  const GeomPose apart = b_at(top_a + 1e-6);
+  EXPECT_EQ(Hit(GeomType::kBox, half_a, a, GeomType::kBox, half_b, apart).n, 0);
+  EXPECT_EQ(Hit(GeomType::kBox, half_b, apart, GeomType::kBox, half_a, a).n, 0);
+}
+
+// separated along one face axis of either box, just past touching (1 um): no contact; 1 um
+// closer instead, the face contact of depth 1 um appears
+TEST(NarrowPhaseTest, BoxesSeparatedAlongAFaceAxisGiveNoContact) {
+  const Mat3 R = Rot(Vec3(3, -1, 2), 1.1);
+  const Vec3 half_a(0.03, 0.02, 0.01), half_b(0.01, 0.015, 0.02);
+  const GeomPose a = Pose(Vec3(0.05, 0.06, 0.07), R);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double side : {-1.0, 1.0}) {
+      const double touch = half_a[axis] + half_b[axis];
+      for (double offset : {1e-6, -1e-6}) {
+        Vec3 x_A = Vec3::Zero();
+        x_A[axis] = side * (touch + offset);
+        const GeomPose b = Pose(a.p_W + R * x_A, R);
+        const Points ab = Hit(GeomType::kBox, half_a, a, GeomType::kBox, half_b, b);
+        const Points ba = Hit(GeomType::kBox, half_b, b, GeomType::kBox, half_a, a);
+        if (offset > 0.0) {
+          EXPECT_EQ(ab.n, 0) << axis << " " << side;
+          EXPECT_EQ(ba.n, 0) << axis << " " << side;
+        } else {
+          ASSERT_EQ(ab.n, 4) << axis << " " << side;
+          ASSERT_EQ(ba.n, 4) << axis << " " << side;
+          for (int i = 0; i < 4; ++i) {
+            // 1e-6 m offsets of 0.05 m coordinates: rounding up to ~1e-17 m per operation
+            EXPECT_NEAR(ab.c[i].depth_m, 1e-6, kExact);
+            EXPECT_NEAR(ba.c[i].depth_m, 1e-6, kExact);
+            EXPECT_LT((ab.c[i].n_W + side * R.col(axis)).norm(), kExact);
+          }
+        }
+      }
+    }
+  }
+}
+
 // --- stability --------------------------------------------------------------------------------
 
 // a box resting on a tilted box (MuJoCo 2.2.2 alternates depths by a factor of two here)
