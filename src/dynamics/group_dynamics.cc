@@ -40,9 +40,10 @@ bool Cholesky6(Mat6& A, Vec6& inv) {
 void SolveRightTransposed(const Mat6& L, const Vec6& inv, Mat6& X) {
 #pragma GCC unroll 6
   for (int c = 0; c < 6; ++c) {
+    Vec6 x = X.col(c);  // accumulated in registers, stored once
 #pragma GCC unroll 6
-    for (int m = 0; m < c; ++m) X.col(c) -= L(c, m) * X.col(m);
-    X.col(c) *= inv(c);
+    for (int m = 0; m < c; ++m) x -= L(c, m) * X.col(m);
+    X.col(c) = x * inv(c);
   }
 }
 
@@ -52,10 +53,10 @@ void SolveRightTransposed(const Mat6& L, const Vec6& inv, Mat6& X) {
 template <int kFirstRow>
 void SubtractOuterColumn(Mat6& D, const Mat6& L, int j) {
   constexpr int kRows = 6 - kFirstRow;
+  Eigen::Matrix<double, kRows, 1> d = D.col(j).tail<kRows>();  // in registers, stored once
 #pragma GCC unroll 6
-  for (int m = 0; m < 6; ++m) {
-    D.col(j).tail<kRows>() -= L(j, m) * L.col(m).tail<kRows>();
-  }
+  for (int m = 0; m < 6; ++m) d -= L(j, m) * L.col(m).tail<kRows>();
+  D.col(j).tail<kRows>() = d;
 }
 void SubtractOuterLower(Mat6& D, const Mat6& L) {
   SubtractOuterColumn<0>(D, L, 0);

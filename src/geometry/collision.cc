@@ -149,6 +149,7 @@ void CollisionScratch::Reserve(const Model& model) {
     moving.push_back(MovingGeom{static_cast<int>(g), centre_only, centre_only && at_origin});
   }
   SetStaticPoses(model, *this);
+  R_WB.assign(model.bodies.size(), Mat3::Identity());
   run_start.assign(model.geoms.size() + 1, 0);
   run_fill.assign(model.geoms.size(), 0);
   mj = mj_makeData(model.collision.get());
@@ -166,33 +167,20 @@ CollisionScratch::~CollisionScratch() {
 
 namespace {
 
-// q * v as Eigen computes it (QuaternionBase::_transformVector, uv = 2 q.vec x v, then
-// v + w uv + q.vec x uv), written out in scalars: the same operations in the same order give the
-// same bits, without the temporaries
-[[gnu::always_inline]] inline Vec3 Rotate(const Quat& q, const Vec3& v) {
-  const double qx = q.x(), qy = q.y(), qz = q.z(), qw = q.w();
-  double ux = qy * v.z() - qz * v.y();
-  double uy = qz * v.x() - qx * v.z();
-  double uz = qx * v.y() - qy * v.x();
-  ux += ux;
-  uy += uy;
-  uz += uz;
-  return Vec3(v.x() + qw * ux + (qy * uz - qz * uy), v.y() + qw * uy + (qz * ux - qx * uz),
-              v.z() + qw * uz + (qx * uy - qy * ux));
-}
-
 // one geom pair's points as they are written: geoms in contact order (a is dynamic, and the tool
 // when it takes part: its forces then act along +n), with the frames of p_A and p_B
 struct PairWriter {
   int ga = -1, gb = -1;
   int body_a = -1, body_b = -1;
-  bool flip = false;  // the caller's normal points from a towards b: reversed when written
-  Quat q_AW, q_BW;    // world-to-body rotations (conjugate orientations) of dynamic bodies
-  Vec3 x_A, x_B;      // body positions
+  bool flip = false;           // the caller's normal points from a towards b: reversed when written
+  const Mat3* R_WA = nullptr;  // body rotations of dynamic bodies (CollisionScratch::R_WB)
+  const Mat3* R_WB = nullptr;
+  Vec3 x_A, x_B;  // body positions
 };
 
 // the writer for points of geoms (ga, gb) whose normals point from gb towards ga
-PairWriter BeginPair(const Model& model, const Data& data, int ga, int gb) {
+PairWriter BeginPair(const Model& model, const Data& data, const CollisionScratch& s, int ga,
+                     int gb) {
   PairWriter w;
   const int tool = model.tool;
   w.flip =
@@ -203,11 +191,11 @@ PairWriter BeginPair(const Model& model, const Data& data, int ga, int gb) {
   w.body_a = model.geoms[ga].body;
   w.body_b = model.geoms[gb].body;
   if (w.body_a >= 0) {
-    w.q_AW = data.bodies[w.body_a].q_WB.conjugate();
+    w.R_WA = &s.R_WB[w.body_a];
     w.x_A = data.bodies[w.body_a].x_W;
   }
   if (w.body_b >= 0) {
-    w.q_BW = data.bodies[w.body_b].q_WB.conjugate();
+    w.R_WB = &s.R_WB[w.body_b];
     w.x_B = data.bodies[w.body_b].x_W;
   }
   return w;
@@ -232,8 +220,8 @@ void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_
   c.n_W = w.flip ? Vec3(-n_W) : n_W;
   c.depth_m = depth_m;
   // in the bodies' frames (the world's for a static geom)
-  c.p_A = w.body_a >= 0 ? Rotate(w.q_AW, p_W - w.x_A) : p_W;
-  c.p_B = w.body_b >= 0 ? Rotate(w.q_BW, p_W - w.x_B) : p_W;
+  c.p_A = w.body_a >= 0 ? Vec3(w.R_WA->transpose() * (p_W - w.x_A)) : p_W;
+  c.p_B = w.body_b >= 0 ? Vec3(w.R_WB->transpose() * (p_W - w.x_B)) : p_W;
   c.normal_force_N = 0.0;
   c.friction_force_W.setZero();
   c.impulse_Ns = 0.0;
@@ -277,7 +265,7 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
   const int n = fn(model.collision.get(), s.mj, s.mj_contacts.data(), model.geoms[g1].mj_geom,
                    model.geoms[g2].mj_geom, 0.0);
   // MuJoCo's normal points from geom1 to geom2: ours from b to a, so a = g2
-  const PairWriter w = BeginPair(model, data, g2, g1);
+  const PairWriter w = BeginPair(model, data, s, g2, g1);
   for (int i = 0; i < n; ++i) {
     const mjContact& mc = s.mj_contacts[i];
     if (!(mc.dist < 0.0)) continue;
@@ -318,6 +306,9 @@ void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
   RememberPrevious(data, s);
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    s.R_WB[i] = data.bodies[i].q_WB.toRotationMatrix();
+  }
   UpdatePoses(model, data, s);
   FindPairs(model, s.poses, s.broadphase);
   if (s.broadphase.dropped > 0) {
@@ -340,7 +331,7 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
                         : 0;
       if (n > 0) {
         // the narrow phase's normal points from geom 2 towards geom 1
-        const PairWriter w = BeginPair(model, data, g1, g2);
+        const PairWriter w = BeginPair(model, data, s, g1, g2);
         for (int i = 0; i < n; ++i) {
           AddContact(data, w, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
         }

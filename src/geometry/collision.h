@@ -43,6 +43,9 @@ struct CollisionScratch {
   std::vector<GeomCheck> geom_kind;   // (ngeom) from the model's types and sizes (Reserve)
   std::vector<GeomCheck> geom_check;  // (ngeom) with the poses, as the poses are set
   std::vector<MovingGeom> moving;     // geoms on dynamic bodies, in geom order
+  // (nbody) each body's rotation matrix at the poses of the last DetectContacts; the tick reads
+  // them too (they hold until it integrates the positions)
+  std::vector<Mat3> R_WB;
   Broadphase broadphase;
   std::array<ContactPoint, kMaxPairContacts> points{};  // one pair's narrow-phase output
   std::vector<mjContact> mj_contacts;                   // one pair's MuJoCo output (mjMAXCONPAIR)

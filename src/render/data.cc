@@ -49,7 +49,6 @@ Data MakeData(const Model& model) {
   ws.groups.Reserve(nbody, ncap);
   ws.laws.resize(ncap);
   ws.normal_velocity.resize(ncap);
-  ws.R_WB.resize(nbody);
   ws.anchor_displacement.resize(ncap);
   ws.force_W.resize(nbody);
   ws.torque_W.resize(nbody);

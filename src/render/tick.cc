@@ -25,15 +25,16 @@ bool Finite(const DeviceState& s) {
          s.angular_velocity_radps.allFinite() && s.orientation.coeffs().allFinite();
 }
 
-// body frames are fixed until stage 7: each body's rotation matrix is computed once per tick
+// body frames are fixed until stage 7: each body's rotation matrix is computed once per tick,
+// by DetectContacts (CollisionScratch::R_WB)
 Vec3 WorldPoint(const Data& data, const Workspace& ws, int body, const Vec3& p_local) {
   if (body < 0) return p_local;
-  return data.bodies[body].x_W + ws.R_WB[body] * p_local;
+  return data.bodies[body].x_W + ws.collision.R_WB[body] * p_local;
 }
 
 Vec3 LocalPoint(const Data& data, const Workspace& ws, int body, const Vec3& p_W) {
   if (body < 0) return p_W;
-  return ws.R_WB[body].transpose() * (p_W - data.bodies[body].x_W);
+  return ws.collision.R_WB[body].transpose() * (p_W - data.bodies[body].x_W);
 }
 
 // contact point offsets from the two centres of mass
@@ -185,7 +186,8 @@ void FreeMotion(const Model& model, Data& data, const Workspace& ws, int i) {
   const double h = model.timestep_s;
   BodyState& s = data.bodies[i];
   s.v_W += h / model.bodies[i].mass_kg * ws.force_W[i];
-  s.w_W += h * dynamics::WorldInverseInertiaTimes(model.bodies[i], ws.R_WB[i], ws.torque_W[i]);
+  s.w_W +=
+      h * dynamics::WorldInverseInertiaTimes(model.bodies[i], ws.collision.R_WB[i], ws.torque_W[i]);
 }
 
 // the collision window of a group: restarted by an approaching new contact (METHOD.md
@@ -357,7 +359,6 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
 
   // 3. phases and groups
   contact::BuildGroups(data, ws.groups);
-  for (int i = 0; i < nbody; ++i) ws.R_WB[i] = data.bodies[i].q_WB.toRotationMatrix();
   for (int ci = 0; ci < data.ncontact; ++ci) {
     Contact& c = data.contacts[ci];
     // the approach speed only matters for a new contact (a collision onset, GroupWindow)
@@ -391,7 +392,7 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
     // a tool held through a device is gravity-compensated like the device itself
     const bool compensated = i == tool && model.device.coupling != Coupling::kNone;
     ws.force_W[i] = compensated ? Vec3::Zero() : Vec3(b.mass_kg * model.gravity_W);
-    ws.torque_W[i] = dynamics::GyroscopicTorque(b, ws.R_WB[i], data.bodies[i].w_W);
+    ws.torque_W[i] = dynamics::GyroscopicTorque(b, ws.collision.R_WB[i], data.bodies[i].w_W);
   }
   ws.force_W[tool] += user.force_N;
   ws.torque_W[tool] += user.torque_Nm;

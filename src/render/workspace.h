@@ -19,7 +19,6 @@ struct Workspace {
   std::vector<contact::PenaltyLaw> laws;  // (max_contacts)
   std::vector<Vec3> anchor_displacement;  // (max_contacts) stick-anchor stretch
   std::vector<double> normal_velocity;    // (max_contacts) approach speed of new contacts
-  std::vector<Mat3> R_WB;      // (nbody) body rotations this tick
   std::vector<Vec3> force_W, torque_W;              // (nbody) explicit force and torque this tick
   std::vector<dynamics::ImplicitContact> implicit;  // (max_contacts) implicit contacts of a group
   dynamics::GroupSolverScratch group_solver;
