@@ -51,7 +51,7 @@ void SolveRightTransposed(const Mat6& L, const Vec6& inv, Mat6& X) {
 // that whole SSE pairs are updated (the extra entries are above the diagonal, which nothing reads):
 // 144 multiply-adds instead of the full product's 216
 template <int kFirstRow>
-void SubtractOuterColumn(Mat6& D, const Mat6& L, int j) {
+[[gnu::always_inline]] inline void SubtractOuterColumn(Mat6& D, const Mat6& L, int j) {
   constexpr int kRows = 6 - kFirstRow;
   Eigen::Matrix<double, kRows, 1> d = D.col(j).tail<kRows>();  // in registers, stored once
 #pragma GCC unroll 6
@@ -173,10 +173,11 @@ bool Analyse(GroupSolverScratch& s, int nb) {
 // with C [Q]x = ct [Q]x + dc n (n x Q)^T and [P]x C = ct [P]x + dc (P x n) n^T
 // (-[p]x [q]x = (p.q) I - q p^T and -[p]x n n^T [q]x = [n]x p q^T [n]x^T), so a manifold of k
 // points costs k small outer products and one block update instead of 3 k rank-1 updates.
-// `diagonal`: A is a diagonal block, of which the factorisation reads only the lower triangle, so
-// its upper right 3 x 3 block is left out.
+// kDiagonal: A is a diagonal block, of which the factorisation reads only the lower triangle, so
+// only that is updated.
+template <bool kDiagonal>
 void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, const Vec3& P,
-                   const Vec3& Q, const Mat3& S, bool diagonal) {
+                   const Vec3& Q, const Mat3& S) {
   // written out in scalars: Eigen's 3-vector cross products on matrix rows cost twice as much
   const double nx = n.x(), ny = n.y(), nz = n.z();
   const double kct = count * ct, kdc = count * dc;
@@ -184,7 +185,7 @@ void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, cons
   const double c_nn[3][3] = {
       {nx * nx, nx * ny, nx * nz}, {ny * nx, ny * ny, ny * nz}, {nz * nx, nz * ny, nz * nz}};
   for (int j = 0; j < 3; ++j) {
-    for (int i = 0; i < 3; ++i) A(i, j) += kdc * c_nn[i][j];
+    for (int i = kDiagonal ? j : 0; i < 3; ++i) A(i, j) += kdc * c_nn[i][j];
     A(j, j) += kct;
   }
   // bottom left: [P]x C = ct [P]x + dc (P x n) n^T
@@ -200,7 +201,7 @@ void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, cons
   A(5, 0) -= ct * P.y();
   A(5, 1) += ct * P.x();
   // top right: -C [Q]x = -ct [Q]x - dc n (n x Q)^T (a diagonal block's upper triangle is unread)
-  if (!diagonal) {
+  if constexpr (!kDiagonal) {
     const double nq[3] = {dc * (ny * Q.z() - nz * Q.y()), dc * (nz * Q.x() - nx * Q.z()),
                           dc * (nx * Q.y() - ny * Q.x())};
     for (int j = 0; j < 3; ++j) {
@@ -225,7 +226,7 @@ void AddPatchBlock(Mat6& A, int count, double ct, double dc, const Vec3& n, cons
   for (int i = 0; i < 3; ++i) {
     const double nsn[3] = {ny * U[i][2] - nz * U[i][1], nz * U[i][0] - nx * U[i][2],
                            nx * U[i][1] - ny * U[i][0]};
-    for (int j = 0; j < 3; ++j) A(3 + i, 3 + j) += dc * nsn[j] - ct * S(j, i);
+    for (int j = 0; j <= (kDiagonal ? i : 2); ++j) A(3 + i, 3 + j) += dc * nsn[j] - ct * S(j, i);
     A(3 + i, 3 + i) += tr;
   }
 }
@@ -279,7 +280,7 @@ void AssemblePatch(GroupSolverScratch& s, const Data& data, std::span<const int>
     const double sign = pa >= 0 ? 1.0 : -1.0;
     s.b[p].head<3>() += sign * F;
     s.b[p].tail<3>() += sign * T;
-    AddPatchBlock(s.diag_A[p], count, ct, dc, n, P, P, S, true);
+    AddPatchBlock<true>(s.diag_A[p], count, ct, dc, n, P, P, S);
     return;
   }
   const Vec3 d = origin - data.bodies[first.body_b].x_W;
@@ -290,19 +291,19 @@ void AssemblePatch(GroupSolverScratch& s, const Data& data, std::span<const int>
   s.b[pa].tail<3>() += T;
   s.b[pb].head<3>() -= F;
   s.b[pb].tail<3>() -= T + d.cross(F);
-  AddPatchBlock(s.diag_A[pa], count, ct, dc, n, P, P, S, true);
-  AddPatchBlock(s.diag_A[pb], count, ct, dc, n, Pb, Pb, Sbb, true);
+  AddPatchBlock<true>(s.diag_A[pa], count, ct, dc, n, P, P, S);
+  AddPatchBlock<true>(s.diag_A[pb], count, ct, dc, n, Pb, Pb, Sbb);
   // the coupling H_ab = -h sum J_a^T C J_b; only the lower block (larger position first) is
   // stored. Both points on one body: J = J_a - J_b adds both couplings to the diagonal.
   if (pa == pb) {
-    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, P, Pb, Sab, true);
-    AddPatchBlock(s.diag_A[pa], count, -ct, -dc, n, Pb, P, Sab.transpose(), true);
+    AddPatchBlock<true>(s.diag_A[pa], count, -ct, -dc, n, P, Pb, Sab);
+    AddPatchBlock<true>(s.diag_A[pa], count, -ct, -dc, n, Pb, P, Sab.transpose());
   } else if (pa > pb) {
-    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc, n, P,
-                  Pb, Sab, false);
+    AddPatchBlock<false>(s.off_A[s.block[static_cast<std::size_t>(pa) * nb + pb]], count, -ct, -dc,
+                         n, P, Pb, Sab);
   } else {
-    AddPatchBlock(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc, n, Pb,
-                  P, Sab.transpose(), false);
+    AddPatchBlock<false>(s.off_A[s.block[static_cast<std::size_t>(pb) * nb + pa]], count, -ct, -dc,
+                         n, Pb, P, Sab.transpose());
   }
 }
 
