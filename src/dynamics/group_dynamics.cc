@@ -376,8 +376,10 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
     }
     while (end < nc && contacts[end].active && SamePatch(contacts[begin], contacts[end])) ++end;
     AssemblePatch(s, data, slot, contacts, begin, end, h, nb);
-    s.patch_start[s.npatch] = begin;
-    s.patch_start[++s.npatch] = end;
+    // a patch's range: dropped contacts may lie between two patches
+    s.patch_range[2 * s.npatch] = begin;
+    s.patch_range[2 * s.npatch + 1] = end;
+    ++s.npatch;
     begin = end;
   }
 }
@@ -447,7 +449,7 @@ void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
   analysed_pairs.assign(2 * static_cast<std::size_t>(max_contacts), 0);
   npairs = 0;
   analysed_npairs = analysed_nb = -1;
-  patch_start.assign(static_cast<std::size_t>(max_contacts) + 1, 0);
+  patch_range.assign(2 * static_cast<std::size_t>(max_contacts), 0);
   npatch = 0;
 }
 
@@ -479,7 +481,7 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
     }
     bool pulled = false;
     for (int q = 0; q < s.npatch; ++q) {
-      pulled |= PatchForces(s, data, slot, contacts, s.patch_start[q], s.patch_start[q + 1],
+      pulled |= PatchForces(s, data, slot, contacts, s.patch_range[2 * q], s.patch_range[2 * q + 1],
                             pass + 1 < kMaxPasses);
     }
     if (!pulled) break;

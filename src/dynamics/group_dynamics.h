@@ -67,7 +67,7 @@ struct GroupSolverScratch {
   // the group's structure (slot pairs that share a contact, 2 per pair) and the structure the
   // analysis above (pos, col_start, col_row, block) was made for: reused while they are equal
   std::vector<int> pairs, analysed_pairs;
-  std::vector<int> patch_start;  // (max_contacts + 1) the assembled patches' contact ranges
+  std::vector<int> patch_range;  // (2 max_contacts) the assembled patches' [begin, end)
   int npatch = 0;
   int npairs = 0, analysed_npairs = -1, analysed_nb = -1;
   void Reserve(int max_group_bodies, int max_contacts);

@@ -269,6 +269,47 @@ TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
   }
 }
 
+TEST(GroupDynamics, DroppedContactsBetweenKeptOnesReportNoForce) {
+  // two columns of two boxes; the upper boxes are pulled off, so the faces between the boxes
+  // drop out while the floor faces on either side of them in the list stay. Every kept contact
+  // reports its forces at the solved velocities, every dropped one reports none, and the
+  // velocities are the dense solve without the dropped contacts.
+  Fixture f = MakeFixture(2, 1, 2, 10);
+  std::mt19937 rng(4);
+  const auto& b = f.bodies;  // b[x + 2 z]
+  std::vector<ImplicitContact> contacts;
+  AddFace(f, contacts, b[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, b[2], b[0], Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, b[1], -1, Vec3::UnitZ(), false, rng);
+  AddFace(f, contacts, b[3], b[1], Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, b[1], -1, Vec3(0.1, 0.0, 1.0).normalized(), true, rng);
+  for (int i : b) {
+    f.data.bodies[i].v_W.setZero();
+    f.data.bodies[i].w_W.setZero();
+    f.torque[i].setZero();
+  }
+  f.force[b[0]] = f.force[b[1]] = Vec3(0.0, 0.0, -5000.0);
+  f.force[b[2]] = f.force[b[3]] = Vec3(0.0, 0.0, 5000.0);
+  std::vector<ImplicitContact> kept = contacts;
+  for (ImplicitContact& c : kept) c.active = c.body_b < 0;
+  const Eigen::VectorXd expected = DenseSolve(f, kept);
+  ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
+                                   f.scratch));
+  EXPECT_LE((Solved(f) - expected).lpNorm<Eigen::Infinity>(),
+            kTol * expected.lpNorm<Eigen::Infinity>());
+  for (const ImplicitContact& c : contacts) {
+    ASSERT_EQ(c.active, c.body_b < 0);
+    if (!c.active) {
+      EXPECT_EQ(c.normal_force_N, 0.0);
+      EXPECT_EQ(c.friction_force_W, Vec3::Zero());
+      continue;
+    }
+    const Vec3 u = PointVelocity(f.data.bodies[c.body_a], Offset(f, c.body_a, c));
+    EXPECT_NEAR(c.normal_force_N, c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W),
+                1e-9 * std::abs(c.phi_n_N));
+  }
+}
+
 TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
   // a box on the floor, a box on it (spinning, so the lower face's points move differently on the
   // two boxes) and a ceiling point pressing the top box: each contact's reported forces are its
