@@ -38,8 +38,8 @@ struct ImplicitContact {
   double phi_n_N = 0.0;       // normal force independent of the new velocity
   double c_n_Ns_per_m = 0.0;  // h k + b: normal force per unit of new approach velocity
   bool stick = false;         // tangential rows present
-  Vec3 phi_t_W =
-      Vec3::Zero();  // tangential force independent of the new velocity, on a (n . phi_t = 0)
+  // tangential force on a independent of the new velocity, in the tangent plane (n . phi_t = 0)
+  Vec3 phi_t_W = Vec3::Zero();
   double c_t_Ns_per_m = 0.0;
   int contact = -1;    // index in data.contacts
   bool active = true;  // false once dropped for pulling
