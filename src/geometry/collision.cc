@@ -3,11 +3,29 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
 namespace rigidtouch::geometry {
 namespace {
+
+// the end of the run of one geom pair that starts at prev[begin]. MatchPair leaves the run's
+// length in each of its points (pair_points), so the run's ends are checked rather than every
+// point compared; a list not written by DetectContacts, whose pair_points may not hold, is scanned.
+// Either way the points of a geom pair are taken to be contiguous, as RememberPrevious assumes.
+int RunEnd(const Contact* prev, int nprev, int begin) {
+  const int ga = prev[begin].geom_a, gb = prev[begin].geom_b;
+  auto same_pair = [prev, ga, gb](int i) { return prev[i].geom_a == ga && prev[i].geom_b == gb; };
+  const int count = prev[begin].pair_points;
+  if (count >= 1 && count <= nprev - begin) {
+    const int end = begin + count;
+    if (same_pair(end - 1) && (end == nprev || !same_pair(end))) return end;
+  }
+  int end = begin + 1;
+  while (end < nprev && same_pair(end)) ++end;
+  return end;
+}
 
 // last tick's contacts become `previous` (the buffers trade places, no copy), and the runs of
 // their geom pairs are indexed for MatchPair: data.previous_runs sorted by pair, the runs whose
@@ -23,10 +41,8 @@ void RememberPrevious(Data& data, CollisionScratch& s) {
   // calls f(geom_a, geom_b, begin, count) for each run of one geom pair, in list order
   auto for_each_run = [prev, nprev](auto&& f) {
     for (int begin = 0; begin < nprev;) {
-      const int ga = prev[begin].geom_a, gb = prev[begin].geom_b;
-      int end = begin + 1;
-      while (end < nprev && prev[end].geom_a == ga && prev[end].geom_b == gb) ++end;
-      f(ga, gb, begin, end - begin);
+      const int end = RunEnd(prev, nprev, begin);
+      f(prev[begin].geom_a, prev[begin].geom_b, begin, end - begin);
       begin = end;
     }
   };
@@ -69,23 +85,27 @@ void MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
   const int ncur = end - begin;
   // a pair with one point before and now is the same contact wherever it slid
   const bool single = nprev == 1 && ncur == 1;
-  // greedy nearest matching; a manifold has at most a few points
-  unsigned used = 0;
+  // greedy nearest matching; a manifold has at most a few points. The candidates are last tick's
+  // first 32 points not matched yet, one bit each: visiting the set bits from the lowest keeps the
+  // index order, so ties still go to the lowest index, without a test per matched point.
+  unsigned unused = nprev >= 32 ? ~0u : (1u << nprev) - 1u;
   for (int c = begin; c < end; ++c) {
     Contact& con = data.contacts[c];
-    int best = -1;
-    double best_d2 = kMatchDistance_m * kMatchDistance_m;
-    for (int k = 0; k < nprev && k < 32; ++k) {
-      if (used & (1u << k)) continue;
-      const double d2 = (lo[k].p_A - con.p_A).squaredNorm();
-      if (single || d2 < best_d2) {
-        best = k;
-        best_d2 = d2;
+    int best = single ? 0 : -1;
+    if (!single) {
+      double best_d2 = kMatchDistance_m * kMatchDistance_m;
+      for (unsigned left = unused; left != 0; left &= left - 1) {
+        const int k = std::countr_zero(left);
+        const double d2 = (lo[k].p_A - con.p_A).squaredNorm();
+        if (d2 < best_d2) {
+          best = k;
+          best_d2 = d2;
+        }
       }
     }
     con.pair_points = ncur;
     if (best >= 0) {
-      used |= 1u << best;
+      unused &= ~(1u << best);
       const Contact& prev = lo[best];
       con.id = prev.id;
       con.is_new = false;
@@ -146,7 +166,11 @@ void CollisionScratch::Reserve(const Model& model) {
     const bool at_origin = geom.pos_B.x() == 0.0 && geom.pos_B.y() == 0.0 &&
                            geom.pos_B.z() == 0.0 && !std::signbit(geom.pos_B.x()) &&
                            !std::signbit(geom.pos_B.y()) && !std::signbit(geom.pos_B.z());
-    moving.push_back(MovingGeom{static_cast<int>(g), centre_only, centre_only && at_origin});
+    const Quat& q = geom.quat_B;
+    const bool identity = q.w() == 1.0 && q.x() == 0.0 && q.y() == 0.0 && q.z() == 0.0 &&
+                          !std::signbit(q.x()) && !std::signbit(q.y()) && !std::signbit(q.z());
+    moving.push_back(MovingGeom{static_cast<int>(g), centre_only, centre_only && at_origin,
+                                !centre_only && at_origin && identity});
   }
   SetStaticPoses(model, *this);
   R_WB.assign(model.bodies.size(), Mat3::Identity());
@@ -201,16 +225,22 @@ PairWriter BeginPair(const Model& model, const Data& data, const CollisionScratc
   return w;
 }
 
-// appends one contact point of the pair; a full contact list counts Warning::kContactFull
-void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_W, double depth_m) {
-  if (data.ncontact >= static_cast<int>(data.contacts.size())) {
-    auto& warning = data.warnings[static_cast<int>(Warning::kContactFull)];
-    if (warning.last_step != data.step) {
-      ++warning.count;
-      warning.last_step = data.step;
-    }
-    return;
+// how many of `n` points of one pair the contact list has room for; a full contact list counts
+// Warning::kContactFull (once per step)
+int Room(Data& data, int n) {
+  const int room = static_cast<int>(data.contacts.size()) - data.ncontact;
+  if (n <= room) return n;
+  auto& warning = data.warnings[static_cast<int>(Warning::kContactFull)];
+  if (warning.last_step != data.step) {
+    ++warning.count;
+    warning.last_step = data.step;
   }
+  return room;
+}
+
+// appends one contact point of the pair, for which Room has made room. The id is left to
+// MatchPair, which gives every point of the pair one.
+void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_W, double depth_m) {
   Contact& c = data.contacts[data.ncontact++];
   c.geom_a = w.ga;
   c.geom_b = w.gb;
@@ -226,7 +256,6 @@ void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_
   c.friction_force_W.setZero();
   c.impulse_Ns = 0.0;
   c.group = -1;
-  c.id = -1;
 }
 
 int MjType(GeomType t) {
@@ -268,14 +297,21 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
   const PairWriter w = BeginPair(model, data, s, g2, g1);
   for (int i = 0; i < n; ++i) {
     const mjContact& mc = s.mj_contacts[i];
-    if (!(mc.dist < 0.0)) continue;
+    if (!(mc.dist < 0.0) || Room(data, 1) < 1) continue;
     AddContact(data, w, Vec3(mc.pos[0], mc.pos[1], mc.pos[2]),
                Vec3(mc.frame[0], mc.frame[1], mc.frame[2]), -mc.dist);
   }
 }
 
+// whether every component of q is finite and nonzero
+bool NonzeroFinite(const Quat& q) {
+  const auto c = q.coeffs().array();
+  return (c != 0.0).all() && (c.abs() <= std::numeric_limits<double>::max()).all();
+}
+
 // the moving geoms' poses as GeomPoses gives them, and Collide's checks of its arguments, once
-// per geom rather than once per pair (the static geoms' are set by Reserve)
+// per geom rather than once per pair (the static geoms' are set by Reserve). Reads the bodies'
+// rotation matrices of this tick (CollisionScratch::R_WB).
 void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
   // a quaternion whose squared norm is at most this (so finite, its components at most 1e100)
   // gives a finite rotation matrix, even times a geom quaternion of components at most 2
@@ -294,6 +330,14 @@ void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
       // the rotation matrix would be finite, so PoseFinite is whether the centre is
       s.geom_check[m.geom] =
           kind == GeomCheck::kAccepted && !pose.p_W.allFinite() ? GeomCheck::kRejected : kind;
+    } else if (m.body_frame && NonzeroFinite(b.q_WB)) {
+      // q_WB * (+0, +0, +0, 1) is q_WB bit for bit when no component of q_WB is zero or not
+      // finite (each product by 0 or 1 is exact, and a signed zero added to a nonzero term leaves
+      // it), so the geom's rotation matrix is the body's, from the same quaternion; the centre is
+      // x_W + (+0, +0, +0) as for a sphere above
+      pose.p_W = b.x_W + Vec3::Zero();
+      pose.R_WG = s.R_WB[geom.body];
+      s.geom_check[m.geom] = CheckPose(kind, pose);
     } else {
       pose.p_W = b.x_W + b.q_WB * geom.pos_B;
       pose.R_WG = (b.q_WB * geom.quat_B).toRotationMatrix();
@@ -332,7 +376,8 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
       if (n > 0) {
         // the narrow phase's normal points from geom 2 towards geom 1
         const PairWriter w = BeginPair(model, data, s, g1, g2);
-        for (int i = 0; i < n; ++i) {
+        const int fit = Room(data, n);
+        for (int i = 0; i < fit; ++i) {
           AddContact(data, w, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
         }
       }

@@ -33,6 +33,9 @@ struct MovingGeom {
   bool centre_only = false;
   // a centre-only sphere at its body's origin (pos_B is +0): its centre is the body's position
   bool at_body_origin = false;
+  // any other geom whose frame is its body's (pos_B and quat_B (+0, +0, +0) and (+0, +0, +0, 1)):
+  // its rotation matrix is the body's, which DetectContacts computes anyway (see UpdatePoses)
+  bool body_frame = false;
 };
 
 /// Scratch of the collision stage, sized by Reserve.

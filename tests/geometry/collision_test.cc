@@ -91,7 +91,9 @@ bool SameBits(const double* a, const double* b, int n) {
 // only the centre (the body's position when the sphere sits at its origin): every pose part that
 // is read, and every geom's check, must still be bitwise what GeomPoses and PoseFinite give for
 // the bodies as they are now, however they moved, with signed zeros, and with non-finite or huge
-// (finite, unnormalised) quaternions; spheres also off their body's origin, and at -0
+// (finite, unnormalised) quaternions, and quaternions with zero components (a box at its body's
+// frame takes the body's rotation matrix only when none is zero); spheres also off their body's
+// origin, and at -0
 TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
   using geometry::GeomCheck;
   std::mt19937_64 rng(11);
@@ -134,6 +136,9 @@ TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
           case 6:
             b.x_W = Vec3(-0.0, 0.0, -0.0);
             break;
+          case 5:  // zero components, some -0: a box's pose takes the full expression
+            b.q_WB = trial % 20 == 5 ? Quat(-0.6, 0.0, -0.0, 0.8) : Quat(1.0, -0.0, 0.0, 0.0);
+            break;
           default:
             break;
         }
@@ -157,6 +162,107 @@ TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
       }
     }
   }
+}
+
+// last tick's points of one geom pair, matched as the greedy nearest: each point of this tick,
+// in order, takes the nearest unmatched one within kMatchDistance_m (the lowest index on a tie),
+// and a lone point before and now always matches. A plain reference for MatchPair.
+struct Expected {
+  int id = -1;  // -1: new
+  Vec3 anchor_A, anchor_B;
+};
+std::vector<Expected> ReferenceMatch(const Data& d) {
+  std::vector<Expected> out(d.ncontact);
+  for (int begin = 0; begin < d.ncontact;) {
+    const Contact& key = d.contacts[begin];
+    int end = begin;
+    while (end < d.ncontact && d.contacts[end].geom_a == key.geom_a &&
+           d.contacts[end].geom_b == key.geom_b) {
+      ++end;
+    }
+    std::vector<int> prev;
+    for (int k = 0; k < d.nprevious; ++k) {
+      if (d.previous[k].geom_a == key.geom_a && d.previous[k].geom_b == key.geom_b) {
+        prev.push_back(k);
+      }
+    }
+    std::vector<bool> used(prev.size(), false);
+    const bool single = prev.size() == 1 && end - begin == 1;
+    for (int c = begin; c < end; ++c) {
+      int best = -1;
+      double best_d2 = geometry::kMatchDistance_m * geometry::kMatchDistance_m;
+      for (std::size_t k = 0; k < prev.size(); ++k) {
+        if (used[k]) continue;
+        const double d2 = (d.previous[prev[k]].p_A - d.contacts[c].p_A).squaredNorm();
+        if (single || d2 < best_d2) {
+          best = static_cast<int>(k);
+          best_d2 = d2;
+        }
+      }
+      if (best >= 0) {
+        used[best] = true;
+        const Contact& p = d.previous[prev[best]];
+        out[c] = Expected{p.id, p.anchor_A, p.anchor_B};
+      } else {
+        out[c] = Expected{-1, d.contacts[c].p_A, d.contacts[c].p_B};
+      }
+    }
+    begin = end;
+  }
+  return out;
+}
+
+// DetectContacts matches as the reference above while the boxes of a stack jitter about their
+// resting poses (points slide, vanish, appear, swap order); a second run, whose previous list
+// has wrong pair_points (as a list not written by DetectContacts may), matches the same
+TEST(CollisionTest, MatchingIsTheGreedyNearest) {
+  const Model m = LoadModel(test::TestScene("stack3.xml"), {});
+  Data d = MakeData(m), e = MakeData(m);
+  for (int i = 0; i < 300; ++i) Tick(m, d, TickInput{});
+  const std::vector<BodyState> rest = d.bodies;
+  geometry::CollisionScratch s, t;
+  s.Reserve(m);
+  t.Reserve(m);
+  d.ncontact = 0;
+  e.next_contact_id = d.next_contact_id;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int matched = 0, fresh = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    // mostly small steps, which keep the points; now and then a large one, which moves them all
+    const double step = trial % 17 == 0 ? 0.01 : 0.0015;
+    for (std::size_t b = 0; b < rest.size(); ++b) {
+      BodyState& x = d.bodies[b];
+      x.x_W = rest[b].x_W + step * Vec3(u(rng), u(rng), u(rng));
+      x.q_WB =
+          (rest[b].q_WB * Quat(1.0, 0.2 * step * u(rng), 0.2 * step * u(rng), 0.0)).normalized();
+    }
+    e.bodies = d.bodies;
+    for (int c = 0; c < e.ncontact; ++c) e.contacts[c].pair_points = 1 + (trial + c) % 3;
+    const int next_id = d.next_contact_id;
+    geometry::DetectContacts(m, d, s);
+    geometry::DetectContacts(m, e, t);
+    const std::vector<Expected> expected = ReferenceMatch(d);
+    ASSERT_EQ(e.ncontact, d.ncontact);
+    int new_id = next_id;
+    for (int c = 0; c < d.ncontact; ++c) {
+      const Contact& con = d.contacts[c];
+      if (expected[c].id >= 0) {
+        EXPECT_EQ(con.id, expected[c].id) << "trial " << trial << " contact " << c;
+        EXPECT_FALSE(con.is_new);
+        ++matched;
+      } else {
+        EXPECT_EQ(con.id, new_id++) << "trial " << trial << " contact " << c;
+        EXPECT_TRUE(con.is_new);
+        ++fresh;
+      }
+      EXPECT_EQ(con.anchor_A, expected[c].anchor_A);
+      EXPECT_EQ(con.anchor_B, expected[c].anchor_B);
+      EXPECT_EQ(e.contacts[c].id, con.id);
+    }
+  }
+  EXPECT_GT(matched, 500);
+  EXPECT_GT(fresh, 100);
 }
 
 }  // namespace
