@@ -10,23 +10,6 @@
 namespace rigidtouch::geometry {
 namespace {
 
-// the end of the run of one geom pair that starts at prev[begin]. MatchPair leaves the run's
-// length in each of its points (pair_points), so the run's ends are checked rather than every
-// point compared; a list not written by DetectContacts, whose pair_points may not hold, is scanned.
-// Either way the points of a geom pair are taken to be contiguous, as RememberPrevious assumes.
-int RunEnd(const Contact* prev, int nprev, int begin) {
-  const int ga = prev[begin].geom_a, gb = prev[begin].geom_b;
-  auto same_pair = [prev, ga, gb](int i) { return prev[i].geom_a == ga && prev[i].geom_b == gb; };
-  const int count = prev[begin].pair_points;
-  if (count >= 1 && count <= nprev - begin) {
-    const int end = begin + count;
-    if (same_pair(end - 1) && (end == nprev || !same_pair(end))) return end;
-  }
-  int end = begin + 1;
-  while (end < nprev && same_pair(end)) ++end;
-  return end;
-}
-
 // last tick's contacts become `previous` (the buffers trade places, no copy), and the runs of
 // their geom pairs are indexed for MatchPair: data.previous_runs sorted by pair, the runs whose
 // first geom is g at previous_runs[run_start[g] .. run_start[g + 1]). A counting sort on the first
@@ -41,8 +24,10 @@ void RememberPrevious(Data& data, CollisionScratch& s) {
   // calls f(geom_a, geom_b, begin, count) for each run of one geom pair, in list order
   auto for_each_run = [prev, nprev](auto&& f) {
     for (int begin = 0; begin < nprev;) {
-      const int end = RunEnd(prev, nprev, begin);
-      f(prev[begin].geom_a, prev[begin].geom_b, begin, end - begin);
+      const int ga = prev[begin].geom_a, gb = prev[begin].geom_b;
+      int end = begin + 1;
+      while (end < nprev && prev[end].geom_a == ga && prev[end].geom_b == gb) ++end;
+      f(ga, gb, begin, end - begin);
       begin = end;
     }
   };

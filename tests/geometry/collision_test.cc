@@ -213,18 +213,15 @@ std::vector<Expected> ReferenceMatch(const Data& d) {
 }
 
 // DetectContacts matches as the reference above while the boxes of a stack jitter about their
-// resting poses (points slide, vanish, appear, swap order); a second run, whose previous list
-// has wrong pair_points (as a list not written by DetectContacts may), matches the same
+// resting poses (points slide, vanish, appear, swap order)
 TEST(CollisionTest, MatchingIsTheGreedyNearest) {
   const Model m = LoadModel(test::TestScene("stack3.xml"), {});
-  Data d = MakeData(m), e = MakeData(m);
+  Data d = MakeData(m);
   for (int i = 0; i < 300; ++i) Tick(m, d, TickInput{});
   const std::vector<BodyState> rest = d.bodies;
-  geometry::CollisionScratch s, t;
+  geometry::CollisionScratch s;
   s.Reserve(m);
-  t.Reserve(m);
   d.ncontact = 0;
-  e.next_contact_id = d.next_contact_id;
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int matched = 0, fresh = 0;
@@ -237,13 +234,9 @@ TEST(CollisionTest, MatchingIsTheGreedyNearest) {
       x.q_WB =
           (rest[b].q_WB * Quat(1.0, 0.2 * step * u(rng), 0.2 * step * u(rng), 0.0)).normalized();
     }
-    e.bodies = d.bodies;
-    for (int c = 0; c < e.ncontact; ++c) e.contacts[c].pair_points = 1 + (trial + c) % 3;
     const int next_id = d.next_contact_id;
     geometry::DetectContacts(m, d, s);
-    geometry::DetectContacts(m, e, t);
     const std::vector<Expected> expected = ReferenceMatch(d);
-    ASSERT_EQ(e.ncontact, d.ncontact);
     int new_id = next_id;
     for (int c = 0; c < d.ncontact; ++c) {
       const Contact& con = d.contacts[c];
@@ -258,7 +251,6 @@ TEST(CollisionTest, MatchingIsTheGreedyNearest) {
       }
       EXPECT_EQ(con.anchor_A, expected[c].anchor_A);
       EXPECT_EQ(con.anchor_B, expected[c].anchor_B);
-      EXPECT_EQ(e.contacts[c].id, con.id);
     }
   }
   EXPECT_GT(matched, 500);
