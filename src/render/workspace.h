@@ -16,9 +16,9 @@ namespace rigidtouch {
 struct Workspace {
   geometry::CollisionScratch collision;  // broad and narrow phase scratch
   contact::Groups groups;
-  std::vector<contact::PenaltyLaw> laws;  // (max_contacts)
-  std::vector<Vec3> anchor_displacement;  // (max_contacts) stick-anchor stretch
-  std::vector<double> normal_velocity;    // (max_contacts) approach speed of new contacts
+  std::vector<contact::PenaltyLaw> laws;            // (max_contacts)
+  std::vector<Vec3> anchor_displacement;            // (max_contacts) stick-anchor stretch
+  std::vector<double> normal_velocity;              // (max_contacts) approach speed of new contacts
   std::vector<Vec3> force_W, torque_W;              // (nbody) explicit force and torque this tick
   std::vector<dynamics::ImplicitContact> implicit;  // (max_contacts) implicit contacts of a group
   dynamics::GroupSolverScratch group_solver;
