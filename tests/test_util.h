@@ -15,10 +15,24 @@ inline std::string TestScene(const std::string& name) {
   return std::string(RIGIDTOUCH_SOURCE_DIR) + "/tests/scenes/" + name;
 }
 
+/// The test process's temporary directory; removed, with everything in it, when the process
+/// exits normally (a crashed test leaves it behind for inspection).
+inline std::filesystem::path TempDir() {
+  struct Owner {
+    std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("rigidtouch_test_" + std::to_string(::getpid()));
+    ~Owner() {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  };
+  static const Owner owner;
+  return owner.dir;
+}
+
 /// Writes `text` to a fresh file in the test's temporary directory and returns its path.
 inline std::string WriteTempFile(const std::string& name, const std::string& text) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("rigidtouch_test_" + std::to_string(::getpid()));
+  const std::filesystem::path dir = TempDir();
   std::filesystem::create_directories(dir);
   const std::string path = (dir / name).string();
   std::ofstream(path) << text;
