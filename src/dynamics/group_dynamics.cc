@@ -97,8 +97,12 @@ void BackSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
 void StructureOf(GroupSolverScratch& s, std::span<const int> slot,
                  std::span<const ImplicitContact> contacts) {
   s.npairs = 0;
+  int last_a = -1, last_b = -1;  // the bodies of the previous two-body contact
   for (const ImplicitContact& c : contacts) {
     if (c.body_a < 0 || c.body_b < 0) continue;
+    if (c.body_a == last_a && c.body_b == last_b) continue;  // the manifold's next point
+    last_a = c.body_a;
+    last_b = c.body_b;
     const int a = slot[c.body_a], b = slot[c.body_b];
     if (a == b) continue;
     const int n = s.npairs;

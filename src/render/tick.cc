@@ -27,7 +27,8 @@ bool Finite(const DeviceState& s) {
 
 // body frames are fixed until stage 7: each body's rotation matrix is computed once per tick,
 // by DetectContacts (CollisionScratch::R_WB)
-Vec3 WorldPoint(const Data& data, const Workspace& ws, int body, const Vec3& p_local) {
+[[gnu::always_inline]] inline Vec3 WorldPoint(const Data& data, const Workspace& ws, int body,
+                                              const Vec3& p_local) {
   if (body < 0) return p_local;
   return data.bodies[body].x_W + ws.collision.R_WB[body] * p_local;
 }
