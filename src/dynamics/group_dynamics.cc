@@ -1,6 +1,7 @@
 #include "dynamics/group_dynamics.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "dynamics/rigid_body.h"
@@ -9,6 +10,13 @@ namespace rigidtouch::dynamics {
 namespace {
 
 constexpr int kMaxPasses = 4;
+// the lagged factorisation's refinement: at most this many corrections, until the velocity error
+// in the kinetic-energy norm is below this fraction of the step's momentum scale
+constexpr int kMaxRefinements = 2;
+constexpr double kRefineTolerance = 1e-10;
+// after a failed refinement the kept factor is not tried for 1, 3, 7, ... solves, at most this
+// many: a failed try costs about half a factorisation
+constexpr int kMaxBackoff = 63;
 
 // --- 6 x 6 kernels (column-major, fixed size, unrolled: GCC leaves triangular loops rolled
 // otherwise, measured at twice the instructions; no allocation) ---
@@ -91,9 +99,10 @@ void BackSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
 
 // --- the group's block structure ---
 
-// the group's structure: the pairs of group slots that share a contact, in the contacts' order
-// with consecutive repeats (the points of one manifold) left out. Equal lists give equal
-// analyses, so a group whose bodies keep touching the same neighbours is analysed once.
+// the group's structure: the pairs of group slots that share a contact (smaller slot in the high
+// half), sorted and unique. Equal lists give equal analyses, so a group whose bodies keep touching
+// the same neighbours is analysed once, whatever order its contacts come in and whichever body of
+// a manifold is its reference.
 void StructureOf(GroupSolverScratch& s, std::span<const int> slot,
                  std::span<const ImplicitContact> contacts) {
   s.npairs = 0;
@@ -103,14 +112,13 @@ void StructureOf(GroupSolverScratch& s, std::span<const int> slot,
     if (c.body_a == last_a && c.body_b == last_b) continue;  // the manifold's next point
     last_a = c.body_a;
     last_b = c.body_b;
-    const int a = slot[c.body_a], b = slot[c.body_b];
-    if (a == b) continue;
-    const int n = s.npairs;
-    if (n > 0 && s.pairs[2 * n - 2] == a && s.pairs[2 * n - 1] == b) continue;
-    s.pairs[2 * n] = a;
-    s.pairs[2 * n + 1] = b;
-    ++s.npairs;
+    const auto a = static_cast<std::uint64_t>(std::min(slot[c.body_a], slot[c.body_b]));
+    const auto b = static_cast<std::uint64_t>(std::max(slot[c.body_a], slot[c.body_b]));
+    if (a != b) s.pairs[s.npairs++] = a << 32 | b;
   }
+  const auto begin = s.pairs.begin(), end = begin + s.npairs;
+  std::sort(begin, end);
+  s.npairs = static_cast<int>(std::unique(begin, end) - begin);
 }
 
 // orders the group's bodies by minimum degree on the graph of bodies that share a contact
@@ -123,7 +131,8 @@ bool Analyse(GroupSolverScratch& s, int nb) {
   std::fill(s.degree.begin(), s.degree.begin() + nb, 0);
   std::fill(s.eliminated.begin(), s.eliminated.begin() + nb, 0);
   for (int e = 0; e < s.npairs; ++e) {
-    const int a = s.pairs[2 * e], b = s.pairs[2 * e + 1];
+    const auto a = static_cast<int>(s.pairs[e] >> 32),
+               b = static_cast<int>(s.pairs[e] & 0xffffffffU);
     if (adj(a, b)) continue;
     adj(a, b) = adj(b, a) = 1;
     ++s.degree[a];
@@ -312,8 +321,8 @@ void AssemblePatch(GroupSolverScratch& s, const Data& data, std::span<const int>
 }
 
 // factors the assembled blocks in place (right-looking block Cholesky over the analysed
-// structure) and solves for x
-bool FactorAndSolve(GroupSolverScratch& s, int nb) {
+// structure): the factor stays in diag_A, diag_inv and off_A until the next assembly
+bool Factor(GroupSolverScratch& s, int nb) {
   for (int k = 0; k < nb; ++k) {
     if (!Cholesky6(s.diag_A[k], s.diag_inv[k])) return false;
     const int begin = s.col_start[k], end = s.col_start[k + 1];
@@ -330,21 +339,25 @@ bool FactorAndSolve(GroupSolverScratch& s, int nb) {
       }
     }
   }
-  std::copy(s.b.begin(), s.b.begin() + nb, s.x.begin());
-  for (int k = 0; k < nb; ++k) {  // L y = b
-    ForwardSubstitute(s.diag_A[k], s.diag_inv[k], s.x[k]);
+  return true;
+}
+
+// y <- (L L^T)^-1 y with the factor, by position; false unless the result is finite
+bool Substitute(const GroupSolverScratch& s, int nb, std::vector<Vec6>& y) {
+  for (int k = 0; k < nb; ++k) {  // L z = y
+    ForwardSubstitute(s.diag_A[k], s.diag_inv[k], y[k]);
     for (int e = s.col_start[k]; e < s.col_start[k + 1]; ++e) {
-      s.x[s.col_row[e]].noalias() -= s.off_A[e] * s.x[k];
+      y[s.col_row[e]].noalias() -= s.off_A[e] * y[k];
     }
   }
-  for (int k = nb - 1; k >= 0; --k) {  // L^T x = y
+  for (int k = nb - 1; k >= 0; --k) {  // L^T y = z
     for (int e = s.col_start[k]; e < s.col_start[k + 1]; ++e) {
-      s.x[k].noalias() -= s.off_A[e].transpose() * s.x[s.col_row[e]];
+      y[k].noalias() -= s.off_A[e].transpose() * y[s.col_row[e]];
     }
-    BackSubstitute(s.diag_A[k], s.diag_inv[k], s.x[k]);
+    BackSubstitute(s.diag_A[k], s.diag_inv[k], y[k]);
   }
   for (int k = 0; k < nb; ++k) {
-    if (!s.x[k].allFinite()) return false;
+    if (!y[k].allFinite()) return false;
   }
   return true;
 }
@@ -388,43 +401,245 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
   }
 }
 
-// the forces of patch [begin, end) at the solved velocities. With r = p - x_a and d = x_a - x_b,
-// a point's relative velocity is (v_a - v_b - w_b x d) + (w_a - w_b) x r: one cross product per
-// point. `may_drop`: a contact whose normal force would pull is taken out (active = false, no
-// force) and true returned, so the system is solved again without it.
-bool PatchForces(const GroupSolverScratch& s, const Data& data, std::span<const int> slot,
-                 std::span<ImplicitContact> contacts, int begin, int end, bool may_drop) {
+// the forces of patch [begin, end) at the velocities s.x. With r = p - x_a and d = x_a - x_b, a
+// point's relative velocity is (v_a - v_b - w_b x d) + (w_a - w_b) x r: one cross product per
+// point. Returns true if a normal force would pull. `may_drop`: such a contact is taken out
+// (active = false, no force), so the system is solved again without it. kAccumulate: the patch's
+// impulse over the step, h sum J^T f, is added to s.b (the residual of the momentum balance).
+template <bool kAccumulate>
+bool PatchForces(GroupSolverScratch& s, const Data& data, std::span<const int> slot,
+                 std::span<ImplicitContact> contacts, int begin, int end, bool may_drop, double h) {
   const ImplicitContact& first = contacts[begin];
   const bool has_a = first.body_a >= 0, has_b = first.body_b >= 0;
+  const int pa = has_a ? s.pos[slot[first.body_a]] : -1;
+  const int pb = has_b ? s.pos[slot[first.body_b]] : -1;
   const Vec3& origin = data.bodies[has_a ? first.body_a : first.body_b].x_W;
+  Vec3 d = Vec3::Zero();  // x_a - x_b
   Vec3 v0 = Vec3::Zero(), w = Vec3::Zero();
   if (has_a) {
-    const Vec6& x = s.x[s.pos[slot[first.body_a]]];
+    const Vec6& x = s.x[pa];
     v0 += x.head<3>();
     w += x.tail<3>();
   }
   if (has_b) {
-    const Vec6& x = s.x[s.pos[slot[first.body_b]]];
+    const Vec6& x = s.x[pb];
     v0 -= x.head<3>();
     w -= x.tail<3>();
-    if (has_a) v0 -= x.tail<3>().cross(origin - data.bodies[first.body_b].x_W);
+    if (has_a) {
+      d = origin - data.bodies[first.body_b].x_W;
+      v0 -= x.tail<3>().cross(d);
+    }
   }
+  // in scalars: Eigen's 3-vector cross products and temporaries cost about twice as much here
+  const double vx = v0.x(), vy = v0.y(), vz = v0.z(), wx = w.x(), wy = w.y(), wz = w.z();
+  const double ox = origin.x(), oy = origin.y(), oz = origin.z();
   bool pulled = false;
+  double Fx = 0.0, Fy = 0.0, Fz = 0.0;  // total force on a
+  double Tx = 0.0, Ty = 0.0, Tz = 0.0;  // and its moment about origin
   for (int k = begin; k < end; ++k) {
     ImplicitContact& c = contacts[k];
-    const Vec3 u = v0 + w.cross(c.p_W - origin);
-    const double un = u.dot(c.n_W);
+    const double rx = c.p_W.x() - ox, ry = c.p_W.y() - oy, rz = c.p_W.z() - oz;
+    const double ux = vx + (wy * rz - wz * ry);
+    const double uy = vy + (wz * rx - wx * rz);
+    const double uz = vz + (wx * ry - wy * rx);
+    const double nx = c.n_W.x(), ny = c.n_W.y(), nz = c.n_W.z();
+    const double un = ux * nx + uy * ny + uz * nz;
     const double fn = c.phi_n_N - c.c_n_Ns_per_m * un;
-    if (may_drop && fn < 0.0) {
-      // a contact that stops pushing has no friction either
-      c.active = false;
+    if (fn < 0.0) {
       pulled = true;
-      continue;
+      if (may_drop) {
+        // a contact that stops pushing has no friction either
+        c.active = false;
+        continue;
+      }
     }
     c.normal_force_N = fn;
-    if (c.stick) c.friction_force_W = c.phi_t_W - c.c_t_Ns_per_m * (u - un * c.n_W);
+    double fx = fn * nx, fy = fn * ny, fz = fn * nz;
+    if (c.stick) {
+      const double ct = c.c_t_Ns_per_m;
+      const double tx = c.phi_t_W.x() - ct * (ux - un * nx);
+      const double ty = c.phi_t_W.y() - ct * (uy - un * ny);
+      const double tz = c.phi_t_W.z() - ct * (uz - un * nz);
+      c.friction_force_W = Vec3(tx, ty, tz);
+      fx += tx;
+      fy += ty;
+      fz += tz;
+    }
+    if constexpr (kAccumulate) {
+      Fx += fx;
+      Fy += fy;
+      Fz += fz;
+      Tx += ry * fz - rz * fy;
+      Ty += rz * fx - rx * fz;
+      Tz += rx * fy - ry * fx;
+    }
+  }
+  if constexpr (kAccumulate) {
+    const Vec3 F(h * Fx, h * Fy, h * Fz), T(h * Tx, h * Ty, h * Tz);
+    if (has_a) {
+      s.b[pa].head<3>() += F;
+      s.b[pa].tail<3>() += T;
+    }
+    if (has_b) {
+      s.b[pb].head<3>() -= F;
+      s.b[pb].tail<3>() -= T + d.cross(F);
+    }
   }
   return pulled;
+}
+
+// --- the lagged factorisation ---
+
+// the group's patches as Assemble makes them when every contact is active: the contacts
+// [begin, end) of each
+void PartitionPatches(GroupSolverScratch& s, std::span<const ImplicitContact> contacts) {
+  const int nc = static_cast<int>(contacts.size());
+  s.npatch = 0;
+  for (int begin = 0; begin < nc;) {
+    int end = begin + 1;
+    while (end < nc && SamePatch(contacts[begin], contacts[end])) ++end;
+    s.patch_range[2 * s.npatch] = begin;
+    s.patch_range[2 * s.npatch + 1] = end;
+    ++s.npatch;
+    begin = end;
+  }
+}
+
+// the patches' keys (GroupSolverScratch::PatchKey), sorted: the bodies, count and stick state
+// exactly, the coefficients by their bits
+void PatchKeys(GroupSolverScratch& s, std::span<const ImplicitContact> contacts) {
+  for (int q = 0; q < s.npatch; ++q) {
+    const int begin = s.patch_range[2 * q], end = s.patch_range[2 * q + 1];
+    const ImplicitContact& c = contacts[begin];
+    // body indices + 1 (static: 0) in 24 bits each, the count in 15, the stick state in 1
+    const auto lo = static_cast<std::uint64_t>(std::min(c.body_a, c.body_b) + 1);
+    const auto hi = static_cast<std::uint64_t>(std::max(c.body_a, c.body_b) + 1);
+    const auto count = static_cast<std::uint64_t>(end - begin);
+    const std::uint64_t shape = lo << 40 | hi << 16 | count << 1 | (c.stick ? 1 : 0);
+    const auto c_n = std::bit_cast<std::uint64_t>(c.c_n_Ns_per_m);
+    const auto c_t = std::bit_cast<std::uint64_t>(c.stick ? c.c_t_Ns_per_m : 0.0);
+    s.patch_keys[q] = {shape, c_n ^ (c_t << 1 | c_t >> 63)};
+  }
+  std::sort(s.patch_keys.begin(), s.patch_keys.begin() + s.npatch);
+}
+
+// true if the factor kept in the scratch was made for a system of this shape: the same bodies in
+// the same positions and the same patch keys. Its values differ (the contacts moved), which the
+// refinement accounts for; keys that are equal by chance for different systems only cost a
+// refinement that fails. Partitions the contacts into patches when the bodies match.
+bool FactorFits(GroupSolverScratch& s, std::span<const int> bodies,
+                std::span<const ImplicitContact> contacts) {
+  const int nb = static_cast<int>(bodies.size());
+  if (!s.factor_valid || nb != s.factor_nb ||
+      !std::equal(bodies.begin(), bodies.end(), s.factor_bodies.begin())) {
+    return false;
+  }
+  PartitionPatches(s, contacts);
+  if (s.npatch != s.factor_npatch) return false;
+  PatchKeys(s, contacts);
+  return std::equal(s.patch_keys.begin(), s.patch_keys.begin() + s.npatch, s.factor_keys.begin());
+}
+
+// records what the factor now in the scratch was made for (FactorFits), from the patches
+// assembled with every contact active
+void KeepFactor(GroupSolverScratch& s, std::span<const int> bodies,
+                std::span<const ImplicitContact> contacts) {
+  PatchKeys(s, contacts);
+  s.factor_nb = static_cast<int>(bodies.size());
+  std::copy(bodies.begin(), bodies.end(), s.factor_bodies.begin());
+  s.factor_npatch = s.npatch;
+  std::copy(s.patch_keys.begin(), s.patch_keys.begin() + s.npatch, s.factor_keys.begin());
+  s.factor_valid = true;
+}
+
+// f^T m^-1 f + t^T I^-1 t for a body of rotation R (the M^-1 norm of an impulse, squared)
+double InverseMassNorm2(const BodyModel& b, const Mat3& R, const Vec3& f, const Vec3& t) {
+  const Vec3 t_B = R.transpose() * t;
+  return f.squaredNorm() / b.mass_kg + t_B.dot(t_B.cwiseQuotient(b.inertia_kgm2));
+}
+
+// the residual of the momentum balance at the velocities s.x, into s.b:
+//   r = M (v - x) + h F + h sum J^T f(x),
+// zero exactly at the solution of the implicit system; the contacts' forces at x are left in
+// them. Returns r^T M^-1 r. Since A = M + h sum J^T C J >= M, the error of x in the kinetic-energy
+// norm is bounded by the residual: (x - x*)^T M (x - x*) <= r^T A^-1 r <= r^T M^-1 r.
+double Residual(const Model& model, const Data& data, std::span<const int> bodies,
+                std::span<const int> slot, std::span<ImplicitContact> contacts,
+                std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+                GroupSolverScratch& s, bool* pulls) {
+  const double h = model.timestep_s;
+  const int nb = static_cast<int>(bodies.size());
+  for (int k = 0; k < nb; ++k) {
+    const int i = bodies[k], p = s.pos[k];
+    const BodyState& st = data.bodies[i];
+    s.b[p].head<3>() = model.bodies[i].mass_kg * (st.v_W - s.x[p].head<3>()) + h * force_W[i];
+    s.b[p].tail<3>() =
+        WorldInertiaTimes(model.bodies[i], s.rotation[p], st.w_W - s.x[p].tail<3>()) +
+        h * torque_W[i];
+  }
+  bool pulled = false;
+  for (int q = 0; q < s.npatch; ++q) {
+    pulled |= PatchForces<true>(s, data, slot, contacts, s.patch_range[2 * q],
+                                s.patch_range[2 * q + 1], false, h);
+  }
+  *pulls = pulled;
+  double r2 = 0.0;
+  for (int k = 0; k < nb; ++k) {
+    const int p = s.pos[k];
+    const Vec3 rl = s.b[p].head<3>(), ra = s.b[p].tail<3>();
+    r2 += InverseMassNorm2(model.bodies[bodies[k]], s.rotation[p], rl, ra);
+  }
+  return r2;
+}
+
+// solves the group with the factor of an earlier step's system of the same shape, by iterative
+// refinement against this step's system: x <- x + F^-1 r(x) from the current velocities, until
+// the residual bounds the velocity error in the kinetic-energy norm by kRefineTolerance of the
+// step's momentum scale. False (nothing final written, the caller factors afresh) if that takes
+// more than kMaxRefinements corrections or the accepted velocities would make a contact pull.
+bool SolveLagged(const Model& model, const Data& data, std::span<const int> bodies,
+                 std::span<const int> slot, std::span<ImplicitContact> contacts,
+                 std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+                 GroupSolverScratch& s) {
+  const double h = model.timestep_s;
+  const int nb = static_cast<int>(bodies.size());
+  // the momentum scale: |M v| + |h F| + |r(v)|, each in the M^-1 norm
+  double mv2 = 0.0, hf2 = 0.0;
+  for (int k = 0; k < nb; ++k) {
+    const int i = bodies[k], p = s.pos[k];
+    const BodyModel& bm = model.bodies[i];
+    const BodyState& st = data.bodies[i];
+    const Mat3 R = st.q_WB.toRotationMatrix();
+    s.rotation[p] = R;
+    s.x[p] << st.v_W, st.w_W;
+    const Vec3 w_B = R.transpose() * st.w_W;
+    mv2 += bm.mass_kg * st.v_W.squaredNorm() + w_B.dot(w_B.cwiseProduct(bm.inertia_kgm2));
+    hf2 += h * h * InverseMassNorm2(bm, R, force_W[i], torque_W[i]);
+  }
+  bool pulls = false;
+  double r2 = Residual(model, data, bodies, slot, contacts, force_W, torque_W, s, &pulls);
+  const double scale = std::sqrt(mv2) + std::sqrt(hf2) + std::sqrt(r2);
+  const double tol2 = kRefineTolerance * kRefineTolerance * scale * scale;
+  int steps = 0;
+  double last2 = r2;
+  while (!(r2 <= tol2)) {
+    if (steps == kMaxRefinements) return false;
+    if (steps > 0) {
+      // each correction shrinks the residual by about the last one's ratio: stop early if the
+      // corrections left cannot bring it under the tolerance
+      double predicted2 = r2;
+      for (int k = steps; k < kMaxRefinements; ++k) predicted2 *= r2 / last2;
+      if (!(predicted2 <= tol2)) return false;
+    }
+    if (!Substitute(s, nb, s.b)) return false;
+    for (int p = 0; p < nb; ++p) s.x[p] += s.b[p];
+    last2 = r2;
+    r2 = Residual(model, data, bodies, slot, contacts, force_W, torque_W, s, &pulls);
+    ++steps;
+  }
+  if (pulls) return false;
+  s.refinement_steps += steps;
+  return true;
 }
 
 }  // namespace
@@ -449,12 +664,20 @@ void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
   adj.assign(n2, 0);
   degree.assign(max_bodies, 0);
   eliminated.assign(max_bodies, 0);
-  pairs.assign(2 * static_cast<std::size_t>(max_contacts), 0);
-  analysed_pairs.assign(2 * static_cast<std::size_t>(max_contacts), 0);
+  pairs.assign(max_contacts, 0);
+  analysed_pairs.assign(max_contacts, 0);
   npairs = 0;
   analysed_npairs = analysed_nb = -1;
   patch_range.assign(2 * static_cast<std::size_t>(max_contacts), 0);
   npatch = 0;
+  factor_valid = false;
+  factor_nb = factor_npatch = 0;
+  factor_bodies.assign(max_bodies, -1);
+  patch_keys.assign(max_contacts, PatchKey{});
+  factor_keys.assign(max_contacts, PatchKey{});
+  rotation.assign(max_bodies, Mat3::Identity());
+  factorisations = lagged_solves = refinement_steps = lagged_failures = 0;
+  lag_backoff = lag_skip = 0;
 }
 
 bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
@@ -465,7 +688,7 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
   const int nc = static_cast<int>(contacts.size());
   if (nb > s.max_bodies || nc > s.max_contacts) return false;
   StructureOf(s, slot, contacts);
-  const auto pairs_end = s.pairs.begin() + 2 * static_cast<std::ptrdiff_t>(s.npairs);
+  const auto pairs_end = s.pairs.begin() + s.npairs;
   if (nb != s.analysed_nb || s.npairs != s.analysed_npairs ||
       !std::equal(s.pairs.begin(), pairs_end, s.analysed_pairs.begin())) {
     s.analysed_nb = -1;  // stays invalid if the analysis fails
@@ -475,20 +698,51 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
     s.analysed_nb = nb;
   }
 
-  for (int pass = 0; pass < kMaxPasses; ++pass) {
-    // the factorisation overwrites the system: each pass assembles it over the contacts left
-    Assemble(model, data, bodies, slot, contacts, force_W, torque_W, s);
-    if (!FactorAndSolve(s, nb)) return false;
-    for (ImplicitContact& c : contacts) {
-      c.normal_force_N = 0.0;
-      c.friction_force_W.setZero();
+  // a contact may come in inactive (dropped by the caller): then the system is not the one
+  // kept factors are made for
+  const bool reuse =
+      s.reuse_factor && std::all_of(contacts.begin(), contacts.end(),
+                                    [](const ImplicitContact& c) { return c.active; });
+  bool lagged = false;
+  if (reuse && FactorFits(s, bodies, contacts)) {
+    if (s.lag_skip > 0) {
+      --s.lag_skip;
+    } else if (SolveLagged(model, data, bodies, slot, contacts, force_W, torque_W, s)) {
+      lagged = true;
+      ++s.lagged_solves;
+      s.lag_backoff = 0;
+    } else {
+      // while the group moves too much for the kept factor, try it ever more rarely
+      ++s.lagged_failures;
+      s.lag_backoff = std::min(2 * s.lag_backoff + 1, kMaxBackoff);
+      s.lag_skip = s.lag_backoff;
     }
-    bool pulled = false;
-    for (int q = 0; q < s.npatch; ++q) {
-      pulled |= PatchForces(s, data, slot, contacts, s.patch_range[2 * q], s.patch_range[2 * q + 1],
-                            pass + 1 < kMaxPasses);
+  }
+  if (!lagged) {
+    s.factor_valid = false;
+    for (int pass = 0; pass < kMaxPasses; ++pass) {
+      // the factorisation overwrites the system: each pass assembles it over the contacts left
+      Assemble(model, data, bodies, slot, contacts, force_W, torque_W, s);
+      if (!Factor(s, nb)) return false;
+      ++s.factorisations;
+      std::copy(s.b.begin(), s.b.begin() + nb, s.x.begin());
+      if (!Substitute(s, nb, s.x)) return false;
+      for (ImplicitContact& c : contacts) {
+        c.normal_force_N = 0.0;
+        c.friction_force_W.setZero();
+      }
+      bool pulled = false;
+      for (int q = 0; q < s.npatch; ++q) {
+        pulled |=
+            PatchForces<false>(s, data, slot, contacts, s.patch_range[2 * q],
+                               s.patch_range[2 * q + 1], pass + 1 < kMaxPasses, model.timestep_s);
+      }
+      if (!pulled) {
+        // a factor of the system with every contact is kept for the next steps
+        if (pass == 0 && reuse) KeepFactor(s, bodies, contacts);
+        break;
+      }
     }
-    if (!pulled) break;
   }
   for (int k = 0; k < nb; ++k) {
     BodyState& st = data.bodies[bodies[k]];

@@ -81,7 +81,10 @@ void ResetData(const Model& model, Data& data) {
   data.tool_contacts = 0;
   data.nimpulse = 0;
   data.warnings.fill(WarningStat{});
-  if (data.workspace) data.workspace->collision.Reset(model);
+  if (data.workspace) {
+    data.workspace->collision.Reset(model);
+    data.workspace->group_solver.ForgetFactor();
+  }
 }
 
 double KineticEnergy(const Model& model, const Data& data) {

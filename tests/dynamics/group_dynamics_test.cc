@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -112,19 +113,27 @@ std::vector<Row> RowsOf(const std::vector<ImplicitContact>& contacts) {
 
 // dense reference: (M + h sum c j j^T) v = M v0 + h F + h sum phi j over the rows of the active
 // contacts, each row assembled on its own
-Eigen::VectorXd DenseSolve(const Fixture& f, const std::vector<ImplicitContact>& contacts) {
+struct DenseSystem {
+  Eigen::MatrixXd M, H;       // the mass matrix and the system's
+  Eigen::VectorXd v0, hF, b;  // the velocities before the step, h F, and the right-hand side
+};
+DenseSystem DenseSystemOf(const Fixture& f, const std::vector<ImplicitContact>& contacts) {
   const int n = 6 * static_cast<int>(f.bodies.size());
   const double h = f.model.timestep_s;
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  DenseSystem d{Eigen::MatrixXd::Zero(n, n), Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n),
+                Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)};
   for (std::size_t k = 0; k < f.bodies.size(); ++k) {
     const int i = f.bodies[k];
     const Mat3 I = WorldInertia(f.model.bodies[i], f.data.bodies[i]);
-    H.block<3, 3>(6 * k, 6 * k) = f.model.bodies[i].mass_kg * Mat3::Identity();
-    H.block<3, 3>(6 * k + 3, 6 * k + 3) = I;
-    rhs.segment<3>(6 * k) = f.model.bodies[i].mass_kg * f.data.bodies[i].v_W + h * f.force[i];
-    rhs.segment<3>(6 * k + 3) = I * f.data.bodies[i].w_W + h * f.torque[i];
+    d.M.block<3, 3>(6 * k, 6 * k) = f.model.bodies[i].mass_kg * Mat3::Identity();
+    d.M.block<3, 3>(6 * k + 3, 6 * k + 3) = I;
+    d.v0.segment<3>(6 * k) = f.data.bodies[i].v_W;
+    d.v0.segment<3>(6 * k + 3) = f.data.bodies[i].w_W;
+    d.hF.segment<3>(6 * k) = h * f.force[i];
+    d.hF.segment<3>(6 * k + 3) = h * f.torque[i];
   }
+  d.H = d.M;
+  d.b = d.M * d.v0 + d.hF;
   for (const Row& r : RowsOf(contacts)) {
     const ImplicitContact& c = *r.contact;
     Eigen::VectorXd j = Eigen::VectorXd::Zero(n);
@@ -136,10 +145,15 @@ Eigen::VectorXd DenseSolve(const Fixture& f, const std::vector<ImplicitContact>&
       j.segment<3>(6 * f.slot[c.body_b]) -= r.d;
       j.segment<3>(6 * f.slot[c.body_b] + 3) -= Offset(f, c.body_b, c).cross(r.d);
     }
-    H += h * r.c * j * j.transpose();
-    rhs += h * r.phi * j;
+    d.H += h * r.c * j * j.transpose();
+    d.b += h * r.phi * j;
   }
-  return H.ldlt().solve(rhs);
+  return d;
+}
+
+Eigen::VectorXd DenseSolve(const Fixture& f, const std::vector<ImplicitContact>& contacts) {
+  const DenseSystem d = DenseSystemOf(f, contacts);
+  return d.H.ldlt().solve(d.b);
 }
 
 Eigen::VectorXd Solved(const Fixture& f) {
@@ -335,6 +349,249 @@ TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
                     (c.phi_t_W.dot(t2) - c.c_t_Ns_per_m * u.dot(t2)) * t2;
     EXPECT_LE((c.friction_force_W - ft).norm(), 1e-12 * c.phi_n_N);
   }
+}
+
+// --- the lagged factorisation (GroupSolverScratch::reuse_factor) ---
+
+// a column of four boxes on the floor: sticking and slipping faces, and a ceiling point
+std::vector<ImplicitContact> ColumnContacts(const Fixture& f, std::mt19937& rng) {
+  std::vector<ImplicitContact> contacts;
+  AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[2], f.bodies[1], Vec3(0.1, 0.0, 1.0).normalized(), false, rng);
+  AddFace(f, contacts, f.bodies[3], f.bodies[2], Vec3::UnitZ(), true, rng);
+  const Vec3 top = f.data.bodies[f.bodies[3]].x_W;
+  AddContact(contacts, -1, f.bodies[3], Vec3::UnitZ(), top + Vec3(0.02, -0.01, 0.025), 5.0, true);
+  return contacts;
+}
+
+// a scratch like the fixture's that factors every solve
+GroupSolverScratch FreshScratch(const Fixture& f) {
+  GroupSolverScratch s;
+  s.Reserve(static_cast<int>(f.bodies.size()), 3 * 4000);
+  s.reuse_factor = false;
+  return s;
+}
+
+// solves with scratch s and returns the new velocities; the bodies are left as they were
+Eigen::VectorXd SolveWith(Fixture& f, std::vector<ImplicitContact> contacts,
+                          GroupSolverScratch& s) {
+  const std::vector<BodyState> before = f.data.bodies;
+  EXPECT_TRUE(
+      SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque, s));
+  const Eigen::VectorXd v = Solved(f);
+  f.data.bodies = before;
+  return v;
+}
+
+// the lagged solve's guarantee for velocities v of the system d: the error in the kinetic-energy
+// norm, sqrt(e^T M e), is at most 1e-10 (|M v0| + |h F| + |b - H v0|), each in the M^-1 norm
+// (plus 1e-13 of the solution for the dense reference's own rounding). Returns the error.
+double ExpectWithinRefinementBound(const DenseSystem& d, const Eigen::VectorXd& v) {
+  const Eigen::MatrixXd M_inv = d.M.inverse();
+  auto norm_inv = [&](const Eigen::VectorXd& r) { return std::sqrt(r.dot(M_inv * r)); };
+  const Eigen::VectorXd expected = d.H.ldlt().solve(d.b);
+  const double scale =
+      std::sqrt(d.v0.dot(d.M * d.v0)) + norm_inv(d.hF) + norm_inv(d.b - d.H * d.v0);
+  const Eigen::VectorXd e = v - expected;
+  const double error = std::sqrt(e.dot(d.M * e));
+  EXPECT_LE(error, 1e-10 * scale + 1e-13 * std::sqrt(expected.dot(d.M * expected)));
+  return error;
+}
+
+void SetVelocities(Fixture& f, const Eigen::VectorXd& v) {
+  for (std::size_t k = 0; k < f.bodies.size(); ++k) {
+    f.data.bodies[f.bodies[k]].v_W = v.segment<3>(6 * k);
+    f.data.bodies[f.bodies[k]].w_W = v.segment<3>(6 * k + 3);
+  }
+}
+
+// the next step of the same group: the bodies start at the velocities v just solved, every
+// contact point moves by up to `move` and every body turns by up to move / (25 mm), the contacts'
+// forces change by up to `change`; bodies, patches, stick states and coefficients stay
+void NextStep(Fixture& f, std::vector<ImplicitContact>& contacts, const Eigen::VectorXd& v,
+              double move, double change, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  SetVelocities(f, v);
+  for (int i : f.bodies) {
+    BodyState& st = f.data.bodies[i];
+    const double angle = move / 0.025 * u(rng);
+    st.q_WB = (Quat(Eigen::AngleAxisd(angle, Vec3(u(rng), u(rng), 1.0).normalized())) * st.q_WB)
+                  .normalized();
+  }
+  for (ImplicitContact& c : contacts) {
+    c.p_W += move * Vec3(u(rng), u(rng), u(rng));
+    c.phi_n_N *= 1.0 + change * u(rng);
+    c.phi_t_W *= 1.0 + change * u(rng);
+  }
+}
+
+TEST(GroupDynamics, KeptFactorSolvesTheNextStepsWithinItsBound) {
+  // a column at rest under its contact forces (the same step repeated from its own answer until
+  // the velocities stop changing), one factorisation, then five steps in which the contacts move
+  // by up to 1 um and their forces change by up to 1e-4, solved by refinement: each within the
+  // bound against the dense solve of its own system, every contact's forces at the returned
+  // velocities
+  Fixture f = MakeFixture(1, 1, 4, 12);
+  std::mt19937 rng(21);
+  std::vector<ImplicitContact> contacts = ColumnContacts(f, rng);
+  GroupSolverScratch settle = FreshScratch(f);
+  Eigen::VectorXd v = Solved(f);
+  for (int k = 0; k < 200; ++k) {
+    SetVelocities(f, v);
+    v = SolveWith(f, contacts, settle);
+  }
+  SetVelocities(f, v);
+  v = SolveWith(f, contacts, f.scratch);
+  ASSERT_EQ(f.scratch.factorisations, 1);
+  ASSERT_EQ(f.scratch.lagged_solves, 0);
+  for (int step = 1; step <= 5; ++step) {
+    NextStep(f, contacts, v, 1e-6, 1e-4, rng);
+    const DenseSystem d = DenseSystemOf(f, contacts);
+    std::vector<ImplicitContact> solved = contacts;
+    ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, solved, f.force, f.torque,
+                                     f.scratch));
+    v = Solved(f);
+    EXPECT_EQ(f.scratch.factorisations, 1) << "step " << step;
+    EXPECT_EQ(f.scratch.lagged_solves, step);
+    const double error = ExpectWithinRefinementBound(d, v);
+    // the step changed the velocities by far more than the error
+    EXPECT_GT(std::sqrt((v - d.v0).dot(d.M * (v - d.v0))), 1e3 * error) << "step " << step;
+    for (const ImplicitContact& c : solved) {
+      ASSERT_TRUE(c.active);
+      Vec3 u = Vec3::Zero();
+      if (c.body_a >= 0) u += PointVelocity(f.data.bodies[c.body_a], Offset(f, c.body_a, c));
+      if (c.body_b >= 0) u -= PointVelocity(f.data.bodies[c.body_b], Offset(f, c.body_b, c));
+      EXPECT_NEAR(c.normal_force_N, c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W), 1e-12 * c.phi_n_N);
+    }
+  }
+  EXPECT_GE(f.scratch.refinement_steps, 5);  // no step was solved by its old velocities
+  EXPECT_EQ(f.scratch.lagged_failures, 0);
+}
+
+TEST(GroupDynamics, TriesTheKeptFactorEverMoreRarelyWhileTheGroupMoves) {
+  // forty steps from the same velocities in which the contacts move by up to 1 mm and their
+  // forces change by up to 10%: the kept factor never bounds the error in two corrections. It is
+  // tried in solves 2, 4, 8, 16 and 32 (the back-off doubles), every solve factors once (no
+  // contact pulls), and every answer is a fresh factorisation's, bit for bit.
+  Fixture f = MakeFixture(1, 1, 4, 17);
+  std::mt19937 rng(26);
+  std::vector<ImplicitContact> contacts = ColumnContacts(f, rng);
+  GroupSolverScratch fresh = FreshScratch(f);
+  const Eigen::VectorXd v0 = Solved(f);
+  for (int solve = 1; solve <= 40; ++solve) {
+    NextStep(f, contacts, v0, 1e-3, 0.1, rng);
+    const Eigen::VectorXd expected = SolveWith(f, contacts, fresh);
+    ASSERT_EQ(SolveWith(f, contacts, f.scratch), expected) << "solve " << solve;
+  }
+  EXPECT_EQ(f.scratch.lagged_failures, 5);
+  EXPECT_EQ(f.scratch.lagged_solves, 0);
+  EXPECT_EQ(f.scratch.factorisations, 40);
+}
+
+TEST(GroupDynamics, KeptFactorIgnoresContactOrderAndReferenceBody) {
+  // the same system listed differently: the patches in reverse order, and each box-box face with
+  // its bodies swapped (normal and tangential force negated), as a manifold whose reference box
+  // changed. Its factor fits, and the answer is the first one within the bound.
+  Fixture f = MakeFixture(1, 1, 4, 13);
+  std::mt19937 rng(22);
+  const std::vector<ImplicitContact> contacts = ColumnContacts(f, rng);
+  const DenseSystem d = DenseSystemOf(f, contacts);
+  (void)SolveWith(f, contacts, f.scratch);
+  std::vector<ImplicitContact> relisted(contacts.rbegin(), contacts.rend());
+  for (ImplicitContact& c : relisted) {
+    if (c.body_a < 0 || c.body_b < 0) continue;
+    std::swap(c.body_a, c.body_b);
+    c.n_W = -c.n_W;
+    c.phi_t_W = -c.phi_t_W;
+  }
+  const Eigen::VectorXd v = SolveWith(f, relisted, f.scratch);
+  EXPECT_EQ(f.scratch.factorisations, 1);
+  EXPECT_EQ(f.scratch.lagged_solves, 1);
+  ExpectWithinRefinementBound(d, v);
+}
+
+TEST(GroupDynamics, FactorsAfreshWhenAPatchChanges) {
+  // a face that starts slipping, a face that loses a point, a contact law with another
+  // stiffness: each is a different system, so the kept factor is not tried and the result is a
+  // fresh factorisation's, bit for bit
+  Fixture f = MakeFixture(1, 1, 4, 14);
+  std::mt19937 rng(23);
+  const std::vector<ImplicitContact> contacts = ColumnContacts(f, rng);
+  std::vector<std::vector<ImplicitContact>> changed(3, contacts);
+  for (int k = 4; k < 8; ++k) changed[0][k].stick = false;  // the second face
+  changed[1].erase(changed[1].begin() + 4);
+  for (int k = 8; k < 12; ++k) changed[2][k].c_n_Ns_per_m *= 2.0;  // the third face
+  for (std::size_t i = 0; i < changed.size(); ++i) {
+    (void)SolveWith(f, contacts, f.scratch);  // keeps the factor of the unchanged system
+    const long factorisations = f.scratch.factorisations;
+    const long lagged = f.scratch.lagged_solves;
+    GroupSolverScratch fresh = FreshScratch(f);
+    const Eigen::VectorXd expected = SolveWith(f, changed[i], fresh);
+    EXPECT_EQ(SolveWith(f, changed[i], f.scratch), expected) << "change " << i;
+    EXPECT_EQ(f.scratch.factorisations, factorisations + 1) << "change " << i;
+    EXPECT_EQ(f.scratch.lagged_solves, lagged) << "change " << i;
+    EXPECT_EQ(fresh.lagged_solves, 0);
+  }
+}
+
+TEST(GroupDynamics, NeverTrustsAWrongFactor) {
+  // the kept factor damaged (a scaled diagonal block, then a NaN): the refinement cannot bound
+  // its error, and the solve factors afresh and returns that factorisation's answer bit for bit
+  Fixture f = MakeFixture(1, 1, 4, 15);
+  std::mt19937 rng(24);
+  const std::vector<ImplicitContact> contacts = ColumnContacts(f, rng);
+  for (int damage = 0; damage < 2; ++damage) {
+    f.scratch.ForgetFactor();
+    (void)SolveWith(f, contacts, f.scratch);
+    ASSERT_TRUE(f.scratch.factor_valid);
+    if (damage == 0) {
+      f.scratch.diag_A[1] *= 3.0;
+      f.scratch.diag_inv[1] /= 3.0;
+    } else {
+      f.scratch.diag_A[2](4, 3) = std::numeric_limits<double>::quiet_NaN();
+    }
+    const long factorisations = f.scratch.factorisations;
+    GroupSolverScratch fresh = FreshScratch(f);
+    const Eigen::VectorXd expected = SolveWith(f, contacts, fresh);
+    EXPECT_EQ(SolveWith(f, contacts, f.scratch), expected) << "damage " << damage;
+    EXPECT_EQ(f.scratch.factorisations, factorisations + 1) << "damage " << damage;
+  }
+  EXPECT_EQ(f.scratch.lagged_solves, 0);
+}
+
+TEST(GroupDynamics, FactorsAfreshWhenTheLaggedAnswerWouldPull) {
+  // the same system twice, so the kept factor is exact; the second time the upper boxes are
+  // pulled off. The refinement converges, but to velocities at which the faces between the boxes
+  // pull: the solve factors afresh and drops them, as a fresh scratch does.
+  Fixture f = MakeFixture(1, 1, 2, 16);
+  std::mt19937 rng(25);
+  std::vector<ImplicitContact> contacts;
+  AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
+  AddFace(f, contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
+  for (int i : f.bodies) {
+    f.data.bodies[i].v_W.setZero();
+    f.data.bodies[i].w_W.setZero();
+    f.torque[i].setZero();
+  }
+  // pressed together: reused, since nothing changed
+  f.force[f.bodies[0]] = f.force[f.bodies[1]] = Vec3(0.0, 0.0, -1.0);
+  (void)SolveWith(f, contacts, f.scratch);
+  (void)SolveWith(f, contacts, f.scratch);
+  ASSERT_EQ(f.scratch.factorisations, 1);
+  ASSERT_EQ(f.scratch.lagged_solves, 1);
+  // pulled apart
+  f.force[f.bodies[0]] = Vec3(0.0, 0.0, -5000.0);
+  f.force[f.bodies[1]] = Vec3(0.0, 0.0, 5000.0);
+  GroupSolverScratch fresh = FreshScratch(f);
+  const Eigen::VectorXd expected = SolveWith(f, contacts, fresh);
+  std::vector<ImplicitContact> solved = contacts;
+  ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, solved, f.force, f.torque,
+                                   f.scratch));
+  EXPECT_EQ(Solved(f), expected);
+  EXPECT_EQ(f.scratch.lagged_solves, 1);
+  EXPECT_EQ(f.scratch.factorisations, 1 + fresh.factorisations);  // two passes: all, then kept
+  for (const ImplicitContact& c : solved) EXPECT_EQ(c.active, c.body_b < 0);
 }
 
 TEST(GroupDynamics, RefusesAGroupBeyondItsCapacity) {
