@@ -15,7 +15,7 @@ constexpr int kMaxPasses = 4;
 constexpr int kMaxRefinements = 2;
 constexpr double kRefineTolerance = 1e-10;
 // after a failed refinement the kept factor is not tried for 1, 3, 7, ... solves, at most this
-// many: a failed try costs about half a factorisation
+// many: on the stack a failed try costs about 60% of a factorised solve
 constexpr int kMaxBackoff = 63;
 
 // --- 6 x 6 kernels (column-major, fixed size, unrolled: GCC leaves triangular loops rolled
