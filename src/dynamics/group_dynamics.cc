@@ -362,6 +362,25 @@ bool Substitute(const GroupSolverScratch& s, int nb, std::vector<Vec6>& y) {
   return true;
 }
 
+// the active contacts' patches (consecutive contacts that SamePatch joins) into s.patch_range,
+// [begin, end) each; dropped contacts may lie between two patches
+void PartitionPatches(GroupSolverScratch& s, std::span<const ImplicitContact> contacts) {
+  const int nc = static_cast<int>(contacts.size());
+  s.npatch = 0;
+  for (int begin = 0; begin < nc;) {
+    int end = begin + 1;
+    if (!contacts[begin].active) {
+      begin = end;
+      continue;
+    }
+    while (end < nc && contacts[end].active && SamePatch(contacts[begin], contacts[end])) ++end;
+    s.patch_range[2 * s.npatch] = begin;
+    s.patch_range[2 * s.npatch + 1] = end;
+    ++s.npatch;
+    begin = end;
+  }
+}
+
 // assembles M + h sum c J^T J and M v + h F + h sum phi J^T over the active contacts, a patch
 // at a time
 void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
@@ -370,7 +389,6 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
               GroupSolverScratch& s) {
   const double h = model.timestep_s;
   const int nb = static_cast<int>(bodies.size());
-  const int nc = static_cast<int>(contacts.size());
   for (int k = 0; k < nb; ++k) {
     const int i = bodies[k];
     const BodyModel& bm = model.bodies[i];
@@ -384,20 +402,9 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
     s.b[p] << bm.mass_kg * st.v_W + h * force_W[i], I * st.w_W + h * torque_W[i];
   }
   for (int e = 0; e < s.col_start[nb]; ++e) s.off_A[e].setZero();
-  s.npatch = 0;
-  for (int begin = 0; begin < nc;) {
-    int end = begin + 1;
-    if (!contacts[begin].active) {
-      begin = end;
-      continue;
-    }
-    while (end < nc && contacts[end].active && SamePatch(contacts[begin], contacts[end])) ++end;
-    AssemblePatch(s, data, slot, contacts, begin, end, h, nb);
-    // a patch's range: dropped contacts may lie between two patches
-    s.patch_range[2 * s.npatch] = begin;
-    s.patch_range[2 * s.npatch + 1] = end;
-    ++s.npatch;
-    begin = end;
+  PartitionPatches(s, contacts);
+  for (int q = 0; q < s.npatch; ++q) {
+    AssemblePatch(s, data, slot, contacts, s.patch_range[2 * q], s.patch_range[2 * q + 1], h, nb);
   }
 }
 
@@ -489,21 +496,6 @@ bool PatchForces(GroupSolverScratch& s, const Data& data, std::span<const int> s
 }
 
 // --- the lagged factorisation ---
-
-// the group's patches as Assemble makes them when every contact is active: the contacts
-// [begin, end) of each
-void PartitionPatches(GroupSolverScratch& s, std::span<const ImplicitContact> contacts) {
-  const int nc = static_cast<int>(contacts.size());
-  s.npatch = 0;
-  for (int begin = 0; begin < nc;) {
-    int end = begin + 1;
-    while (end < nc && SamePatch(contacts[begin], contacts[end])) ++end;
-    s.patch_range[2 * s.npatch] = begin;
-    s.patch_range[2 * s.npatch + 1] = end;
-    ++s.npatch;
-    begin = end;
-  }
-}
 
 // the patches' keys (GroupSolverScratch::PatchKey), sorted: the bodies, count and stick state
 // exactly, the coefficients by their bits

@@ -111,6 +111,15 @@ std::vector<Row> RowsOf(const std::vector<ImplicitContact>& contacts) {
   return rows;
 }
 
+// every body of the group at rest and without torque (the forces are left to the test)
+void StartAtRest(Fixture& f) {
+  for (int i : f.bodies) {
+    f.data.bodies[i].v_W.setZero();
+    f.data.bodies[i].w_W.setZero();
+    f.torque[i].setZero();
+  }
+}
+
 // dense reference: (M + h sum c j j^T) v = M v0 + h F + h sum phi j over the rows of the active
 // contacts, each row assembled on its own
 struct DenseSystem {
@@ -255,11 +264,7 @@ TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
   std::vector<ImplicitContact> contacts;
   AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
   AddFace(f, contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
-  for (int i : f.bodies) {
-    f.data.bodies[i].v_W.setZero();
-    f.data.bodies[i].w_W.setZero();
-    f.torque[i].setZero();
-  }
+  StartAtRest(f);
   // pulled apart: at the first pass the pair moves as one (the floor still pushes) and the contacts
   // between them pull; without those contacts the lower box is pressed on the floor
   f.force[f.bodies[0]] = Vec3(0.0, 0.0, -5000.0);
@@ -297,11 +302,7 @@ TEST(GroupDynamics, DroppedContactsBetweenKeptOnesReportNoForce) {
   AddFace(f, contacts, b[1], -1, Vec3::UnitZ(), false, rng);
   AddFace(f, contacts, b[3], b[1], Vec3::UnitZ(), true, rng);
   AddFace(f, contacts, b[1], -1, Vec3(0.1, 0.0, 1.0).normalized(), true, rng);
-  for (int i : b) {
-    f.data.bodies[i].v_W.setZero();
-    f.data.bodies[i].w_W.setZero();
-    f.torque[i].setZero();
-  }
+  StartAtRest(f);
   f.force[b[0]] = f.force[b[1]] = Vec3(0.0, 0.0, -5000.0);
   f.force[b[2]] = f.force[b[3]] = Vec3(0.0, 0.0, 5000.0);
   std::vector<ImplicitContact> kept = contacts;
@@ -569,11 +570,7 @@ TEST(GroupDynamics, FactorsAfreshWhenTheLaggedAnswerWouldPull) {
   std::vector<ImplicitContact> contacts;
   AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), true, rng);
   AddFace(f, contacts, f.bodies[1], f.bodies[0], Vec3::UnitZ(), true, rng);
-  for (int i : f.bodies) {
-    f.data.bodies[i].v_W.setZero();
-    f.data.bodies[i].w_W.setZero();
-    f.torque[i].setZero();
-  }
+  StartAtRest(f);
   // pressed together: reused, since nothing changed
   f.force[f.bodies[0]] = f.force[f.bodies[1]] = Vec3(0.0, 0.0, -1.0);
   (void)SolveWith(f, contacts, f.scratch);
