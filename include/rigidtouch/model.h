@@ -26,7 +26,8 @@ enum class RendererKind {
 enum class Coupling {
   kNone,     ///< no device: the user wrench comes from TickInput::tool_wrench (offline simulation)
   kDirect,   ///< the tool is the device end effector: its pose and velocity are the device's
-  kVirtual,  ///< a spring-damper between device and tool (Colgate et al. 1995)
+  kVirtual,  ///< a spring-damper between device and tool positions (Colgate et al. 1995); the
+             ///< tool's orientation and angular velocity are the device's
 };
 
 /// A free rigid body; its state lives at the centre of mass in the principal inertial frame.

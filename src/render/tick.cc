@@ -343,7 +343,12 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
       break;
     case Coupling::kVirtual:
       if (dev.valid && Finite(dev)) {
-        const BodyState& t = data.bodies[tool];
+        BodyState& t = data.bodies[tool];
+        // the spring couples the position; the tool turns with the handle, as under kDirect, so
+        // contact torques cannot spin a tool the user holds (a free sphere dragged over a rough
+        // floor would roll and stick-slip, and the user would feel that chatter as friction)
+        t.q_WB = (dev.orientation * model.bodies[tool].iquat_B).normalized();
+        t.w_W = dev.angular_velocity_radps;
         const Vec3 x_dev = dev.position_m + model.device.workspace_offset_m;
         user.force_N = model.device.coupling_stiffness_N_per_m * (x_dev - t.x_W) +
                        model.device.coupling_damping_Ns_per_m * (dev.velocity_mps - t.v_W);
