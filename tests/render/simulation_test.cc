@@ -76,8 +76,9 @@ double NudgedStack(double seconds, bool hold_tool, double& final_m) {
 // rolls towards the low side of a tilted top face, and its load there tilts the column further.
 // With the tool held from rotating, a nudge dies out and the stack stands for 30 s (measured:
 // at most 1.6e-7 m sideways, 1.1e-8 m at the end; bounds 1e-6 and 1e-7 m); the same nudge with a
-// free tool moves the top box by millimetres within 15 s (measured 4.5 mm by 10 s), so the nudge
-// is no small test of the held case. docs/performance.md: the benchmark's stack has this mode.
+// free tool moves the top box by millimetres within 15 s (measured 4.5 mm by 10 s), so the held
+// case is tested against a disturbance that matters. docs/performance.md: the benchmark's stack
+// has this mode.
 TEST(SimulationTest, PressedStackStandsForThirtySecondsWhenTheToolCannotRoll) {
   double final_m = 0.0;
   const double held_m = NudgedStack(30.0, true, final_m);
@@ -87,14 +88,15 @@ TEST(SimulationTest, PressedStackStandsForThirtySecondsWhenTheToolCannotRoll) {
   EXPECT_GT(free_m, 1e-3);
 }
 
-// Virtual coupling drags the tool sphere over a rough floor at 50 mm/s, pressed 2 mm into it. The
-// tool turns with the handle (here: not at all), so it slides, and the coupling carries the
-// contact's kinetic friction mu N, steady: over the second second of sliding the ratio of the
-// coupling's sideways force to the contact's normal force is mu = 0.4 within 1e-9 (equal static
-// and kinetic coefficients, so the anchor slips every tick). The tool's spin never exceeds what
-// one tick's largest friction torque gives, h mu N_max r / I with I = 2/5 m r^2 (measured 2.5
-// rad/s against a bound of 5.6). A tool free to turn rolls and stick-slips instead: with the same
-// input that ratio swung between -0.81 and +0.65 and the tool spun at up to 129 rad/s.
+// Virtual coupling drags the tool sphere over a rough floor at 50 mm/s, the device 2 mm below the
+// height at which the tool rests on the floor. The tool turns with the handle (here: not at all),
+// so it slides, and the coupling carries the contact's kinetic friction mu N, steady: over the
+// second second of sliding the ratio of the coupling's sideways force to the contact's normal force
+// is mu = 0.4 within 1e-9 (equal static and kinetic coefficients, so the anchor slips every tick).
+// The tool's spin never exceeds what one tick's largest friction torque gives, h mu N_max r / I
+// with I = 2/5 m r^2 (measured 2.5 rad/s against a bound of 5.6). A tool free to turn rolls and
+// stick-slips instead: with the same input that ratio swung between -0.81 and +0.65 and the tool
+// spun at up to 129 rad/s.
 TEST(SimulationTest, VirtualCouplingDragsTheToolWithSteadyKineticFriction) {
   constexpr double kMu = 0.4;
   LoadOptions o;
