@@ -331,32 +331,29 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
       }
       break;
     case Coupling::kDirect:
-      if (dev.valid && Finite(dev)) {
-        BodyState& t = data.bodies[tool];
-        t.x_W = dev.position_m + model.device.workspace_offset_m;
-        t.v_W = dev.velocity_mps;
-        t.q_WB = (dev.orientation * model.bodies[tool].iquat_B).normalized();
-        t.w_W = dev.angular_velocity_radps;
-      } else {
+    case Coupling::kVirtual: {
+      if (!dev.valid || !Finite(dev)) {
         device_ok = false;
+        break;
       }
-      break;
-    case Coupling::kVirtual:
-      if (dev.valid && Finite(dev)) {
-        BodyState& t = data.bodies[tool];
-        // the spring couples the position; the tool turns with the handle, as under kDirect, so
-        // contact torques cannot spin a tool the user holds (a free sphere dragged over a rough
-        // floor would roll and stick-slip, and the user would feel that chatter as friction)
-        t.q_WB = (dev.orientation * model.bodies[tool].iquat_B).normalized();
-        t.w_W = dev.angular_velocity_radps;
-        const Vec3 x_dev = dev.position_m + model.device.workspace_offset_m;
+      BodyState& t = data.bodies[tool];
+      // the tool turns with the handle under both couplings, so contact torques cannot spin a tool
+      // the user holds (a free sphere dragged over a rough floor would roll and stick-slip, and
+      // the user would feel that chatter as friction)
+      t.q_WB = (dev.orientation * model.bodies[tool].iquat_B).normalized();
+      t.w_W = dev.angular_velocity_radps;
+      const Vec3 x_dev = dev.position_m + model.device.workspace_offset_m;
+      if (model.device.coupling == Coupling::kDirect) {
+        t.x_W = x_dev;
+        t.v_W = dev.velocity_mps;
+      } else {
+        // the spring-damper couples the position
         user.force_N = model.device.coupling_stiffness_N_per_m * (x_dev - t.x_W) +
                        model.device.coupling_damping_Ns_per_m * (dev.velocity_mps - t.v_W);
         data.tool_coupling_force_W = user.force_N;
-      } else {
-        device_ok = false;
       }
       break;
+    }
   }
   if (!device_ok) Warn(data, Warning::kBadDeviceState);
 
