@@ -296,6 +296,55 @@ TEST(NarrowPhaseTest, BoxCentredOnEqualBoxGivesFourCornersAtTheOverlap) {
   }
 }
 
+// equal boxes face to face, the top one shifted by `shift` along x and y and turned by `yaw` about
+// the normal: corners a sliver past the reference face (up to 3.3e-10 of its half-extent, inside
+// kCornerTolerance) are moved onto it, wider overhangs (1.5e-8, beyond it) are clipped. Either
+// way: four points inside the reference face to 1e-15 m (rounding of the frame change), inside
+// the incident face to the overhang, each at its own corner of the overlap rectangle (to
+// rounding, plus twice the distance the turn moves a corner), at the closed-form depth. Geom 1's
+// face is the reference (the preferred axis on a tie), so both geom orders are checked.
+TEST(NarrowPhaseTest, CornersASliverPastTheReferenceFaceGiveTheOverlapCorners) {
+  const Vec3 half(0.03, 0.02, 0.025);  // not square: each side tests its own limit
+  const Mat3 R = Rot(Vec3(1, -2, 2), 0.4);
+  const GeomPose bottom = Pose(Vec3(0.2, -0.1, 0.3), R);
+  const double depth = 5e-6;
+  struct Case {
+    double shift_m, yaw_rad;
+  };
+  for (const Case& k : {Case{3e-12, 1e-10}, Case{3e-10, 0.0}}) {
+    const double turn_m = k.yaw_rad * half.head<2>().norm();  // how far the turn moves a corner
+    const double overhang_m = k.shift_m + turn_m;
+    // a shifted face's overlap corners are exact whether clipped or moved: rounding only
+    const double corner_m = 2.0 * turn_m + 1e-15;
+    const GeomPose top = Pose(bottom.p_W + R * Vec3(k.shift_m, k.shift_m, 2.0 * half.z() - depth),
+                              R * Rot(Vec3::UnitZ(), k.yaw_rad));
+    for (bool top_first : {true, false}) {
+      const Points r = top_first ? Hit(GeomType::kBox, half, top, GeomType::kBox, half, bottom)
+                                 : Hit(GeomType::kBox, half, bottom, GeomType::kBox, half, top);
+      ASSERT_EQ(r.n, 4) << k.shift_m;
+      const GeomPose& ref = top_first ? top : bottom;
+      const GeomPose& inc = top_first ? bottom : top;
+      bool seen[2][2] = {};
+      for (int i = 0; i < r.n; ++i) {
+        EXPECT_NEAR(r.c[i].depth_m, depth, kExact);
+        const Vec3 in_ref = ref.R_WG.transpose() * (r.c[i].p_W - ref.p_W);
+        const Vec3 in_inc = inc.R_WG.transpose() * (r.c[i].p_W - inc.p_W);
+        EXPECT_LE(std::abs(in_ref.x()), half.x() + 1e-15) << k.shift_m << " " << i;
+        EXPECT_LE(std::abs(in_ref.y()), half.y() + 1e-15) << k.shift_m << " " << i;
+        EXPECT_LE(std::abs(in_inc.x()), half.x() + overhang_m) << k.shift_m << " " << i;
+        EXPECT_LE(std::abs(in_inc.y()), half.y() + overhang_m) << k.shift_m << " " << i;
+        // the overlap rectangle, in bottom's frame: [-half + shift, half] in x and y
+        const Vec3 x_B = R.transpose() * (r.c[i].p_W - bottom.p_W);
+        const bool high_x = x_B.x() > 0.0, high_y = x_B.y() > 0.0;
+        EXPECT_NEAR(x_B.x(), high_x ? half.x() : -half.x() + k.shift_m, corner_m);
+        EXPECT_NEAR(x_B.y(), high_y ? half.y() : -half.y() + k.shift_m, corner_m);
+        seen[high_x][high_y] = true;
+      }
+      EXPECT_TRUE(seen[0][0] && seen[0][1] && seen[1][0] && seen[1][1]) << k.shift_m;
+    }
+  }
+}
+
 TEST(NarrowPhaseTest, BoxRotated45DegreesOnEqualBoxReducesTheOctagonToFour) {
   const Vec3 half(0.025, 0.025, 0.025);
   const GeomPose bottom = Pose(Vec3(0.01, 0, 0.025), Rot(Vec3::UnitX(), 0.1));
