@@ -1,5 +1,6 @@
 // `rigidtouch serve`: the real-time haptic loop against a device (the UDP bridge or the
 // in-process simulated device), with loop statistics at the end.
+#include <cstdio>
 #include <iostream>
 
 #include "analysis/tap_experiment.h"
@@ -38,11 +39,17 @@ void PrintResult(const nlohmann::json& result, bool json) {
     return;
   }
   const auto& t = result["loop"];
-  std::cout << "ticks " << t["ticks"] << " at " << t["achieved_rate_hz"] << " Hz (asked "
-            << t["rate_hz"] << "), overruns " << t["overruns"] << ", period error p50 / p99 / "
-            << "p99.9 / max " << t["period_error_p50_s"] << " / " << t["period_error_p99_s"]
-            << " / " << t["period_error_p999_s"] << " / " << t["period_error_max_s"] << " s\n"
-            << "impulses " << result["impulses"] << ", invalid device ticks "
+  // periods in microseconds, rates to 0.1 Hz: the JSON keeps the full values
+  const auto us = [&t](const char* key) { return 1e6 * t[key].get<double>(); };
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "ticks %lld at %.1f Hz (asked %.1f), overruns %lld, skipped periods %lld, period "
+                "error p50 / p99 / p99.9 / max %.1f / %.1f / %.1f / %.1f us\n",
+                t["ticks"].get<long long>(), t["achieved_rate_hz"].get<double>(),
+                t["rate_hz"].get<double>(), t["overruns"].get<long long>(),
+                t["skipped_periods"].get<long long>(), us("period_error_p50_s"),
+                us("period_error_p99_s"), us("period_error_p999_s"), us("period_error_max_s"));
+  std::cout << line << "impulses " << result["impulses"] << ", invalid device ticks "
             << result["invalid_device_ticks"] << ", safe zero-force ticks "
             << result["safe_fallback_ticks"] << "\n";
   for (const auto& w : t["warnings"]) std::cout << "warning: " << w.get<std::string>() << "\n";

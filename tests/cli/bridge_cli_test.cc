@@ -1,6 +1,7 @@
 // End to end over loopback: `device-sim` and `serve` talk through the UDP bridge with 5% of the
 // packets dropped; device-sim is killed mid-run, the watchdog zeroes the force, and a new
-// device-sim brings the loop back (issue: real-time loop and network bridge).
+// device-sim brings the loop back (issue: real-time loop and network bridge). Also serve's text
+// summary of an in-process run.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
@@ -11,6 +12,7 @@
 
 #include <chrono>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <thread>
 
 #include "cli/cli_util.h"
@@ -100,6 +102,28 @@ TEST(BridgeCliTest, AddressInUseGivesAClearError) {
   ::close(fd);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find(std::to_string(port)), std::string::npos) << r.err;
+}
+
+// the text summary of a short in-process run: every deadline is a tick or a skipped period
+// (300 of them at 1 kHz for 0.3 s), the period errors are in microseconds and ordered
+TEST(ServeCliTest, TextSummaryCountsEveryDeadlineInMicroseconds) {
+  const CliResult r = RunCli("serve --device sim --rate 1000 --duration 0.3 --taps 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::regex line(
+      "ticks (\\d+) at ([0-9.]+) Hz \\(asked 1000\\.0\\), overruns (\\d+), skipped periods "
+      "(\\d+), period error p50 / p99 / p99\\.9 / max ([0-9.]+) / ([0-9.]+) / ([0-9.]+) / "
+      "([0-9.]+) us\n");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, line)) << r.out;
+  EXPECT_EQ(std::stol(m[1]) + std::stol(m[4]), 300) << r.out;
+  EXPECT_GT(std::stod(m[2]), 0.0);
+  EXPECT_LE(std::stod(m[2]), 1000.1);
+  double last = 0.0;
+  for (int k = 5; k <= 8; ++k) {
+    EXPECT_GE(std::stod(m[k]), last) << r.out;
+    last = std::stod(m[k]);
+  }
+  EXPECT_LT(last, 3e5) << r.out;  // the largest period error is shorter than the run
 }
 
 }  // namespace
