@@ -1,7 +1,15 @@
 #include "geometry/broadphase.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 namespace rigidtouch::geometry {
 namespace {
+
+// the sweep moves to another axis only when the boxes spread over it more than this many times as
+// far as over the current one, so that a scene about as wide as it is deep keeps its order
+constexpr double kAxisSwitchRatio = 2.0;
 
 Aabb Bounds(const GeomModel& g, const GeomPose& pose) {
   Vec3 half;
@@ -49,7 +57,8 @@ void Broadphase::Reserve(const Model& model, int pair_capacity) {
     (geom.type == GeomType::kPlane ? planes : order).push_back(g);
     filters.push_back(Filter{geom.body, geom.contype, geom.conaffinity});
   }
-  for (auto* bound : {&lo_x, &hi_x, &lo_y, &hi_y, &lo_z, &hi_z}) bound->assign(order.size(), 0.0);
+  axis = 0;
+  for (auto* bound : {&lo_s, &hi_s, &lo_p, &hi_p, &lo_q, &hi_q}) bound->assign(order.size(), 0.0);
   pairs.assign(pair_capacity, {-1, -1});
   npair = 0;
   dropped = 0;
@@ -85,55 +94,82 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
   };
   const int n = static_cast<int>(bp.order.size());
   int* order = bp.order.data();
-  double *lo_x = bp.lo_x.data(), *hi_x = bp.hi_x.data(), *lo_y = bp.lo_y.data(),
-         *hi_y = bp.hi_y.data(), *lo_z = bp.lo_z.data(), *hi_z = bp.hi_z.data();
-  // this tick's boxes at the geoms' places in last tick's order
+  double *lo_s = bp.lo_s.data(), *hi_s = bp.hi_s.data(), *lo_p = bp.lo_p.data(),
+         *hi_p = bp.hi_p.data(), *lo_q = bp.lo_q.data(), *hi_q = bp.hi_q.data();
+  // this tick's boxes, and how far their lower corners spread along each axis
+  Vec3 least = Vec3::Constant(std::numeric_limits<double>::infinity()), most = -least;
   for (int i = 0; i < n; ++i) {
     const int g = order[i];
     const Aabb box = Bounds(model.geoms[g], poses[g]);
     bp.boxes[g] = box;
-    lo_x[i] = box.lo.x();
-    hi_x[i] = box.hi.x();
-    lo_y[i] = box.lo.y();
-    hi_y[i] = box.hi.y();
-    lo_z[i] = box.lo.z();
-    hi_z[i] = box.hi.z();
+    least = least.cwiseMin(box.lo);
+    most = most.cwiseMax(box.lo);
   }
-  // insertion sort by lower x: linear when nothing crossed since the last tick; ties keep their
-  // order, so the result depends only on the poses and the previous order (deterministic)
+  const Vec3 spread = most - least;
+  int widest = 0;
+  for (int a = 1; a < 3; ++a) {
+    if (spread[a] > spread[widest]) widest = a;
+  }
+  if (widest != bp.axis && spread[widest] > kAxisSwitchRatio * spread[bp.axis]) {
+    // a new sweep axis: sort afresh (ties by geom index, so the order depends only on the poses;
+    // a NaN bound counts as +inf, which keeps the comparison a strict weak order)
+    bp.axis = widest;
+    const int a = widest;
+    const auto key = [&bp, a](int g) {
+      const double l = bp.boxes[g].lo[a];
+      return std::isnan(l) ? std::numeric_limits<double>::infinity() : l;
+    };
+    std::sort(order, order + n, [&key](int g1, int g2) {
+      const double l1 = key(g1), l2 = key(g2);
+      return l1 < l2 || (l1 == l2 && g1 < g2);
+    });
+  }
+  // the bounds in last tick's order (or the new axis's)
+  const int as = bp.axis, ap = (as + 1) % 3, aq = (as + 2) % 3;
+  for (int i = 0; i < n; ++i) {
+    const Aabb& box = bp.boxes[order[i]];
+    lo_s[i] = box.lo[as];
+    hi_s[i] = box.hi[as];
+    lo_p[i] = box.lo[ap];
+    hi_p[i] = box.hi[ap];
+    lo_q[i] = box.lo[aq];
+    hi_q[i] = box.hi[aq];
+  }
+  // insertion sort by the lower bound: linear when nothing crossed since the last tick; ties keep
+  // their order, so the result depends only on the poses and the previous order (deterministic)
   for (int i = 1; i < n; ++i) {
-    const double x = lo_x[i];
-    if (!(lo_x[i - 1] > x)) continue;
+    const double x = lo_s[i];
+    if (!(lo_s[i - 1] > x)) continue;
     const int g = order[i];
-    const double x1 = hi_x[i], y0 = lo_y[i], y1 = hi_y[i], z0 = lo_z[i], z1 = hi_z[i];
+    const double x1 = hi_s[i], p0 = lo_p[i], p1 = hi_p[i], q0 = lo_q[i], q1 = hi_q[i];
     int j = i;
-    while (j > 0 && lo_x[j - 1] > x) {
+    while (j > 0 && lo_s[j - 1] > x) {
       order[j] = order[j - 1];
-      lo_x[j] = lo_x[j - 1];
-      hi_x[j] = hi_x[j - 1];
-      lo_y[j] = lo_y[j - 1];
-      hi_y[j] = hi_y[j - 1];
-      lo_z[j] = lo_z[j - 1];
-      hi_z[j] = hi_z[j - 1];
+      lo_s[j] = lo_s[j - 1];
+      hi_s[j] = hi_s[j - 1];
+      lo_p[j] = lo_p[j - 1];
+      hi_p[j] = hi_p[j - 1];
+      lo_q[j] = lo_q[j - 1];
+      hi_q[j] = hi_q[j - 1];
       --j;
     }
     order[j] = g;
-    lo_x[j] = x;
-    hi_x[j] = x1;
-    lo_y[j] = y0;
-    hi_y[j] = y1;
-    lo_z[j] = z0;
-    hi_z[j] = z1;
+    lo_s[j] = x;
+    hi_s[j] = x1;
+    lo_p[j] = p0;
+    hi_p[j] = p1;
+    lo_q[j] = q0;
+    hi_q[j] = q1;
   }
-  // sweep along x; the other axes are tested first, as they reject most candidates that the
-  // sweep lets through (a stack overlaps along x throughout)
+  // sweep; the other two axes are tested first, as they reject most candidates that the sweep
+  // lets through
   const Broadphase::Filter* filters = bp.filters.data();
   for (int i = 0; i < n; ++i) {
     const int a = order[i];
     for (int j = i + 1; j < n; ++j) {
-      if (lo_x[j] > hi_x[i]) break;
-      if (lo_z[i] <= hi_z[j] && lo_z[j] <= hi_z[i] && lo_y[i] <= hi_y[j] && lo_y[j] <= hi_y[i] &&
-          lo_x[i] <= hi_x[j] && lo_x[j] <= hi_x[i] && CanCollide(filters[a], filters[order[j]])) {
+      if (lo_s[j] > hi_s[i]) break;
+      if (lo_q[i] <= hi_q[j] && lo_q[j] <= hi_q[i] && lo_p[i] <= hi_p[j] && lo_p[j] <= hi_p[i] &&
+          lo_s[i] <= hi_s[j] && lo_s[j] <= hi_s[i] && CanCollide(filters[a], filters[order[j]])) {
         add(a, order[j]);
       }
     }

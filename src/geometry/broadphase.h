@@ -1,6 +1,7 @@
-// Broad phase: which geom pairs may touch this tick. Sweep and prune along x over axis-aligned
-// boxes, with an insertion sort that is linear when the order barely changes between ticks.
-// Planes are infinite and are paired with every geom that may collide with them.
+// Broad phase: which geom pairs may touch this tick. Sweep and prune over axis-aligned boxes along
+// the world axis over which they spread most (as MuJoCo sweeps along its principal axis), with an
+// insertion sort that is linear when the order barely changes between ticks. Planes are infinite
+// and are paired with every geom that may collide with them.
 #pragma once
 
 #include <span>
@@ -21,10 +22,12 @@ struct Aabb {
 /// Preallocated broad-phase state; the sort order persists across ticks.
 struct Broadphase {
   std::vector<Aabb> boxes;  // (ngeom)
-  std::vector<int> order;   // (non-plane geoms) sorted by boxes[i].lo.x
+  std::vector<int> order;   // (non-plane geoms) sorted by boxes[i].lo[axis]
   std::vector<int> planes;  // static plane geoms
-  // the boxes in sweep order, one array per bound (order[i]'s at i), for a compact inner loop
-  std::vector<double> lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;  // (non-plane geoms)
+  int axis = 0;             // the sweep axis (0 x, 1 y, 2 z)
+  // the boxes in sweep order, one array per bound (order[i]'s at i), for a compact inner loop:
+  // bounds along the sweep axis (lo_s, hi_s) and the two others in cyclic order (_p, _q)
+  std::vector<double> lo_s, hi_s, lo_p, hi_p, lo_q, hi_q;  // (non-plane geoms)
   // each geom's collision filter from the model (Reserve), read for every candidate pair
   struct Filter {
     int body = -1, contype = 0, conaffinity = 0;

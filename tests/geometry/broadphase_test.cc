@@ -101,8 +101,8 @@ std::vector<std::pair<int, int>> Sorted(std::vector<std::pair<int, int>> pairs) 
 
 // over coherent motion (small steps, the sort order carried over) and random jumps (a new order
 // each time), FindPairs gives the brute-force pair set, each pair once, in the sweep order: by
-// the first geom's place in the order sorted by lower x, its partners later in that order first,
-// then the planes
+// the first geom's place in the order sorted by the lower bound along the sweep axis, its
+// partners later in that order first, then the planes
 TEST(BroadphaseTest, SamePairsAsBruteForceInSweepOrder) {
   std::mt19937_64 rng(7);
   int total = 0;
@@ -126,12 +126,13 @@ TEST(BroadphaseTest, SamePairsAsBruteForceInSweepOrder) {
       const std::vector<std::pair<int, int>> found(bp.pairs.begin(), bp.pairs.begin() + bp.npair);
       ASSERT_EQ(Sorted(found), Sorted(BruteForce(m, poses))) << "scene " << scene;
       total += bp.npair;
-      // the order: non-plane geoms sorted by lower x, and pairs by their place in it
+      // the order: non-plane geoms sorted by the lower bound along the sweep axis, and pairs by
+      // their place in it
       std::vector<int> place(m.geoms.size(), -1);
       for (std::size_t i = 0; i < bp.order.size(); ++i) {
         place[bp.order[i]] = static_cast<int>(i);
         if (i > 0) {
-          EXPECT_LE(bp.boxes[bp.order[i - 1]].lo.x(), bp.boxes[bp.order[i]].lo.x());
+          EXPECT_LE(bp.boxes[bp.order[i - 1]].lo[bp.axis], bp.boxes[bp.order[i]].lo[bp.axis]);
         }
       }
       const int nplace = static_cast<int>(bp.order.size());
@@ -149,6 +150,45 @@ TEST(BroadphaseTest, SamePairsAsBruteForceInSweepOrder) {
     }
   }
   EXPECT_GT(total, 1000);  // the scenes are dense enough to test something
+}
+
+// the sweep follows the axis over which the geoms spread most, and leaves the current one only
+// for an axis at least kAxisSwitchRatio (2) times as wide: a column along z, a row along y, then x
+// wider than y by 3/2 (kept) and by 3 (taken). Same pairs as brute force throughout.
+TEST(BroadphaseTest, SweepsAlongTheAxisOfWidestSpread) {
+  std::mt19937_64 rng(9);
+  const Model m = RandomModel(rng, 30);
+  std::vector<GeomPose> poses(m.geoms.size());
+  RandomPoses(rng, m, poses);
+  Broadphase bp;
+  bp.Reserve(m, 4096);
+  ASSERT_EQ(bp.axis, 0);
+  struct Case {
+    Vec3 extent_m;  // the geoms' centres spread uniformly over +-extent / 2 along each axis
+    int axis;       // the sweep axis expected after it
+  };
+  // the geoms' own sizes (up to about 0.09 m) blur each spread a little: the ratios leave room
+  const Case cases[] = {{Vec3(0.02, 0.02, 2.0), 2},
+                        {Vec3(0.02, 2.0, 0.02), 1},
+                        {Vec3(3.0, 2.0, 0.02), 1},
+                        {Vec3(6.0, 2.0, 0.02), 0}};
+  int total = 0;
+  for (const Case& k : cases) {
+    std::uniform_real_distribution<double> u(-0.5, 0.5);
+    for (std::size_t g = 0; g < m.geoms.size(); ++g) {
+      if (m.geoms[g].type == GeomType::kPlane) continue;
+      poses[g].p_W = Vec3(u(rng), u(rng), u(rng)).cwiseProduct(k.extent_m);
+    }
+    FindPairs(m, poses, bp);
+    EXPECT_EQ(bp.axis, k.axis) << k.extent_m.transpose();
+    const std::vector<std::pair<int, int>> found(bp.pairs.begin(), bp.pairs.begin() + bp.npair);
+    EXPECT_EQ(Sorted(found), Sorted(BruteForce(m, poses))) << k.extent_m.transpose();
+    for (std::size_t i = 1; i < bp.order.size(); ++i) {
+      EXPECT_LE(bp.boxes[bp.order[i - 1]].lo[bp.axis], bp.boxes[bp.order[i]].lo[bp.axis]);
+    }
+    total += bp.npair;
+  }
+  EXPECT_GT(total, 10);  // dense enough to test something
 }
 
 // a full pair list keeps the first candidates and counts the rest
