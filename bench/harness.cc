@@ -46,6 +46,19 @@ TimeSummary ConstantWorkProbe(double target_ns, int samples) {
   return Summarize(durations);
 }
 
+void MeasureInterleaved(std::span<SceneRun* const> runs, int measurements, int block) {
+  if (block < 1)
+    throw Error("interleaved measurement: block must be at least 1, got " + std::to_string(block));
+  const int n = static_cast<int>(runs.size());
+  for (int done = 0, b = 0; done < measurements; done += block, ++b) {
+    const int count = std::min(block, measurements - done);
+    for (int k = 0; k < n; ++k) {
+      SceneRun& run = *runs[static_cast<std::size_t>((b + k) % n)];
+      for (int i = 0; i < count; ++i) run.MeasureOne();
+    }
+  }
+}
+
 double StrikeStartHeight(const Vec3& position_m, const Quat& orientation, double half_size_m,
                          double gap_m, double radius_m) {
   // the face normals are the body axes and their opposites; the upward one has the largest |z|

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,14 @@ class SceneRun {
   int step_in_batch_ = 0;
   int last_strike_steps_ = 0;
 };
+
+/// Measures several prepared runs of one scene in interleaved blocks: `block` measurements of the
+/// first run, then of the next, and so on, the runs' order rotating by one from block to block,
+/// until each run has `measurements`. Every engine then sees the same stretches of a shared
+/// machine's changing speed (slow and fast periods of seconds, 1.2-1.6 times apart on the
+/// development machine), so their ratios do not depend on which engine ran in a slow period. Throws
+/// `Error` when `block` < 1.
+void MeasureInterleaved(std::span<SceneRun* const> runs, int measurements, int block);
 
 /// Times a constant-work arithmetic kernel (a dependent floating-point chain, no memory traffic)
 /// calibrated to take about `target_ns`, `samples` times, exactly as steps are timed: what the

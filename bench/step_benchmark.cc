@@ -4,14 +4,19 @@
 // Extra flags (after Google Benchmark's own):
 //   --rigidtouch_scenes=DIR   folder with tap.xml, stack.xml, pile.xml (default: the source tree)
 //   --rigidtouch_scale=X      measure X (0 < X <= 1) of the specified steps, for smoke runs
+//   --rigidtouch_interleave=N instead of Google Benchmark's runs, measure every engine of a scene
+//                             in turns of N steps (strikes), the engines' order rotating: each
+//                             engine then sees the same stretches of the machine's speed
 // With --benchmark_repetitions=N --benchmark_enable_random_interleaving=true every scene and
 // engine runs N times in random order and the tables pool the repetitions: each engine's steps
-// then spread over the same stretch of a shared machine's changing speed.
+// then spread over the same stretch of a shared machine's changing speed, though at the scale of
+// whole runs only.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -79,6 +84,33 @@ std::string FlagValue(int argc, char** argv, const std::string& flag) {
   return "";
 }
 
+// every engine on every scene in turns of `block` measurements (MeasureInterleaved); an engine
+// whose scene does not load is reported and left out
+std::vector<RunResult> RunInterleaved(const std::vector<Scene>& scenes, int block) {
+  std::vector<RunResult> results;
+  for (const Scene& scene : scenes) {
+    std::vector<std::unique_ptr<Engine>> engines;
+    std::vector<std::unique_ptr<SceneRun>> runs;
+    std::vector<SceneRun*> prepared;
+    for (const EngineEntry& entry : Engines()) {
+      engines.push_back(entry.make());
+      runs.push_back(std::make_unique<SceneRun>(*engines.back(), scene));
+      try {
+        runs.back()->Prepare();
+        prepared.push_back(runs.back().get());
+      } catch (const Error& error) {
+        std::cerr << "error: " << scene.name << " / " << entry.name << ": " << error.what() << "\n";
+      }
+    }
+    MeasureInterleaved(prepared, scene.measured_steps, block);
+    for (SceneRun* run : prepared) {
+      results.push_back(run->Finish());
+      if (!results.back().gates.ok()) ReportGateFailure(results.back());
+    }
+  }
+  return results;
+}
+
 // removes our flags so Google Benchmark does not reject them
 void DropFlags(int& argc, char** argv) {
   int kept = 1;
@@ -96,7 +128,17 @@ int main(int argc, char** argv) {
   std::string scenes_dir = FlagValue(argc, argv, "rigidtouch_scenes");
   if (scenes_dir.empty()) scenes_dir = DefaultScenesDir();
   const std::string scale_text = FlagValue(argc, argv, "rigidtouch_scale");
+  const std::string interleave_text = FlagValue(argc, argv, "rigidtouch_interleave");
   DropFlags(argc, argv);
+  int interleave = 0;
+  if (!interleave_text.empty()) {
+    interleave = std::atoi(interleave_text.c_str());
+    if (interleave < 1) {
+      std::cerr << "error: --rigidtouch_interleave must be a whole number of steps >= 1, got '"
+                << interleave_text << "'\n";
+      return 2;
+    }
+  }
 
   static std::vector<Scene> scenes;
   try {
@@ -117,7 +159,13 @@ int main(int argc, char** argv) {
   }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
+  if (interleave > 0) {
+    std::cout << "interleaved: every engine of a scene in turns of " << interleave
+              << " measured steps (strikes)\n";
+    Results() = RunInterleaved(scenes, interleave);
+  } else {
+    benchmark::RunSpecifiedBenchmarks();
+  }
   benchmark::Shutdown();
 
   std::vector<std::string> scene_names, engine_names, peers;

@@ -19,8 +19,8 @@ constexpr double kMinEdgeAxisSine = 1e-6;
 // an incident corner past a side plane of the reference face by at most this fraction of the
 // face's half-extent is moved onto the plane instead of being clipped. What clipping would cut
 // off is then a sliver that thin, and the corner stands for the sliver's two vertices. Coincident
-// faces of equal boxes (a stack) have every second corner about 1e-16 relative outside, from
-// rounding alone; clipping them cost 40% of the face manifold
+// faces of equal boxes (a stack) have half their corners outside by rounding alone (under 1e-15 m
+// on the benchmark's settled stack of 25 mm boxes); clipping them cost 40% of the face manifold
 constexpr double kCornerTolerance = 1e-9;
 // at most this many points per face manifold: 4 span a face, more only cost solver rows
 constexpr int kMaxManifoldPoints = 4;

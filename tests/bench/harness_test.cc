@@ -174,6 +174,51 @@ TEST(SceneRun, StrikeWithoutContactFailsTheGate) {
   EXPECT_FALSE(result.gates.ok());
 }
 
+// an engine that only records, in a log shared by several, which engine stepped
+class LoggingEngine : public Engine {
+ public:
+  LoggingEngine(int id, std::vector<int>* log) : id_(id), log_(log) {}
+  std::string_view Name() const override { return "logging"; }
+  void Load(const Scene&) override {}
+  void Step() override { log_->push_back(id_); }
+  int ContactCount() const override { return 0; }
+  int BodyContactCount(std::string_view) const override { return 0; }
+  double DeepestPenetration_m() const override { return 0.0; }
+  Vec3 BodyPosition(std::string_view) const override { return Vec3::Zero(); }
+  Quat BodyOrientation(std::string_view) const override { return Quat::Identity(); }
+  void SetBodyMotion(std::string_view, const Vec3&, const Vec3&) override {}
+  void SaveSnapshot() override {}
+  void RestoreSnapshot() override {}
+  bool StateIsFinite() const override { return true; }
+  long WarningCount() const override { return 0; }
+  std::string Configuration() const override { return "logging"; }
+
+ private:
+  int id_;
+  std::vector<int>* log_;
+};
+
+// three engines, 7 measurements each in turns of 3: blocks of 3, 3 and 1 steps, the order
+// rotating by one engine per turn; every engine ends with exactly its 7 measurements
+TEST(MeasureInterleaved, TurnsOfBlockStepsInRotatingOrder) {
+  Scene scene;
+  scene.name = "log";
+  scene.warmup_steps = 0;
+  scene.measured_steps = 7;
+  std::vector<int> log;
+  LoggingEngine e0(0, &log), e1(1, &log), e2(2, &log);
+  SceneRun r0(e0, scene), r1(e1, scene), r2(e2, scene);
+  for (SceneRun* r : {&r0, &r1, &r2}) r->Prepare();
+  SceneRun* runs[] = {&r0, &r1, &r2};
+  MeasureInterleaved(runs, scene.measured_steps, 3);
+  const std::vector<int> expected = {0, 0, 0, 1, 1, 1, 2, 2, 2,  // turn 0: 0, 1, 2
+                                     1, 1, 1, 2, 2, 2, 0, 0, 0,  // turn 1: 1, 2, 0
+                                     2, 0, 1};                   // turn 2: 2, 0, 1
+  EXPECT_EQ(log, expected);
+  for (SceneRun* r : runs) EXPECT_EQ(r->durations_ns().size(), 7u);
+  EXPECT_THROW(MeasureInterleaved(runs, 1, 0), Error);
+}
+
 }  // namespace
 }  // namespace rigidtouch::bench
 
