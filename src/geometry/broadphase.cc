@@ -96,14 +96,26 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
   int* order = bp.order.data();
   double *lo_s = bp.lo_s.data(), *hi_s = bp.hi_s.data(), *lo_p = bp.lo_p.data(),
          *hi_p = bp.hi_p.data(), *lo_q = bp.lo_q.data(), *hi_q = bp.hi_q.data();
-  // this tick's boxes, and how far their lower corners spread along each axis
+  // the bounds of order[i]'s box at i: along the sweep axis (s) and the two others (p, q)
+  auto place = [&bp, order, lo_s, hi_s, lo_p, hi_p, lo_q, hi_q](int i) {
+    const Aabb& box = bp.boxes[order[i]];
+    const int as = bp.axis, ap = (as + 1) % 3, aq = (as + 2) % 3;
+    lo_s[i] = box.lo[as];
+    hi_s[i] = box.hi[as];
+    lo_p[i] = box.lo[ap];
+    hi_p[i] = box.hi[ap];
+    lo_q[i] = box.lo[aq];
+    hi_q[i] = box.hi[aq];
+  };
+  // this tick's boxes at the geoms' places in last tick's order, and how far their lower corners
+  // spread along each axis
   Vec3 least = Vec3::Constant(std::numeric_limits<double>::infinity()), most = -least;
   for (int i = 0; i < n; ++i) {
     const int g = order[i];
-    const Aabb box = Bounds(model.geoms[g], poses[g]);
-    bp.boxes[g] = box;
-    least = least.cwiseMin(box.lo);
-    most = most.cwiseMax(box.lo);
+    bp.boxes[g] = Bounds(model.geoms[g], poses[g]);
+    place(i);
+    least = least.cwiseMin(bp.boxes[g].lo);
+    most = most.cwiseMax(bp.boxes[g].lo);
   }
   const Vec3 spread = most - least;
   int widest = 0;
@@ -123,17 +135,7 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
       const double l1 = key(g1), l2 = key(g2);
       return l1 < l2 || (l1 == l2 && g1 < g2);
     });
-  }
-  // the bounds in last tick's order (or the new axis's)
-  const int as = bp.axis, ap = (as + 1) % 3, aq = (as + 2) % 3;
-  for (int i = 0; i < n; ++i) {
-    const Aabb& box = bp.boxes[order[i]];
-    lo_s[i] = box.lo[as];
-    hi_s[i] = box.hi[as];
-    lo_p[i] = box.lo[ap];
-    hi_p[i] = box.hi[ap];
-    lo_q[i] = box.lo[aq];
-    hi_q[i] = box.hi[aq];
+    for (int i = 0; i < n; ++i) place(i);
   }
   // insertion sort by the lower bound: linear when nothing crossed since the last tick; ties keep
   // their order, so the result depends only on the poses and the previous order (deterministic)
