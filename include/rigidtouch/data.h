@@ -10,15 +10,12 @@
 #include "rigidtouch/model.h"
 #include "rigidtouch/types.h"
 
-struct mjData_;
-
 namespace rigidtouch {
 
-/// Phase of one contact (DESIGN.md tick stage 3).
+/// Phase of one contact, set by the tick's groups-and-windows stage (docs/architecture.md).
 enum class ContactPhase {
-  kSeparated,  ///< detected but not penetrating (only with a detection margin)
-  kColliding,  ///< penetrating, and its group is inside a collision-rendering window
-  kResting,    ///< penetrating, outside any window: penalty only
+  kColliding,  ///< its group is inside a collision-rendering window: impulses may be due
+  kResting,    ///< outside any window: penalty only
 };
 
 /// One contact point. The normal points from body b towards body a: the penalty force and the
@@ -33,7 +30,7 @@ struct Contact {
   int pair_points = 1;       // points the geom pair has this tick (shares the stiffness)
   Vec3 p_A = Vec3::Zero();   // contact point in a's principal frame (for matching)
   Vec3 p_B = Vec3::Zero();   // contact point in b's frame (world frame when b is static)
-  ContactPhase phase = ContactPhase::kResting;
+  ContactPhase phase = ContactPhase::kResting;  // this tick's, for reports and viewers
   bool is_new = false;           // penetrating now, not matched to a penetrating contact before
   bool sticking = false;         // friction anchor holds
   Vec3 anchor_A = Vec3::Zero();  // friction stick anchor on a (a's frame) and b (b's frame)
@@ -71,13 +68,14 @@ struct ImpulseEvent {
   Vec3 tool_impulse_W = Vec3::Zero();  // linear impulse on the tool  [N s]
 };
 
-/// Conditions Tick counts instead of throwing (MuJoCo's mjtWarning).
+/// Conditions Tick counts instead of throwing (MuJoCo's mjtWarning). Each is counted once per tick
+/// in which it happened (Data::Warn).
 enum class Warning : int {
   kContactFull = 0,  ///< more contacts than Model::max_contacts; extras dropped
   kGroupTooLarge,    ///< a group exceeded Model::max_group_bodies; its bodies move freely
   kSolverFailed,     ///< the impulse solver failed; the impulse was skipped (zero)
   kBadDeviceState,   ///< device state invalid or non-finite; zero force output
-  kNonFiniteState,   ///< the simulation produced NaN/Inf; state reset to initial
+  kNonFiniteState,   ///< the simulation produced NaN/Inf; state reset to initial (ResetState)
   kForceClipped,     ///< the device force limit clipped the output
   kImpulseClipped,   ///< ... and the clipped output contained an impulsive force
   kCount
@@ -88,8 +86,8 @@ const char* WarningName(Warning w);
 
 /// Count and last step of one warning.
 struct WarningStat {
-  int count = 0;
-  std::int64_t last_step = -1;
+  int count = 0;                // ticks in which the warning happened
+  std::int64_t last_step = -1;  // the last of them; -1: never
 };
 
 struct Workspace;  // solver scratch, defined in src/render/workspace.h
@@ -106,6 +104,10 @@ struct Data {
 
   // POSITION and VELOCITY state, per body
   std::vector<BodyState> bodies;  // (nbody)
+
+  // POSITION dependent, written by the kinematics stage before collision detection and read by
+  // every later stage until the positions are integrated
+  std::vector<Mat3> R_WB;  // (nbody) rotation matrix of each body's frame, from bodies[i].q_WB
 
   // CONTACT dependent, per tick
   std::vector<Contact> contacts;  // (max_contacts); the first ncontact are valid
@@ -134,6 +136,14 @@ struct Data {
 
   // scratch
   std::unique_ptr<Workspace, WorkspaceDeleter> workspace;
+
+  /// Counts warning `w` for this tick: at most once per step, however often it happens in it.
+  void Warn(Warning w) {
+    WarningStat& s = warnings[static_cast<int>(w)];
+    if (s.last_step == step && s.count > 0) return;
+    ++s.count;
+    s.last_step = step;
+  }
 };
 
 }  // namespace rigidtouch

@@ -12,10 +12,9 @@ inline Mat3 WorldInertia(const BodyModel& b, const BodyState& s) {
   return R * b.inertia_kgm2.asDiagonal() * R.transpose();
 }
 
-/// Inverse inertia tensor in the world frame  [1/(kg m^2)].
-inline Mat3 WorldInverseInertia(const BodyModel& b, const BodyState& s) {
-  const Mat3 R = s.q_WB.toRotationMatrix();
-  return R * b.inertia_kgm2.cwiseInverse().asDiagonal() * R.transpose();
+/// Inverse inertia tensor in the world frame, for the body's rotation R_WB  [1/(kg m^2)].
+inline Mat3 WorldInverseInertia(const BodyModel& b, const Mat3& R_WB) {
+  return R_WB * b.inertia_kgm2.cwiseInverse().asDiagonal() * R_WB.transpose();
 }
 
 /// Velocity of a body point at offset r_W from the centre of mass.

@@ -158,7 +158,6 @@ void CollisionScratch::Reserve(const Model& model) {
                                 !centre_only && at_origin && identity});
   }
   SetStaticPoses(model, *this);
-  R_WB.assign(model.bodies.size(), Mat3::Identity());
   run_start.assign(model.geoms.size() + 1, 0);
   run_fill.assign(model.geoms.size(), 0);
   mj = mj_makeData(model.collision.get());
@@ -182,14 +181,13 @@ struct PairWriter {
   int ga = -1, gb = -1;
   int body_a = -1, body_b = -1;
   bool flip = false;           // the caller's normal points from a towards b: reversed when written
-  const Mat3* R_WA = nullptr;  // body rotations of dynamic bodies (CollisionScratch::R_WB)
+  const Mat3* R_WA = nullptr;  // body rotations of dynamic bodies (Data::R_WB)
   const Mat3* R_WB = nullptr;
   Vec3 x_A, x_B;  // body positions
 };
 
 // the writer for points of geoms (ga, gb) whose normals point from gb towards ga
-PairWriter BeginPair(const Model& model, const Data& data, const CollisionScratch& s, int ga,
-                     int gb) {
+PairWriter BeginPair(const Model& model, const Data& data, int ga, int gb) {
   PairWriter w;
   const int tool = model.tool;
   w.flip =
@@ -200,11 +198,11 @@ PairWriter BeginPair(const Model& model, const Data& data, const CollisionScratc
   w.body_a = model.geoms[ga].body;
   w.body_b = model.geoms[gb].body;
   if (w.body_a >= 0) {
-    w.R_WA = &s.R_WB[w.body_a];
+    w.R_WA = &data.R_WB[w.body_a];
     w.x_A = data.bodies[w.body_a].x_W;
   }
   if (w.body_b >= 0) {
-    w.R_WB = &s.R_WB[w.body_b];
+    w.R_WB = &data.R_WB[w.body_b];
     w.x_B = data.bodies[w.body_b].x_W;
   }
   return w;
@@ -215,11 +213,7 @@ PairWriter BeginPair(const Model& model, const Data& data, const CollisionScratc
 int Room(Data& data, int n) {
   const int room = static_cast<int>(data.contacts.size()) - data.ncontact;
   if (n <= room) return n;
-  auto& warning = data.warnings[static_cast<int>(Warning::kContactFull)];
-  if (warning.last_step != data.step) {
-    ++warning.count;
-    warning.last_step = data.step;
-  }
+  data.Warn(Warning::kContactFull);
   return room;
 }
 
@@ -279,7 +273,7 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
   const int n = fn(model.collision.get(), s.mj, s.mj_contacts.data(), model.geoms[g1].mj_geom,
                    model.geoms[g2].mj_geom, 0.0);
   // MuJoCo's normal points from geom1 to geom2: ours from b to a, so a = g2
-  const PairWriter w = BeginPair(model, data, s, g2, g1);
+  const PairWriter w = BeginPair(model, data, g2, g1);
   for (int i = 0; i < n; ++i) {
     const mjContact& mc = s.mj_contacts[i];
     if (!(mc.dist < 0.0) || Room(data, 1) < 1) continue;
@@ -296,7 +290,7 @@ bool NonzeroFinite(const Quat& q) {
 
 // the moving geoms' poses as GeomPoses gives them, and Collide's checks of its arguments, once
 // per geom rather than once per pair (the static geoms' are set by Reserve). Reads the bodies'
-// rotation matrices of this tick (CollisionScratch::R_WB).
+// rotation matrices of this tick (Data::R_WB).
 void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
   // a quaternion whose squared norm is at most this (so finite, its components at most 1e100)
   // gives a finite rotation matrix, even times a geom quaternion of components at most 2
@@ -321,7 +315,7 @@ void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
       // it), so the geom's rotation matrix is the body's, from the same quaternion; the centre is
       // x_W + (+0, +0, +0) as for a sphere above
       pose.p_W = b.x_W + Vec3::Zero();
-      pose.R_WG = s.R_WB[geom.body];
+      pose.R_WG = data.R_WB[geom.body];
       s.geom_check[m.geom] = CheckPose(kind, pose);
     } else {
       pose.p_W = b.x_W + b.q_WB * geom.pos_B;
@@ -335,16 +329,9 @@ void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
   RememberPrevious(data, s);
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
-    s.R_WB[i] = data.bodies[i].q_WB.toRotationMatrix();
-  }
   UpdatePoses(model, data, s);
   FindPairs(model, s.poses, s.broadphase);
-  if (s.broadphase.dropped > 0) {
-    auto& w = data.warnings[static_cast<int>(Warning::kContactFull)];
-    ++w.count;
-    w.last_step = data.step;
-  }
+  if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
   for (int k = 0; k < s.broadphase.npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const GeomModel& a = model.geoms[g1];
@@ -360,7 +347,7 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
                         : 0;
       if (n > 0) {
         // the narrow phase's normal points from geom 2 towards geom 1
-        const PairWriter w = BeginPair(model, data, s, g1, g2);
+        const PairWriter w = BeginPair(model, data, g1, g2);
         const int fit = Room(data, n);
         for (int i = 0; i < fit; ++i) {
           AddContact(data, w, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);

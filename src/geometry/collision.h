@@ -46,9 +46,6 @@ struct CollisionScratch {
   std::vector<GeomCheck> geom_kind;   // (ngeom) from the model's types and sizes (Reserve)
   std::vector<GeomCheck> geom_check;  // (ngeom) with the poses, as the poses are set
   std::vector<MovingGeom> moving;     // geoms on dynamic bodies, in geom order
-  // (nbody) each body's rotation matrix at the poses of the last DetectContacts; the tick reads
-  // them too (they hold until it integrates the positions)
-  std::vector<Mat3> R_WB;
   Broadphase broadphase;
   std::array<ContactPoint, kMaxPairContacts> points{};  // one pair's narrow-phase output
   std::vector<mjContact> mj_contacts;                   // one pair's MuJoCo output (mjMAXCONPAIR)
@@ -71,7 +68,8 @@ struct CollisionScratch {
 /// Detects contacts at the poses in `data.bodies` into data.contacts (first data.ncontact valid,
 /// the points of one geom pair contiguous), matching each to the contacts data.contacts held
 /// before the call (they become data.previous) to keep ids and friction anchors and to mark new
-/// contacts. Never allocates or throws; a full contact list counts Warning::kContactFull.
+/// contacts. Reads the bodies' rotations from data.R_WB (the kinematics stage). Never allocates or
+/// throws; a full contact list counts Warning::kContactFull.
 void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch);
 
 /// Distance within which a contact point (in the first body's frame) is the same contact as one

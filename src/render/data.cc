@@ -1,6 +1,7 @@
 // Data lifecycle and per-tick reports.
 #include <algorithm>
 
+#include "dynamics/kinematics.h"
 #include "dynamics/rigid_body.h"
 #include "render/workspace.h"
 #include "rigidtouch/rigidtouch.h"
@@ -37,6 +38,7 @@ Data MakeData(const Model& model) {
   const int nbody = static_cast<int>(model.bodies.size());
   const int ncap = model.max_contacts;
   data.bodies.resize(nbody);
+  data.R_WB.resize(nbody);
   data.contacts.resize(ncap);
   data.previous.resize(ncap);
   data.previous_runs.resize(ncap);
@@ -46,26 +48,16 @@ Data MakeData(const Model& model) {
   data.workspace.reset(new Workspace);
   Workspace& ws = *data.workspace;
   ws.collision.Reserve(model);
-  ws.groups.Reserve(nbody, ncap);
-  ws.laws.resize(ncap);
-  ws.normal_velocity.resize(ncap);
-  ws.anchor_displacement.resize(ncap);
-  ws.force_W.resize(nbody);
-  ws.torque_W.resize(nbody);
-  ws.implicit.resize(ncap);
-  ws.group_solver.Reserve(model.max_group_bodies, ncap);
-  ws.solver_bodies.resize(nbody);
-  ws.solver_rows.resize(ncap);
-  ws.impulses.resize(ncap);
-  ws.impulse_solver = std::make_unique<contact::ImpulseSolver>(ncap, nbody);
+  ws.contact.Reserve(nbody, ncap);
+  ws.velocity.Reserve(nbody, ncap, model.max_group_bodies);
+  ws.impulse.Reserve(model);
   ResetData(model, data);
   return data;
 }
 
-void ResetData(const Model& model, Data& data) {
-  data.step = 0;
-  data.time_s = 0.0;
+void ResetState(const Model& model, Data& data) {
   std::copy(model.initial.begin(), model.initial.end(), data.bodies.begin());
+  dynamics::ComputeKinematics(data);
   data.ncontact = 0;
   data.nprevious = 0;
   data.nprevious_runs = 0;
@@ -80,11 +72,17 @@ void ResetData(const Model& model, Data& data) {
   data.tool_normal_W = Vec3::UnitZ();
   data.tool_contacts = 0;
   data.nimpulse = 0;
-  data.warnings.fill(WarningStat{});
   if (data.workspace) {
     data.workspace->collision.Reset(model);
-    data.workspace->group_solver.ForgetFactor();
+    data.workspace->velocity.group_solver.ForgetFactor();
   }
+}
+
+void ResetData(const Model& model, Data& data) {
+  ResetState(model, data);
+  data.step = 0;
+  data.time_s = 0.0;
+  data.warnings.fill(WarningStat{});
 }
 
 double KineticEnergy(const Model& model, const Data& data) {

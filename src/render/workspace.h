@@ -1,31 +1,27 @@
-// Solver scratch owned by Data: sized once by MakeData, reused every tick.
+// Scratch owned by Data: each stage's buffers, sized once by MakeData and reused every tick.
 #pragma once
 
-#include <memory>
-#include <vector>
-
-#include "contact/groups.h"
-#include "contact/impulse.h"
-#include "contact/impulse_solver.h"
-#include "contact/penalty.h"
-#include "dynamics/group_dynamics.h"
+#include "contact/impulse_stage.h"
+#include "contact/phases.h"
+#include "dynamics/velocities.h"
 #include "geometry/collision.h"
+#include "rigidtouch/data.h"
+#include "rigidtouch/model.h"
 
 namespace rigidtouch {
 
 struct Workspace {
-  geometry::CollisionScratch collision;  // broad and narrow phase scratch
-  contact::Groups groups;
-  std::vector<contact::PenaltyLaw> laws;            // (max_contacts)
-  std::vector<Vec3> anchor_displacement;            // (max_contacts) stick-anchor stretch
-  std::vector<double> normal_velocity;              // (max_contacts) approach speed of new contacts
-  std::vector<Vec3> force_W, torque_W;              // (nbody) explicit force and torque this tick
-  std::vector<dynamics::ImplicitContact> implicit;  // (max_contacts) implicit contacts of a group
-  dynamics::GroupSolverScratch group_solver;
-  std::vector<contact::SolverBody> solver_bodies;  // (max_group_bodies)
-  std::vector<contact::SolverRow> solver_rows;     // (max_contacts)
-  std::vector<double> impulses;                    // (max_contacts)
-  std::unique_ptr<contact::ImpulseSolver> impulse_solver;
+  geometry::CollisionScratch collision;  // stage 2: broad and narrow phase
+  contact::ContactScratch contact;       // stages 3-4: groups, laws, friction anchors
+  dynamics::VelocityScratch velocity;    // stages 4-5: force sums, implicit contacts, group solver
+  contact::ImpulseScratch impulse;       // stage 6: solver rows and the impulse solvers
 };
+
+/// Puts the simulated state back to the model's initial state (bodies, contacts and their
+/// identities, groups, windows, the tool's outputs, the collision order and the group solver's
+/// kept factor) and keeps the step, the time and the warnings. ResetData is this plus step, time
+/// and warnings set to zero; the tick's non-finite-state guard calls it alone, so that the run
+/// goes on from the initial state at the current time with the warning counted.
+void ResetState(const Model& model, Data& data);
 
 }  // namespace rigidtouch

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "dynamics/kinematics.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
@@ -143,6 +144,7 @@ TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
             break;
         }
       }
+      dynamics::ComputeKinematics(d);
       geometry::DetectContacts(m, d, s);
       geometry::GeomPoses(m, d.bodies, expected);
       for (int g = 0; g < ngeom; ++g) {
@@ -235,6 +237,7 @@ TEST(CollisionTest, MatchingIsTheGreedyNearest) {
           (rest[b].q_WB * Quat(1.0, 0.2 * step * u(rng), 0.2 * step * u(rng), 0.0)).normalized();
     }
     const int next_id = d.next_contact_id;
+    dynamics::ComputeKinematics(d);
     geometry::DetectContacts(m, d, s);
     const std::vector<Expected> expected = ReferenceMatch(d);
     int new_id = next_id;

@@ -30,8 +30,8 @@ TEST(FactorReuseTest, StackIsTheSameWithAndWithoutTheKeptFactor) {
   const Model m = StackModel();
   Data reused = MakeData(m);
   Data factored = MakeData(m);
-  factored.workspace->group_solver.reuse_factor = false;
-  const dynamics::GroupSolverScratch& s = reused.workspace->group_solver;
+  factored.workspace->velocity.group_solver.reuse_factor = false;
+  const dynamics::GroupSolverScratch& s = reused.workspace->velocity.group_solver;
   // 2 s, as the benchmark's warm-up: the stack settles under the tool
   Step(m, reused, 2000);
   Step(m, factored, 2000);
@@ -41,7 +41,7 @@ TEST(FactorReuseTest, StackIsTheSameWithAndWithoutTheKeptFactor) {
   // the settled stack: nearly every step by the kept factor (measured: every one)
   EXPECT_GE(s.lagged_solves - lagged_before, 950);
   EXPECT_LE(s.factorisations - factored_before, 50);
-  EXPECT_EQ(factored.workspace->group_solver.lagged_solves, 0);
+  EXPECT_EQ(factored.workspace->velocity.group_solver.lagged_solves, 0);
   // the same stack: every body within 1e-11 m and 1e-9 (quaternion components) after 3 s
   double dx = 0.0, dq = 0.0;
   for (std::size_t i = 0; i < m.bodies.size(); ++i) {
@@ -76,7 +76,7 @@ TEST(FactorReuseTest, ResetDataRepeatsARunBitForBit) {
       "<geom type=\"sphere\" size=\"0.005\" mass=\"0.1\"/></body></worldbody></mujoco>";
   const Model m = LoadModel(test::WriteTempFile("pressed_column.xml", xml), LoadOptions{});
   Data d = MakeData(m);
-  const dynamics::GroupSolverScratch& s = d.workspace->group_solver;
+  const dynamics::GroupSolverScratch& s = d.workspace->velocity.group_solver;
   Step(m, d, 300);
   ASSERT_GT(s.lagged_solves, 250);
   const std::vector<BodyState> first = d.bodies;

@@ -1,0 +1,109 @@
+#include "contact/contact_forces.h"
+
+#include "contact/friction.h"
+#include "contact/relative_motion.h"
+
+namespace rigidtouch::contact {
+
+void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::VelocityScratch& forces) {
+  Contact& c = data.contacts[ci];
+  Vec3 r_a, r_b;
+  Offsets(data, c, &r_a, &r_b);
+  const Vec3 u = RelativeVelocity(data, c, r_a, r_b);
+  const double un = u.dot(c.n_W);
+  const double fn = NormalForce(law, c.depth_m, un);
+  Vec3 ft = Vec3::Zero();
+  if (fn > 0.0) {
+    const Vec3 s = AnchorDisplacement(data, c);
+    const Vec3 ut = u - un * c.n_W;
+    ft = -law.kt_N_per_m * s - law.bt_Ns_per_m * ut;
+    c.sticking = ft.norm() <= law.mu_static * fn;
+    if (!c.sticking) {
+      ft *= law.mu_kinetic * fn / ft.norm();
+      SlideAnchor(data, c, s, ft, law.kt_N_per_m);
+    }
+  } else {
+    c.anchor_A = c.p_A;  // no load: the anchor follows the contact point
+    c.anchor_B = c.p_B;
+    c.sticking = false;
+  }
+  c.normal_force_N = fn;
+  c.friction_force_W = ft;
+  forces.AddContactForce(c, fn * c.n_W + ft, r_a, r_b);
+}
+
+bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
+                      dynamics::ImplicitContact& ic, dynamics::VelocityScratch& forces) {
+  Contact& c = data.contacts[ci];
+  const PenaltyLaw& law = scratch.laws[ci];
+  const double h = model.timestep_s;
+  c.normal_force_N = 0.0;
+  c.friction_force_W.setZero();
+  if (!(c.depth_m > 0.0)) {
+    c.anchor_A = c.p_A;
+    c.anchor_B = c.p_B;
+    c.sticking = false;
+    return false;
+  }
+  // backward Euler: depth after the step is d - h u_n+, so the force is k d - (h k + b) u_n+;
+  // every penetrating point enters the solve, and SolveGroupVelocities drops the contacts that
+  // would pull at the new velocities (a trial on the old velocities would react to velocity noise)
+  ic = dynamics::ImplicitContact{};
+  ic.body_a = c.body_a;
+  ic.body_b = c.body_b;
+  ic.n_W = c.n_W;
+  ic.p_W = c.p_W;
+  ic.phi_n_N = law.k_N_per_m * c.depth_m;
+  ic.c_n_Ns_per_m = h * law.k_N_per_m + law.b_Ns_per_m;
+  ic.contact = ci;
+  // stick or slip was decided for the whole geom pair in stage 3 (DecidePatchFriction)
+  const Vec3 s = scratch.anchor_displacement[ci];
+  if (c.sticking) {
+    // the anchor spring (s lies in the tangent plane) with implicit tangential damping
+    ic.stick = true;
+    ic.phi_t_W = -law.kt_N_per_m * s;
+    ic.c_t_Ns_per_m = h * law.kt_N_per_m + law.bt_Ns_per_m;
+  } else {
+    // kinetic friction opposes the stretch of the anchor, which trails the sliding contact
+    const double stretch = s.norm();
+    const Vec3 ft =
+        stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * ic.phi_n_N / stretch)) : Vec3::Zero();
+    SlideAnchor(data, c, s, ft, law.kt_N_per_m);
+    c.friction_force_W = ft;
+    Vec3 r_a, r_b;
+    Offsets(data, c, &r_a, &r_b);
+    forces.AddContactForce(c, ft, r_a, r_b);
+  }
+  return true;
+}
+
+void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
+                   dynamics::VelocityScratch& forces) {
+  const Groups& G = scratch.groups;
+  const auto too_large = [&](int g) {
+    return G.body_start[g + 1] - G.body_start[g] > model.max_group_bodies;
+  };
+  for (int ci = 0; ci < data.ncontact; ++ci) {
+    if (!scratch.laws[ci].implicit || too_large(data.contacts[ci].group)) {
+      ExplicitContact(data, scratch.laws[ci], ci, forces);
+    }
+  }
+  int n = 0;
+  forces.implicit_start[0] = 0;
+  for (int g = 0; g < G.ngroup; ++g) {
+    if (too_large(g)) {
+      data.Warn(Warning::kGroupTooLarge);
+    } else {
+      for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
+        const int ci = G.contacts[k];
+        if (scratch.laws[ci].implicit &&
+            LinearizeContact(model, data, scratch, ci, forces.implicit[n], forces)) {
+          ++n;
+        }
+      }
+    }
+    forces.implicit_start[g + 1] = n;
+  }
+}
+
+}  // namespace rigidtouch::contact

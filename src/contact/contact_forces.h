@@ -1,0 +1,29 @@
+// Penalty stage (tick stage 4): the forces of every contact's law at this tick's state. Tool
+// contacts (and scene contacts of a group too large for the implicit solve) are explicit: their
+// penalty and friction forces enter the bodies' force sums. Scene contacts are linearised for the
+// backward-Euler solve of stage 5; only their slipping friction is explicit.
+#pragma once
+
+#include "contact/phases.h"
+#include "dynamics/velocities.h"
+#include "rigidtouch/data.h"
+#include "rigidtouch/model.h"
+
+namespace rigidtouch::contact {
+
+/// Explicit penalty and friction of contact ci; updates its friction anchor and adds its force to
+/// the bodies' sums.
+void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::VelocityScratch& forces);
+
+/// Contact ci as a row of the implicit solve (false: not penetrating, nothing to solve). A
+/// slipping contact's kinetic friction stays explicit and is added to the bodies' sums.
+bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
+                      dynamics::ImplicitContact& ic, dynamics::VelocityScratch& forces);
+
+/// Stage 4 over data.contacts: the explicit contacts' forces, and each group's implicit contacts
+/// in forces.implicit (group g's at [implicit_start[g], implicit_start[g + 1])). A group with more
+/// than Model::max_group_bodies bodies counts Warning::kGroupTooLarge: its contacts are explicit.
+void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
+                   dynamics::VelocityScratch& forces);
+
+}  // namespace rigidtouch::contact

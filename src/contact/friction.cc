@@ -1,0 +1,44 @@
+#include "contact/friction.h"
+
+#include "dynamics/kinematics.h"
+
+namespace rigidtouch::contact {
+
+Vec3 AnchorDisplacement(const Data& data, const Contact& c) {
+  const Vec3 d = dynamics::WorldPoint(data, c.body_a, c.anchor_A) -
+                 dynamics::WorldPoint(data, c.body_b, c.anchor_B);
+  return d - d.dot(c.n_W) * c.n_W;
+}
+
+void SlideAnchor(const Data& data, Contact& c, const Vec3& s, const Vec3& f_t, double kt) {
+  if (kt <= 0.0) return;
+  const Vec3 s_target = -f_t / kt;
+  const Vec3 pb = dynamics::WorldPoint(data, c.body_b, c.anchor_B) + (s - s_target);
+  c.anchor_B = dynamics::LocalPoint(data, c.body_b, pb);
+}
+
+void DecidePatchFriction(Data& data, std::span<const PenaltyLaw> laws,
+                         std::span<Vec3> anchor_displacement) {
+  for (int begin = 0; begin < data.ncontact;) {
+    const Contact& first = data.contacts[begin];
+    int end = begin + 1;
+    while (end < data.ncontact && data.contacts[end].geom_a == first.geom_a &&
+           data.contacts[end].geom_b == first.geom_b) {
+      ++end;
+    }
+    if (laws[begin].implicit) {
+      double fn = 0.0, ft = 0.0;
+      for (int ci = begin; ci < end; ++ci) {
+        const Contact& c = data.contacts[ci];
+        fn += laws[ci].k_N_per_m * c.depth_m;
+        anchor_displacement[ci] = AnchorDisplacement(data, c);
+        ft += laws[ci].kt_N_per_m * anchor_displacement[ci].norm();
+      }
+      const bool stick = ft <= laws[begin].mu_static * fn;
+      for (int ci = begin; ci < end; ++ci) data.contacts[ci].sticking = stick;
+    }
+    begin = end;
+  }
+}
+
+}  // namespace rigidtouch::contact

@@ -1,0 +1,40 @@
+// Groups and windows (tick stage 3): the contact groups, each contact's law and approach speed,
+// stick or slip per contact patch, and each group's collision-rendering window, which sets the
+// phase (colliding or resting) of its contacts.
+#pragma once
+
+#include <vector>
+
+#include "contact/groups.h"
+#include "contact/penalty.h"
+#include "rigidtouch/data.h"
+#include "rigidtouch/model.h"
+
+namespace rigidtouch::contact {
+
+/// Per-contact scratch of stages 3 and 4, sized once by Reserve.
+struct ContactScratch {
+  Groups groups;
+  std::vector<PenaltyLaw> laws;           // (max_contacts) each contact's law this tick
+  std::vector<Vec3> anchor_displacement;  // (max_contacts) stick-anchor stretch (implicit ones)
+  std::vector<double> normal_velocity;    // (max_contacts) approach speed of new contacts  [m/s]
+
+  /// Sizes every buffer; the only allocating call.
+  void Reserve(int nbody, int max_contacts);
+};
+
+/// Stage 3 over data.contacts: builds the groups, gives every contact its law (one per geom pair)
+/// and, when new, its normal velocity, decides stick or slip per patch, and updates each group's
+/// window (data.window) and its contacts' phase.
+void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch);
+
+/// The collision window of group g: restarted by a new contact that approaches faster than
+/// ContactParams::onset_speed_mps (a collision onset), otherwise the most recent window among
+/// its bodies. Penalty rendering keeps the bodies' window as it is.
+WindowState GroupWindow(const Model& model, const Data& data, const ContactScratch& scratch, int g);
+
+/// Whether `step` lies inside `window`: the N-impulse window of a train (Eq. 6), the onset step
+/// alone for a single impulse.
+bool InWindow(const Model& model, const WindowState& window, std::int64_t step);
+
+}  // namespace rigidtouch::contact

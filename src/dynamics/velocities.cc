@@ -1,0 +1,77 @@
+#include "dynamics/velocities.h"
+
+#include <algorithm>
+
+#include "dynamics/rigid_body.h"
+
+namespace rigidtouch::dynamics {
+namespace {
+
+// Eq. 1 without contact coupling: v += h F / m, w += h I^-1 tau
+void FreeMotion(const Model& model, Data& data, const VelocityScratch& scratch, int i) {
+  const double h = model.timestep_s;
+  BodyState& s = data.bodies[i];
+  s.v_W += h / model.bodies[i].mass_kg * scratch.force_W[i];
+  s.w_W += h * WorldInverseInertiaTimes(model.bodies[i], data.R_WB[i], scratch.torque_W[i]);
+}
+
+}  // namespace
+
+void VelocityScratch::Reserve(int nbody, int max_contacts, int max_group_bodies) {
+  force_W.resize(nbody);
+  torque_W.resize(nbody);
+  implicit.resize(max_contacts);
+  implicit_start.assign(nbody + 1, 0);
+  group_solver.Reserve(max_group_bodies, max_contacts);
+}
+
+void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& user,
+                         VelocityScratch& scratch) {
+  const int nbody = static_cast<int>(model.bodies.size());
+  for (int i = 0; i < nbody; ++i) {
+    const BodyModel& b = model.bodies[i];
+    const bool compensated = i == model.tool && model.device.coupling != Coupling::kNone;
+    scratch.force_W[i] = compensated ? Vec3::Zero() : Vec3(b.mass_kg * model.gravity_W);
+    scratch.torque_W[i] = GyroscopicTorque(b, data.R_WB[i], data.bodies[i].w_W);
+  }
+  scratch.force_W[model.tool] += user.force_N;
+  scratch.torque_W[model.tool] += user.torque_Nm;
+}
+
+void UpdateVelocities(const Model& model, Data& data, const contact::Groups& groups,
+                      VelocityScratch& scratch) {
+  const int nbody = static_cast<int>(model.bodies.size());
+  for (int i = 0; i < nbody; ++i) {
+    if (data.body_group[i] < 0) FreeMotion(model, data, scratch, i);
+  }
+  for (int g = 0; g < groups.ngroup; ++g) {
+    const int nb = groups.body_start[g + 1] - groups.body_start[g];
+    const std::span<const int> bodies(groups.bodies.data() + groups.body_start[g], nb);
+    const int begin = scratch.implicit_start[g], end = scratch.implicit_start[g + 1];
+    bool solved = false;
+    if (end > begin) {
+      const std::span<ImplicitContact> implicit(scratch.implicit.data() + begin, end - begin);
+      solved = SolveGroupVelocities(model, data, bodies, groups.slot, implicit, scratch.force_W,
+                                    scratch.torque_W, scratch.group_solver);
+      if (solved) {
+        // report the implicit forces at the new velocities
+        for (const ImplicitContact& ic : implicit) {
+          Contact& c = data.contacts[ic.contact];
+          c.normal_force_N = std::max(0.0, ic.normal_force_N);
+          c.friction_force_W += ic.friction_force_W;
+        }
+      } else {
+        data.Warn(Warning::kSolverFailed);
+      }
+    }
+    if (!solved) {
+      for (int i : bodies) FreeMotion(model, data, scratch, i);
+    }
+  }
+}
+
+void IntegratePositions(const Model& model, Data& data) {
+  for (BodyState& s : data.bodies) IntegratePosition(s, model.timestep_s);
+}
+
+}  // namespace rigidtouch::dynamics

@@ -1,0 +1,52 @@
+// Free-motion forces and the velocity update (tick stages 4-5), and the position update (stage
+// 7): Eq. 1 over one step h for every dynamic body.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "contact/groups.h"
+#include "dynamics/group_dynamics.h"
+#include "rigidtouch/data.h"
+#include "rigidtouch/model.h"
+
+namespace rigidtouch::dynamics {
+
+/// Explicit forces of this tick and the implicit contacts of each group, sized once by Reserve.
+struct VelocityScratch {
+  std::vector<Vec3> force_W, torque_W;    // (nbody) explicit force [N] and torque [N m]
+  std::vector<ImplicitContact> implicit;  // (max_contacts) implicit contacts, group by group
+  std::vector<int> implicit_start;        // (nbody + 1) group g's: [start[g], start[g + 1])
+  GroupSolverScratch group_solver;
+
+  /// Sizes every buffer; the only allocating call.
+  void Reserve(int nbody, int max_contacts, int max_group_bodies);
+  /// Adds a contact force f_on_a acting +on a and -on b at offsets r_a, r_b.
+  void AddContactForce(const Contact& c, const Vec3& f_on_a, const Vec3& r_a, const Vec3& r_b) {
+    if (c.body_a >= 0) {
+      force_W[c.body_a] += f_on_a;
+      torque_W[c.body_a] += r_a.cross(f_on_a);
+    }
+    if (c.body_b >= 0) {
+      force_W[c.body_b] -= f_on_a;
+      torque_W[c.body_b] -= r_b.cross(f_on_a);
+    }
+  }
+};
+
+/// Starts stage 4's force sums: gravity and the gyroscopic torque of Eq. 1 on every body, and the
+/// user wrench on the tool. A tool held through a device is gravity-compensated like the device.
+void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& user,
+                         VelocityScratch& scratch);
+
+/// Stage 5: the new velocities. A group with implicit contacts is solved by SolveGroupVelocities
+/// (Warning::kSolverFailed, then free motion, if that fails); every other body moves freely under
+/// its explicit force. Writes each implicit contact's forces at the new velocities back into
+/// data.contacts.
+void UpdateVelocities(const Model& model, Data& data, const contact::Groups& groups,
+                      VelocityScratch& scratch);
+
+/// Stage 7: semi-implicit Euler position update of every body with its new velocity.
+void IntegratePositions(const Model& model, Data& data);
+
+}  // namespace rigidtouch::dynamics

@@ -1,0 +1,49 @@
+#include "render/coupling.h"
+
+#include <cmath>
+
+namespace rigidtouch::render {
+namespace {
+
+bool Finite(const DeviceState& s) {
+  return std::isfinite(s.time_s) && s.position_m.allFinite() && s.velocity_mps.allFinite() &&
+         s.angular_velocity_radps.allFinite() && s.orientation.coeffs().allFinite();
+}
+
+}  // namespace
+
+CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& input) {
+  CouplingResult r;
+  const DeviceState& dev = input.device;
+  if (model.device.coupling == Coupling::kNone) {
+    if (input.tool_wrench.force_N.allFinite() && input.tool_wrench.torque_Nm.allFinite()) {
+      r.user = input.tool_wrench;
+    } else {
+      r.device_ok = false;
+    }
+  } else if (!dev.valid || !Finite(dev)) {
+    r.device_ok = false;
+  } else {
+    const int tool = model.tool;
+    BodyState& t = data.bodies[tool];
+    // the tool turns with the handle under both couplings, so contact torques cannot spin a tool
+    // the user holds (a free sphere dragged over a rough floor would roll and stick-slip, and
+    // the user would feel that chatter as friction)
+    t.q_WB = (dev.orientation * model.bodies[tool].iquat_B).normalized();
+    t.w_W = dev.angular_velocity_radps;
+    const Vec3 x_dev = dev.position_m + model.device.workspace_offset_m;
+    if (model.device.coupling == Coupling::kDirect) {
+      t.x_W = x_dev;
+      t.v_W = dev.velocity_mps;
+    } else {
+      // the spring-damper couples the position
+      r.user.force_N = model.device.coupling_stiffness_N_per_m * (x_dev - t.x_W) +
+                       model.device.coupling_damping_Ns_per_m * (dev.velocity_mps - t.v_W);
+      data.tool_coupling_force_W = r.user.force_N;
+    }
+  }
+  if (!r.device_ok) data.Warn(Warning::kBadDeviceState);
+  return r;
+}
+
+}  // namespace rigidtouch::render

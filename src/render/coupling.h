@@ -1,0 +1,20 @@
+// Coupling (tick stage 1): the device's state moves the tool. Direct coupling puts the tool where
+// the handle is; virtual coupling pulls a simulated tool towards it with a spring-damper.
+#pragma once
+
+#include "rigidtouch/rigidtouch.h"
+
+namespace rigidtouch::render {
+
+/// What stage 1 hands to the later stages.
+struct CouplingResult {
+  Wrench user;            // wrench on the tool's centre of mass from the user or the coupling
+  bool device_ok = true;  // false: the input was invalid or non-finite (zero force is output)
+};
+
+/// Stage 1: applies input to the tool (its pose and velocity under direct coupling, its rotation
+/// under both) and returns the user wrench. An invalid or non-finite input counts
+/// Warning::kBadDeviceState and leaves the tool as it was.
+CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& input);
+
+}  // namespace rigidtouch::render
