@@ -171,5 +171,70 @@ TEST(TickTest, NonFiniteInputGivesSafeZeroForce) {
   EXPECT_TRUE(d.bodies[m.tool].x_W.allFinite());
 }
 
+// a non-finite state inside the loop puts every part of the state back to initial (bodies,
+// contacts, windows, the group solver's kept factor), as ResetData does, and keeps the time and
+// the warnings: the run then repeats a fresh run bit for bit
+TEST(TickTest, NonFiniteStateResetsTheWholeStateToInitial) {
+  LoadOptions o;
+  o.render.renderer = RendererKind::kTrain;
+  const Model m = LoadModel(std::string(RIGIDTOUCH_SCENES) + "/stack.xml", o);
+  Data d = MakeData(m);
+  TickInput in;
+  in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
+  int impulses = 0;
+  for (int s = 0; s < 400; ++s) {
+    Tick(m, d, in);
+    impulses += d.nimpulse;
+  }
+  ASSERT_GT(impulses, 0);  // windows were opened
+  const std::int64_t step = d.step;
+  d.bodies[3].v_W.x() = NAN;
+  const DeviceCommand out = Tick(m, d, in);
+  EXPECT_TRUE(out.safe_fallback);
+  EXPECT_EQ(out.force_N, Vec3::Zero());
+  EXPECT_EQ(d.warnings[static_cast<int>(Warning::kNonFiniteState)].count, 1);
+  EXPECT_EQ(d.step, step + 1);  // the time goes on
+  EXPECT_EQ(d.ncontact, 0);
+  EXPECT_EQ(d.nprevious, 0);
+  for (std::size_t i = 0; i < d.bodies.size(); ++i) {
+    EXPECT_EQ(d.bodies[i].x_W, m.initial[i].x_W);
+    EXPECT_EQ(d.bodies[i].v_W, m.initial[i].v_W);
+    EXPECT_EQ(d.window[i].onset_step, -1);
+    EXPECT_EQ(d.R_WB[i], m.initial[i].q_WB.toRotationMatrix());
+  }
+  Data fresh = MakeData(m);
+  for (int s = 0; s < 400; ++s) {
+    const DeviceCommand a = Tick(m, d, in);
+    const DeviceCommand b = Tick(m, fresh, in);
+    ASSERT_EQ(a.force_N, b.force_N) << "tick " << s;
+  }
+  for (std::size_t i = 0; i < d.bodies.size(); ++i) {
+    EXPECT_EQ(d.bodies[i].x_W, fresh.bodies[i].x_W) << "body " << i;
+    EXPECT_EQ(d.bodies[i].w_W, fresh.bodies[i].w_W) << "body " << i;
+  }
+}
+
+// each contact's phase: colliding inside its group's window, resting outside it
+TEST(TickTest, ContactPhaseFollowsTheCollisionWindow) {
+  const Model m = ImpulseOnlyModel(TestScene("sphere_plane.xml"), RendererKind::kTrain, 0.0, 250.0);
+  Data d = MakeData(m);
+  d.bodies[m.tool].v_W = Vec3(0.0, 0.0, -0.3);
+  ASSERT_TRUE(TickUntilImpulse(m, d));
+  ASSERT_GT(d.ncontact, 0);
+  EXPECT_EQ(d.contacts[0].phase, ContactPhase::kColliding);
+  // past the window (t_c = 0.1 s by default) the contact rests, if it is still there
+  const int window = m.schedule.window_steps;
+  bool rested = false;
+  for (int s = 0; s < window + 5 && !rested; ++s) {
+    Tick(m, d, {});
+    const bool inside = d.step - 1 - d.window[m.tool].onset_step < window;
+    for (int k = 0; k < d.ncontact; ++k) {
+      EXPECT_EQ(d.contacts[k].phase, inside ? ContactPhase::kColliding : ContactPhase::kResting);
+      rested = rested || !inside;
+    }
+  }
+  EXPECT_TRUE(rested);
+}
+
 }  // namespace
 }  // namespace rigidtouch
