@@ -1,0 +1,90 @@
+// Counts the heap allocations of the calling thread by interposing the C allocator (Drake's
+// LimitMalloc idea). Every allocation ends here: operator new, Eigen's dynamic matrices, C code
+// and the standard library alike, which a replaced operator new alone cannot see. Include this
+// header in exactly one translation unit of a test executable.
+//
+//   test::LimitMalloc guard;       // counts this thread's allocations from here
+//   Tick(model, data, input);
+//   EXPECT_EQ(guard.allocations(), 0);
+//
+// Sanitizers own malloc; under them kMallocCounting is false, nothing is interposed, and tests
+// that need the count skip (GTEST_SKIP) instead of asserting nothing.
+#pragma once
+
+#include <cstddef>
+#include <cstdlib>
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(RIGIDTOUCH_SANITIZE)
+#define RIGIDTOUCH_MALLOC_COUNTING 0
+#else
+#define RIGIDTOUCH_MALLOC_COUNTING 1
+#endif
+
+namespace rigidtouch::test {
+
+/// Whether allocations are counted in this build.
+inline constexpr bool kMallocCounting = RIGIDTOUCH_MALLOC_COUNTING != 0;
+
+namespace internal {
+inline thread_local int malloc_guards = 0;        // live LimitMalloc objects on this thread
+inline thread_local long malloc_allocations = 0;  // allocations while one was live
+inline void CountAllocation() {
+  if (malloc_guards > 0) ++malloc_allocations;
+}
+}  // namespace internal
+
+/// Counts the allocations the calling thread makes while the guard lives (guards may nest; each
+/// reports the count since it was made).
+class LimitMalloc {
+ public:
+  LimitMalloc() : start_(internal::malloc_allocations) { ++internal::malloc_guards; }
+  ~LimitMalloc() { --internal::malloc_guards; }
+  LimitMalloc(const LimitMalloc&) = delete;
+  LimitMalloc& operator=(const LimitMalloc&) = delete;
+  /// Allocations since the guard was made.
+  long allocations() const { return internal::malloc_allocations - start_; }
+
+ private:
+  long start_;
+};
+
+}  // namespace rigidtouch::test
+
+#if RIGIDTOUCH_MALLOC_COUNTING
+extern "C" {
+void* __libc_malloc(std::size_t) noexcept;
+void* __libc_calloc(std::size_t, std::size_t) noexcept;
+void* __libc_realloc(void*, std::size_t) noexcept;
+void* __libc_memalign(std::size_t, std::size_t) noexcept;
+void __libc_free(void*) noexcept;
+
+void* malloc(std::size_t n) noexcept {
+  rigidtouch::test::internal::CountAllocation();
+  return __libc_malloc(n);
+}
+void* calloc(std::size_t n, std::size_t s) noexcept {
+  rigidtouch::test::internal::CountAllocation();
+  return __libc_calloc(n, s);
+}
+void* realloc(void* p, std::size_t n) noexcept {
+  rigidtouch::test::internal::CountAllocation();
+  return __libc_realloc(p, n);
+}
+void* memalign(std::size_t a, std::size_t n) noexcept {
+  rigidtouch::test::internal::CountAllocation();
+  return __libc_memalign(a, n);
+}
+void* aligned_alloc(std::size_t a, std::size_t n) noexcept {
+  rigidtouch::test::internal::CountAllocation();
+  return __libc_memalign(a, n);
+}
+int posix_memalign(void** p, std::size_t a, std::size_t n) noexcept {
+  rigidtouch::test::internal::CountAllocation();
+  *p = __libc_memalign(a, n);
+  return *p ? 0 : 12;  // ENOMEM
+}
+void free(void* p) noexcept {
+  __libc_free(p);
+}
+}
+#endif
