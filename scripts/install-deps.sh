@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs the Debian packages rigidtouch needs to build, test and plot (DESIGN.md dependencies).
+# Installs the Debian packages rigidtouch needs to build, test and plot (docs/architecture.md).
 # Skips apt entirely when everything is already installed.
 set -euo pipefail
 packages=(

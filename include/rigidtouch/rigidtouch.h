@@ -16,7 +16,7 @@
 
 namespace rigidtouch {
 
-/// rigidtouch's own parameters, kept apart from the scene file (DESIGN.md).
+/// rigidtouch's own parameters, kept apart from the scene file: flag > config > default.
 struct LoadOptions {
   std::string tool_name = "tool";    // body that is the virtual tool
   std::optional<double> timestep_s;  // default: the MJCF option timestep
@@ -48,7 +48,7 @@ struct TickInput {
   Wrench tool_wrench;  // user wrench on the tool's centre of mass (kNone only)
 };
 
-/// Advances the world by one step h and returns the device command (DESIGN.md "One haptic tick").
+/// Advances the world by one step h and returns the device command (docs/architecture.md).
 /// Never allocates, throws or blocks; problems are counted in data.warnings.
 DeviceCommand Tick(const Model& model, Data& data, const TickInput& input);
 

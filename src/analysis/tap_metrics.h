@@ -25,7 +25,7 @@ struct TapMetricsOptions {
   /// dF/dt [s].
   double extended_rate_hardness_window_s = 0.010;
   /// Window after contact onset analysed by the force spectrum [s]; 0.1 s is the longest
-  /// collision-rendering window the method allows (METHOD.md II.a).
+  /// collision-rendering window the method allows (docs/method.md).
   double collision_window_s = 0.100;
   /// The tool has stopped once its approach speed (-n . velocity) is at most this [m/s].
   double stop_speed_mps = 1e-3;

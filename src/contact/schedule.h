@@ -1,4 +1,4 @@
-// The collision-rendering schedule of an impulse train (METHOD.md II, Eq. 6, Eq. 7).
+// The collision-rendering schedule of an impulse train (Eq. 6, Eq. 7; docs/method.md).
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-// Scene loading: MJCF compiled by libmujoco, copied into rigidtouch's Model (DESIGN.md).
+// Scene loading: MJCF compiled by libmujoco, copied into rigidtouch's Model (docs/architecture.md).
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
