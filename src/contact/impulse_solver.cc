@@ -5,6 +5,8 @@
 #include <limits>
 #include <string>
 
+#include "contact/impulse_math.h"
+
 namespace rigidtouch::contact {
 namespace {
 
@@ -230,9 +232,8 @@ ImpulseSolverError ImpulseSolver::Pack(const ImpulseProblem& problem) {
     double b_mps = 0.0;
     if (row.body_a >= 0) {
       const SolverBody& a = problem.bodies[row.body_a];
-      const Vec3 lever = row.r_a_W.cross(row.n_W);
-      packed.jac_a.head<3>() = row.n_W;
-      packed.jac_a.tail<3>() = lever;
+      packed.jac_a = RowJacobian(row.n_W, row.r_a_W);
+      const Vec3 lever = packed.jac_a.tail<3>();
       packed.minv_jt_a.head<3>() = a.inv_mass * row.n_W;
       packed.minv_jt_a.tail<3>() = a.inv_inertia_W * lever;
       diag += packed.jac_a.dot(packed.minv_jt_a);
@@ -241,9 +242,8 @@ ImpulseSolverError ImpulseSolver::Pack(const ImpulseProblem& problem) {
     }
     if (row.body_b >= 0) {
       const SolverBody& b = problem.bodies[row.body_b];
-      const Vec3 lever = row.r_b_W.cross(row.n_W);
-      packed.jac_b.head<3>() = -row.n_W;
-      packed.jac_b.tail<3>() = -lever;
+      packed.jac_b = -RowJacobian(row.n_W, row.r_b_W);
+      const Vec3 lever = -packed.jac_b.tail<3>();
       packed.minv_jt_b.head<3>() = -b.inv_mass * row.n_W;
       packed.minv_jt_b.tail<3>() = -(b.inv_inertia_W * lever);
       diag += packed.jac_b.dot(packed.minv_jt_b);
