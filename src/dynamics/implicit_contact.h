@@ -1,4 +1,4 @@
-// One scene contact row set of the implicit group solve (group_dynamics.h), shared by the
+// One scene contact of the implicit group solve (group_dynamics.h), used by the
 // assembly (group_assembly.h) and the lagged factorisation (lagged_factor.h).
 #pragma once
 
