@@ -14,10 +14,10 @@ struct RowSide {
 };
 
 RowSide SideA(const SolverRow& row) {
-  return {row.body_a, 1.0, row.r_a_W.cross(row.n_W)};
+  return {row.body_a, 1.0, RowJacobian(row.n_W, row.r_a_W).tail<3>()};
 }
 RowSide SideB(const SolverRow& row) {
-  return {row.body_b, -1.0, row.r_b_W.cross(row.n_W)};
+  return {row.body_b, -1.0, RowJacobian(row.n_W, row.r_b_W).tail<3>()};
 }
 
 // contribution of one shared body to A_ij = J_i M^-1 J_j^T
@@ -68,13 +68,15 @@ void ApplyImpulses(std::span<SolverBody> bodies, std::span<const SolverRow> rows
     // Eq. 2: M dv = Jc^T p, one row at a time
     if (row.body_a >= 0) {
       SolverBody& a = bodies[row.body_a];
+      const Vec3 lever_W = RowJacobian(row.n_W, row.r_a_W).tail<3>();
       a.v_W += a.inv_mass * p[j] * row.n_W;
-      a.w_W += a.inv_inertia_W * (row.r_a_W.cross(row.n_W) * p[j]);
+      a.w_W += a.inv_inertia_W * (lever_W * p[j]);
     }
     if (row.body_b >= 0) {
       SolverBody& b = bodies[row.body_b];
+      const Vec3 lever_W = RowJacobian(row.n_W, row.r_b_W).tail<3>();
       b.v_W -= b.inv_mass * p[j] * row.n_W;
-      b.w_W -= b.inv_inertia_W * (row.r_b_W.cross(row.n_W) * p[j]);
+      b.w_W -= b.inv_inertia_W * (lever_W * p[j]);
     }
   }
 }

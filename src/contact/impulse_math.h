@@ -19,6 +19,17 @@
 
 namespace rigidtouch::contact {
 
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+/// One side's block of a contact row of Jc (Eq. 3): [n; r x n] for the unit normal n_W and the
+/// contact point r_W from the body's centre of mass. Body a's block is RowJacobian(n, r_a), body
+/// b's is -RowJacobian(n, r_b).
+inline Vec6 RowJacobian(const Vec3& n_W, const Vec3& r_W) {
+  Vec6 jac;
+  jac << n_W, r_W.cross(n_W);
+  return jac;
+}
+
 /// Relative normal velocity (Jc v)_row of one row in m/s; negative means the contact approaches.
 double NormalVelocity(const ImpulseProblem& problem, int row);
 

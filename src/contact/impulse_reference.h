@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <span>
 
 #include "contact/impulse.h"
 
@@ -36,5 +37,51 @@ inline constexpr double kReferencePinvThreshold = 1e-10;
 /// comparisons and offline use; the haptic loop uses ImpulseSolver.
 Eigen::VectorXd ReferenceImpulse(const ImpulseProblem& problem, double restitution,
                                  int remaining_impulses);
+
+/// The impulse of ReferenceImpulse on preallocated buffers, for the haptic loop: Solve never
+/// allocates or throws. Method: A = Jc M^-1 Jc^T, Jacobi-scaled to a unit diagonal, gets a
+/// diagonally pivoted Cholesky factor truncated where the largest remaining pivot is at most
+/// kReferencePinvThreshold, A ~= L L^T with L (c x r) of full column rank. Then
+/// A^# = L^+T L^+, and with the Householder QR L = Q R (Q c x r), L^+ = R^-1 Q^T, so
+///   A^# b = Q R^-T R^-1 Q^T b,
+/// two triangular solves between two applications of Q. It agrees with the complete orthogonal
+/// decomposition of ReferenceImpulse to rounding wherever the rank is clear (redundant rows are
+/// exactly dependent; near-dependent ones may be ranked differently by the two thresholds).
+class ReferenceSolver {
+ public:
+  /// Sizes every buffer for groups of up to `max_rows` rows and `max_bodies` bodies (memory:
+  /// about max_rows * (max_rows + min(max_rows, 6 max_bodies)) doubles). Throws rigidtouch::Error
+  /// if either is negative.
+  ReferenceSolver(int max_rows, int max_bodies);
+
+  /// Writes p = -(1 + e) A^# Jc v0 / remaining (Eq. 5, Eq. 8; N s, one per row) into `p` and
+  /// returns true. Returns false, with p set to 0 where it has one entry per row, for e outside
+  /// [0, 1], remaining_impulses < 1, p without one entry per row, more rows or bodies than the
+  /// capacity, a row whose body index is out of range or which names the same body (or static
+  /// geometry) twice, a negative inv_mass, non-finite input, or a non-finite result.
+  bool Solve(const ImpulseProblem& problem, double restitution, int remaining_impulses,
+             std::span<double> p) noexcept;
+
+  /// Capacity in rows.
+  int max_rows() const { return max_rows_; }
+  /// Capacity in bodies.
+  int max_bodies() const { return max_bodies_; }
+
+ private:
+  bool Valid(const ImpulseProblem& problem) const;
+  int Factor(int c);                                   // A -> L (c x r) in l_; returns r
+  void MinimumNormSolve(int c, int r);                 // x_ = A^# b_ from the factor
+  void ApplyReflectors(int c, int r, bool transpose);  // t_ <- Q^T t_ or Q t_
+
+  int max_rows_ = 0;
+  int max_bodies_ = 0;
+  Eigen::MatrixXd a_;       // (max_rows^2) A, then its pivoted Cholesky factor G
+  Eigen::MatrixXd l_;       // (max_rows x max rank) L, then its Householder QR
+  Eigen::VectorXi order_;   // pivot order of the Cholesky factor
+  Eigen::VectorXd b_;       // Jc v0
+  Eigen::VectorXd sqrt_d_;  // sqrt(A_jj), 0 for a row without effective mass
+  Eigen::VectorXd tau_;     // Householder coefficients
+  Eigen::VectorXd t_, x_;   // work vector, solution A^# b
+};
 
 }  // namespace rigidtouch::contact

@@ -197,6 +197,10 @@ class ImpulseSolver {
   bool SolveDense(std::span<const double> p_warm, ImpulseSolverStats& stats);
   void RefineDense();
   bool SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats);
+  void MprgpGradient();  // g = S A S x + S b
+  void MprgpExpand(double feasible_step, double min_step_bar, double& step_bar,
+                   double& inv_step_bar);
+  bool MprgpProportion();  // false if a released direction has no curvature
   bool Polish(ImpulseSolverStats& stats);
   bool PolishDense(int f, ImpulseSolverStats& stats);
   bool PolishCg(ImpulseSolverStats& stats);

@@ -15,17 +15,6 @@
 
 namespace rigidtouch::contact {
 
-// TEMP-SHIM until the preallocated reference solver lands
-class ReferenceSolver {
- public:
-  ReferenceSolver(int, int) {}
-  bool Solve(const ImpulseProblem& problem, double e, int remaining, std::span<double> p) {
-    const Eigen::VectorXd ref = ReferenceImpulse(problem, e, remaining);
-    for (int k = 0; k < static_cast<int>(p.size()); ++k) p[k] = ref[k];
-    return true;
-  }
-};
-
 /// Scratch of stage 6, sized once by Reserve.
 struct ImpulseScratch {
   std::vector<SolverBody> bodies;  // (nbody) one group's bodies

@@ -352,7 +352,7 @@ TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
   }
 }
 
-// --- the lagged factorisation (GroupSolverScratch::reuse_factor) ---
+// --- the lagged factorisation (GroupSolverScratch::lagged.reuse_factor) ---
 
 // a column of four boxes on the floor: sticking and slipping faces, and a ceiling point
 std::vector<ImplicitContact> ColumnContacts(const Fixture& f, std::mt19937& rng) {
@@ -370,7 +370,7 @@ std::vector<ImplicitContact> ColumnContacts(const Fixture& f, std::mt19937& rng)
 GroupSolverScratch FreshScratch(const Fixture& f) {
   GroupSolverScratch s;
   s.Reserve(static_cast<int>(f.bodies.size()), 3 * 4000);
-  s.reuse_factor = false;
+  s.lagged.reuse_factor = false;
   return s;
 }
 
@@ -445,7 +445,7 @@ TEST(GroupDynamics, KeptFactorSolvesTheNextStepsWithinItsBound) {
   SetVelocities(f, v);
   v = SolveWith(f, contacts, f.scratch);
   ASSERT_EQ(f.scratch.factorisations, 1);
-  ASSERT_EQ(f.scratch.lagged_solves, 0);
+  ASSERT_EQ(f.scratch.lagged.lagged_solves, 0);
   for (int step = 1; step <= 5; ++step) {
     NextStep(f, contacts, v, 1e-6, 1e-4, rng);
     const DenseSystem d = DenseSystemOf(f, contacts);
@@ -454,7 +454,7 @@ TEST(GroupDynamics, KeptFactorSolvesTheNextStepsWithinItsBound) {
                                      f.scratch));
     v = Solved(f);
     EXPECT_EQ(f.scratch.factorisations, 1) << "step " << step;
-    EXPECT_EQ(f.scratch.lagged_solves, step);
+    EXPECT_EQ(f.scratch.lagged.lagged_solves, step);
     const double error = ExpectWithinRefinementBound(d, v);
     // the step changed the velocities by far more than the error
     EXPECT_GT(std::sqrt((v - d.v0).dot(d.M * (v - d.v0))), 1e3 * error) << "step " << step;
@@ -466,8 +466,8 @@ TEST(GroupDynamics, KeptFactorSolvesTheNextStepsWithinItsBound) {
       EXPECT_NEAR(c.normal_force_N, c.phi_n_N - c.c_n_Ns_per_m * u.dot(c.n_W), 1e-12 * c.phi_n_N);
     }
   }
-  EXPECT_GE(f.scratch.refinement_steps, 5);  // no step was solved by its old velocities
-  EXPECT_EQ(f.scratch.lagged_failures, 0);
+  EXPECT_GE(f.scratch.lagged.refinement_steps, 5);  // no step was solved by its old velocities
+  EXPECT_EQ(f.scratch.lagged.lagged_failures, 0);
 }
 
 TEST(GroupDynamics, TriesTheKeptFactorEverMoreRarelyWhileTheGroupMoves) {
@@ -485,8 +485,8 @@ TEST(GroupDynamics, TriesTheKeptFactorEverMoreRarelyWhileTheGroupMoves) {
     const Eigen::VectorXd expected = SolveWith(f, contacts, fresh);
     ASSERT_EQ(SolveWith(f, contacts, f.scratch), expected) << "solve " << solve;
   }
-  EXPECT_EQ(f.scratch.lagged_failures, 5);
-  EXPECT_EQ(f.scratch.lagged_solves, 0);
+  EXPECT_EQ(f.scratch.lagged.lagged_failures, 5);
+  EXPECT_EQ(f.scratch.lagged.lagged_solves, 0);
   EXPECT_EQ(f.scratch.factorisations, 40);
 }
 
@@ -508,7 +508,7 @@ TEST(GroupDynamics, KeptFactorIgnoresContactOrderAndReferenceBody) {
   }
   const Eigen::VectorXd v = SolveWith(f, relisted, f.scratch);
   EXPECT_EQ(f.scratch.factorisations, 1);
-  EXPECT_EQ(f.scratch.lagged_solves, 1);
+  EXPECT_EQ(f.scratch.lagged.lagged_solves, 1);
   ExpectWithinRefinementBound(d, v);
 }
 
@@ -526,13 +526,13 @@ TEST(GroupDynamics, FactorsAfreshWhenAPatchChanges) {
   for (std::size_t i = 0; i < changed.size(); ++i) {
     (void)SolveWith(f, contacts, f.scratch);  // keeps the factor of the unchanged system
     const long factorisations = f.scratch.factorisations;
-    const long lagged = f.scratch.lagged_solves;
+    const long lagged = f.scratch.lagged.lagged_solves;
     GroupSolverScratch fresh = FreshScratch(f);
     const Eigen::VectorXd expected = SolveWith(f, changed[i], fresh);
     EXPECT_EQ(SolveWith(f, changed[i], f.scratch), expected) << "change " << i;
     EXPECT_EQ(f.scratch.factorisations, factorisations + 1) << "change " << i;
-    EXPECT_EQ(f.scratch.lagged_solves, lagged) << "change " << i;
-    EXPECT_EQ(fresh.lagged_solves, 0);
+    EXPECT_EQ(f.scratch.lagged.lagged_solves, lagged) << "change " << i;
+    EXPECT_EQ(fresh.lagged.lagged_solves, 0);
   }
 }
 
@@ -545,12 +545,12 @@ TEST(GroupDynamics, NeverTrustsAWrongFactor) {
   for (int damage = 0; damage < 2; ++damage) {
     f.scratch.ForgetFactor();
     (void)SolveWith(f, contacts, f.scratch);
-    ASSERT_TRUE(f.scratch.factor_valid);
+    ASSERT_TRUE(f.scratch.lagged.factor_valid);
     if (damage == 0) {
-      f.scratch.diag_A[1] *= 3.0;
-      f.scratch.diag_inv[1] /= 3.0;
+      f.scratch.factor.diag[1] *= 3.0;
+      f.scratch.factor.diag_inv[1] /= 3.0;
     } else {
-      f.scratch.diag_A[2](4, 3) = std::numeric_limits<double>::quiet_NaN();
+      f.scratch.factor.diag[2](4, 3) = std::numeric_limits<double>::quiet_NaN();
     }
     const long factorisations = f.scratch.factorisations;
     GroupSolverScratch fresh = FreshScratch(f);
@@ -558,7 +558,7 @@ TEST(GroupDynamics, NeverTrustsAWrongFactor) {
     EXPECT_EQ(SolveWith(f, contacts, f.scratch), expected) << "damage " << damage;
     EXPECT_EQ(f.scratch.factorisations, factorisations + 1) << "damage " << damage;
   }
-  EXPECT_EQ(f.scratch.lagged_solves, 0);
+  EXPECT_EQ(f.scratch.lagged.lagged_solves, 0);
 }
 
 TEST(GroupDynamics, FactorsAfreshWhenTheLaggedAnswerWouldPull) {
@@ -576,7 +576,7 @@ TEST(GroupDynamics, FactorsAfreshWhenTheLaggedAnswerWouldPull) {
   (void)SolveWith(f, contacts, f.scratch);
   (void)SolveWith(f, contacts, f.scratch);
   ASSERT_EQ(f.scratch.factorisations, 1);
-  ASSERT_EQ(f.scratch.lagged_solves, 1);
+  ASSERT_EQ(f.scratch.lagged.lagged_solves, 1);
   // pulled apart
   f.force[f.bodies[0]] = Vec3(0.0, 0.0, -5000.0);
   f.force[f.bodies[1]] = Vec3(0.0, 0.0, 5000.0);
@@ -586,7 +586,7 @@ TEST(GroupDynamics, FactorsAfreshWhenTheLaggedAnswerWouldPull) {
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, solved, f.force, f.torque,
                                    f.scratch));
   EXPECT_EQ(Solved(f), expected);
-  EXPECT_EQ(f.scratch.lagged_solves, 1);
+  EXPECT_EQ(f.scratch.lagged.lagged_solves, 1);
   EXPECT_EQ(f.scratch.factorisations, 1 + fresh.factorisations);  // two passes: all, then kept
   for (const ImplicitContact& c : solved) EXPECT_EQ(c.active, c.body_b < 0);
 }

@@ -44,3 +44,48 @@ TEST(TickAllocTest, NoHeapAllocationInTickOfAHundredBoxPile) {
 
 }  // namespace
 }  // namespace rigidtouch
+
+namespace rigidtouch {
+namespace {
+
+// The reference solver in the tick (--reference-solver) is preallocated and cannot throw: a tick
+// whose impulse problem is non-finite counts the failed solve and the non-finite state, outputs
+// the safe zero force, and allocates nothing.
+TEST(TickAllocTest, ReferenceSolverOnANonFiniteStateWarnsWithoutAllocatingOrThrowing) {
+  if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
+  LoadOptions o;
+  o.render.renderer = RendererKind::kTrain;
+  o.render.reference_solver = true;
+  o.contact.stiffness_N_per_m = 0.0;  // impulses alone stop the sphere
+  o.contact.damping_Ns_per_m = 0.0;
+  Model m = LoadModel(test::TestScene("sphere_plane.xml"), o);
+  m.gravity_W.setZero();
+  Data d = MakeData(m);
+  d.bodies[m.tool].v_W = Vec3(0.0, 0.0, -0.3);
+  int onset = -1;
+  for (int s = 0; s < 200 && onset < 0; ++s) {
+    Tick(m, d, {});
+    if (d.nimpulse > 0) onset = static_cast<int>(d.step) - 1;
+  }
+  ASSERT_GE(onset, 0) << "the sphere never reached the plane";
+  // tick up to the step before the train's second impulse, then poison the velocity
+  while (d.step < onset + m.schedule.interval_steps) Tick(m, d, {});
+  ASSERT_EQ(d.window[m.tool].onset_step, onset);
+  d.bodies[m.tool].v_W.x() = NAN;
+  DeviceCommand out;
+  long allocations = -1;
+  {
+    test::LimitMalloc guard;
+    EXPECT_NO_THROW(out = Tick(m, d, {}));
+    allocations = guard.allocations();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(d.warnings[static_cast<int>(Warning::kSolverFailed)].count, 1);
+  EXPECT_EQ(d.warnings[static_cast<int>(Warning::kNonFiniteState)].count, 1);
+  EXPECT_TRUE(out.safe_fallback);
+  EXPECT_EQ(out.force_N, Vec3::Zero());
+  EXPECT_EQ(d.nimpulse, 0);
+}
+
+}  // namespace
+}  // namespace rigidtouch

@@ -1,7 +1,7 @@
-// Canonical impulse problems with known answers, for the impulse solvers' tests and benchmarks:
-// a sphere on a plane, a box landing flat, a head-on collision, a struck stack, a grid pile and
-// random groups. World frame: z up, static geometry below z = 0 where there is a floor.
-// Builders allocate; they are not for the haptic loop.
+// Canonical impulse problems with known answers, for the impulse solvers' tests: a sphere on a
+// plane, a box landing flat, a head-on collision, a struck stack, a grid pile and random groups.
+// World frame: z up, static geometry below z = 0 where there is a floor. Builders allocate; test
+// fixtures (the rigidtouch_test_fixtures library), not part of the installed library.
 #pragma once
 
 #include <cstdint>

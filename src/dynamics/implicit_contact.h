@@ -1,0 +1,33 @@
+// One scene contact of the implicit group solve (group_dynamics.h), used by the
+// assembly (group_assembly.h) and the lagged factorisation (lagged_factor.h).
+#pragma once
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::dynamics {
+
+/// One scene contact of the implicit solve, at the point p (its offsets from the two bodies'
+/// centres of mass are p - x_a and p - x_b), along the unit normal n (from b towards a). Its normal
+/// force is phi_n - c_n u_n at the new relative velocity u_n; while it sticks, its tangential
+/// force is phi_t - c_t u_t (phi_t and the tangential velocity u_t both in the tangent plane, so
+/// this is the two tangential rows of any orthonormal tangent basis at once). Forces act +on a,
+/// -on b.
+struct ImplicitContact {
+  int body_a = -1, body_b = -1;  // Model::bodies indices, -1 static
+  Vec3 n_W = Vec3::UnitZ();
+  Vec3 p_W = Vec3::Zero();
+  double phi_n_N = 0.0;       // normal force independent of the new velocity
+  double c_n_Ns_per_m = 0.0;  // h k + b: normal force per unit of new approach velocity
+  bool stick = false;         // tangential rows present
+  // tangential force on a independent of the new velocity, in the tangent plane (n . phi_t = 0)
+  Vec3 phi_t_W = Vec3::Zero();
+  double c_t_Ns_per_m = 0.0;
+  int contact = -1;    // index in data.contacts
+  bool active = true;  // false once dropped for pulling
+  // output at the solved velocities (zero for a dropped contact): the normal force (negative only
+  // if it still pulls after the last pass) and the tangential force on a
+  double normal_force_N = 0.0;
+  Vec3 friction_force_W = Vec3::Zero();
+};
+
+}  // namespace rigidtouch::dynamics
