@@ -1,5 +1,6 @@
 #include "io/config.h"
 
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -9,30 +10,38 @@
 namespace rigidtouch::io {
 namespace {
 
+// in enum order: the index of a name is its enumerator
 const std::vector<std::string> kRendererNames = {"penalty", "impulse", "train"};
 const std::vector<std::string> kCouplingNames = {"none", "direct", "virtual"};
 
-using NumberFields = std::vector<std::pair<std::string, double*>>;
-
-// the field names of a section: its number fields, then the others
-std::vector<std::string> Names(const NumberFields& numbers, std::vector<std::string> others) {
-  std::vector<std::string> names;
-  for (const auto& [name, unused] : numbers) names.push_back(name);
-  names.insert(names.end(), others.begin(), others.end());
-  return names;
+const char* NameOf(const std::vector<std::string>& names, int index) {
+  return index >= 0 && index < static_cast<int>(names.size()) ? names[index].c_str() : "unknown";
 }
 
-void ReadNumbers(const StrictObject& in, const NumberFields& numbers) {
-  for (const auto& [name, out] : numbers) in.Read(name, *out);
+using NumberFields = std::vector<std::pair<std::string, double*>>;
+
+// reads section `name` if present: `others` (the fields that are not numbers) with `read_others`,
+// then the number fields
+void ReadSection(const StrictObject& top, const std::string& name, const NumberFields& numbers,
+                 const std::vector<std::string>& others = {},
+                 const std::function<void(const StrictObject&)>& read_others = {}) {
+  if (!top.Has(name)) return;
+  std::vector<std::string> fields;
+  for (const auto& [field, unused] : numbers) fields.push_back(field);
+  fields.insert(fields.end(), others.begin(), others.end());
+  const StrictObject in = top.Object(name, fields, "the " + name + " section");
+  if (read_others) read_others(in);
+  for (const auto& [field, out] : numbers) in.Read(field, *out);
 }
 
 }  // namespace
 
 RendererKind ParseRenderer(const std::string& name) {
-  if (name == "penalty") return RendererKind::kPenalty;
-  if (name == "impulse") return RendererKind::kImpulse;
-  if (name == "train") return RendererKind::kTrain;
-  throw Error("unknown renderer " + Quote(name) + "; valid renderers: " + Join(kRendererNames));
+  const int i = IndexOf(kRendererNames, name);
+  if (i < 0) {
+    throw Error("unknown renderer " + Quote(name) + "; valid renderers: " + Join(kRendererNames));
+  }
+  return static_cast<RendererKind>(i);
 }
 
 const std::vector<std::string>& RendererNames() {
@@ -40,22 +49,15 @@ const std::vector<std::string>& RendererNames() {
 }
 
 const char* RendererName(RendererKind kind) {
-  switch (kind) {
-    case RendererKind::kPenalty:
-      return "penalty";
-    case RendererKind::kImpulse:
-      return "impulse";
-    case RendererKind::kTrain:
-      return "train";
-  }
-  return "unknown";
+  return NameOf(kRendererNames, static_cast<int>(kind));
 }
 
 Coupling ParseCoupling(const std::string& name) {
-  if (name == "none") return Coupling::kNone;
-  if (name == "direct") return Coupling::kDirect;
-  if (name == "virtual") return Coupling::kVirtual;
-  throw Error("unknown coupling " + Quote(name) + "; valid couplings: " + Join(kCouplingNames));
+  const int i = IndexOf(kCouplingNames, name);
+  if (i < 0) {
+    throw Error("unknown coupling " + Quote(name) + "; valid couplings: " + Join(kCouplingNames));
+  }
+  return static_cast<Coupling>(i);
 }
 
 void ApplyConfigFile(const std::string& path, LoadOptions& options) {
@@ -67,49 +69,38 @@ void ApplyConfigFile(const std::string& path, LoadOptions& options) {
   if (auto h = top.Number("timestep_s")) options.timestep_s = *h;
 
   ContactParams& c = options.contact;
-  const NumberFields contact = {
-      {"stiffness_N_per_m", &c.stiffness_N_per_m},
-      {"damping_Ns_per_m", &c.damping_Ns_per_m},
-      {"scene_stiffness_N_per_m", &c.scene_stiffness_N_per_m},
-      {"scene_damping_Ns_per_m", &c.scene_damping_Ns_per_m},
-      {"friction_static", &c.friction_static},
-      {"friction_kinetic", &c.friction_kinetic},
-      {"tangential_ratio", &c.tangential_ratio},
-      {"onset_speed_mps", &c.onset_speed_mps},
-  };
-  if (top.Has("contact")) {
-    ReadNumbers(top.Object("contact", Names(contact, {}), "the contact section"), contact);
-  }
+  ReadSection(top, "contact",
+              {{"stiffness_N_per_m", &c.stiffness_N_per_m},
+               {"damping_Ns_per_m", &c.damping_Ns_per_m},
+               {"scene_stiffness_N_per_m", &c.scene_stiffness_N_per_m},
+               {"scene_damping_Ns_per_m", &c.scene_damping_Ns_per_m},
+               {"friction_static", &c.friction_static},
+               {"friction_kinetic", &c.friction_kinetic},
+               {"tangential_ratio", &c.tangential_ratio},
+               {"onset_speed_mps", &c.onset_speed_mps}});
 
   RenderParams& r = options.render;
-  const NumberFields render = {
-      {"restitution", &r.restitution},
-      {"t_collision_s", &r.t_collision_s},
-      {"frequency_hz", &r.frequency_hz},
-  };
-  if (top.Has("render")) {
-    const StrictObject in =
-        top.Object("render", Names(render, {"renderer", "reference_solver"}), "the render section");
-    if (auto name = in.OneOf("renderer", kRendererNames, "renderer")) {
-      r.renderer = ParseRenderer(*name);
-    }
-    ReadNumbers(in, render);
-    in.Read("reference_solver", r.reference_solver);
-  }
+  ReadSection(top, "render",
+              {{"restitution", &r.restitution},
+               {"t_collision_s", &r.t_collision_s},
+               {"frequency_hz", &r.frequency_hz}},
+              {"renderer", "reference_solver"}, [&r](const StrictObject& in) {
+                if (auto name = in.OneOf("renderer", kRendererNames, "renderer")) {
+                  r.renderer = ParseRenderer(*name);
+                }
+                in.Read("reference_solver", r.reference_solver);
+              });
 
   DeviceParams& d = options.device;
-  const NumberFields device = {
-      {"max_force_N", &d.max_force_N},
-      {"coupling_stiffness_N_per_m", &d.coupling_stiffness_N_per_m},
-      {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m},
-  };
-  if (top.Has("device")) {
-    const StrictObject in = top.Object("device", Names(device, {"coupling"}), "the device section");
-    if (auto name = in.OneOf("coupling", kCouplingNames, "coupling")) {
-      d.coupling = ParseCoupling(*name);
-    }
-    ReadNumbers(in, device);
-  }
+  ReadSection(top, "device",
+              {{"max_force_N", &d.max_force_N},
+               {"coupling_stiffness_N_per_m", &d.coupling_stiffness_N_per_m},
+               {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m}},
+              {"coupling"}, [&d](const StrictObject& in) {
+                if (auto name = in.OneOf("coupling", kCouplingNames, "coupling")) {
+                  d.coupling = ParseCoupling(*name);
+                }
+              });
 }
 
 }  // namespace rigidtouch::io

@@ -44,6 +44,14 @@ inline std::string Join(const std::vector<std::string>& items) {
   return out;
 }
 
+/// The index of `name` in `names`, or -1 (tables of names in enum order map names to enums).
+inline int IndexOf(const std::vector<std::string>& names, std::string_view name) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 /// A number as messages print it: six significant digits (%.6g).
 inline std::string FormatNumber(double value) {
   char buffer[32];

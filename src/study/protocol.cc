@@ -15,6 +15,7 @@ namespace rigidtouch::study {
 namespace {
 
 using io::FormatNumber;
+using io::IndexOf;
 using io::Join;
 using io::JsonSource;
 using io::Lower;
@@ -39,10 +40,6 @@ const std::vector<std::string> kTestKeys = {"name",           "conditions",     
 const std::vector<std::string> kRandomizationKeys = {"series_order", "test_order", "seed"};
 const std::vector<std::string> kSeriesOrders = {"balanced", "independent"};  // SeriesOrder
 const std::vector<std::string> kTestOrders = {"fixed", "shuffled"};          // TestOrder
-
-int IndexOf(const std::vector<std::string>& names, const std::string& name) {
-  return static_cast<int>(std::find(names.begin(), names.end(), name) - names.begin());
-}
 const std::vector<std::string> kAllConditionKeys = {
     "renderer",         "restitution", "t_collision_s", "frequency_hz",      "stiffness_N_per_m",
     "damping_Ns_per_m", "scene",       "device",        "approach_speed_mps"};

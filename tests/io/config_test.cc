@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
@@ -171,8 +172,10 @@ TEST(ConfigTest, RendererAndCouplingNamesRoundTrip) {
   for (RendererKind k : {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
     EXPECT_EQ(ParseRenderer(RendererName(k)), k);
   }
-  EXPECT_EQ(RendererNames().size(), 3u);
+  EXPECT_EQ(RendererNames(), (std::vector<std::string>{"penalty", "impulse", "train"}));
+  EXPECT_EQ(ParseCoupling("none"), Coupling::kNone);
   EXPECT_EQ(ParseCoupling("direct"), Coupling::kDirect);
+  EXPECT_EQ(ParseCoupling("virtual"), Coupling::kVirtual);
   EXPECT_THROW(ParseRenderer("spring"), Error);
   EXPECT_THROW(ParseCoupling("loose"), Error);
 }
