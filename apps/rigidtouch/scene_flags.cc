@@ -1,6 +1,7 @@
 #include "scene_flags.h"
 
 #include "io/config.h"
+#include "io/resources.h"
 
 namespace rigidtouch::cli {
 
@@ -37,13 +38,32 @@ LoadOptions ToLoadOptions(const SceneFlags& f) {
   return o;
 }
 
-nlohmann::json WarningsJson(const Data& data) {
-  nlohmann::json w = nlohmann::json::object();
+nlohmann::json WarningsJson(const std::array<WarningStat, static_cast<int>(Warning::kCount)>& w) {
+  nlohmann::json j = nlohmann::json::object();
   for (int k = 0; k < static_cast<int>(Warning::kCount); ++k) {
-    if (data.warnings[k].count > 0)
-      w[WarningName(static_cast<Warning>(k))] = data.warnings[k].count;
+    if (w[k].count > 0) j[WarningName(static_cast<Warning>(k))] = w[k].count;
   }
-  return w;
+  return j;
+}
+
+void PrintWarnings(const nlohmann::json& warnings, std::ostream& out) {
+  for (const auto& [name, count] : warnings.items()) {
+    out << "warning: " << name << " x" << count << "\n";
+  }
+}
+
+analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& device_preset,
+                                        double rate_hz, double speed_mps, int taps) {
+  analysis::TapExperimentConfig c;
+  c.scene_path = f.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene;
+  c.load = ToLoadOptions(f);
+  c.device_preset = device_preset;
+  c.rate_hz = rate_hz;
+  c.stiffness_N_per_m = f.stiffness_N_per_m;
+  c.damping_Ns_per_m = f.damping_Ns_per_m;
+  c.script.approach_speed_mps = speed_mps;
+  c.script.taps = taps;
+  return c;
 }
 
 }  // namespace rigidtouch::cli

@@ -5,8 +5,10 @@
 #include <array>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <ostream>
 #include <string>
 
+#include "analysis/tap_experiment.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::cli {
@@ -35,7 +37,18 @@ void AddSceneFlags(CLI::App* app, SceneFlags& flags, bool scene_required = true)
 LoadOptions ToLoadOptions(const SceneFlags& flags);
 
 /// The warnings of a run as a JSON object {name: count}, only those that occurred.
-nlohmann::json WarningsJson(const Data& data);
+nlohmann::json WarningsJson(const std::array<WarningStat, static_cast<int>(Warning::kCount)>& w);
+inline nlohmann::json WarningsJson(const Data& data) {
+  return WarningsJson(data.warnings);
+}
+
+/// Prints a WarningsJson object as "warning: NAME xCOUNT" lines.
+void PrintWarnings(const nlohmann::json& warnings, std::ostream& out);
+
+/// The tap experiment on the scene flags' scene (the shipped wall when none is given), load
+/// options and contact overrides, with the device preset, haptic rate, approach speed and taps.
+analysis::TapExperimentConfig TapConfig(const SceneFlags& flags, const std::string& device_preset,
+                                        double rate_hz, double speed_mps, int taps);
 
 /// JSON array of a Vec3.
 inline nlohmann::json Json(const Vec3& v) {

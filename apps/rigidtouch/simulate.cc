@@ -77,9 +77,7 @@ void Run(const SimulateFlags& f) {
     std::cout << "  " << model.bodies[i].name << ": position " << s.x_W.transpose()
               << " m, velocity " << s.v_W.transpose() << " m/s\n";
   }
-  for (const auto& [name, count] : result["warnings"].items()) {
-    std::cout << "warning: " << name << " x" << count << "\n";
-  }
+  PrintWarnings(result["warnings"], std::cout);
 }
 
 void Register(CLI::App& root) {

@@ -2,7 +2,6 @@
 // cohorts of simulated participants, analysis of logs, and the observer model's predictions.
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -86,16 +85,15 @@ std::string StatusName(st::SessionStatus status) {
 }
 
 st::ObserverParams LoadObserver(const std::string& path) {
-  if (path.empty()) return {};
-  std::ifstream file(path);
-  if (!file) throw Error(path + ": cannot open the observer parameter file");
-  json document;
-  try {
-    document = json::parse(file);
-  } catch (const json::parse_error& e) {
-    throw Error(path + ": not valid JSON (" + e.what() + ")");
-  }
-  return st::ParseObserverParams(document, path);
+  return path.empty() ? st::ObserverParams{} : st::LoadObserverParams(path);
+}
+
+// simulated taps on `scene` with the `device` preset (empty: the defaults)
+std::unique_ptr<st::StimulusSource> TapSource(const std::string& scene, const std::string& device) {
+  st::TapSourceOptions options;
+  options.scene = scene;
+  options.device = device;
+  return st::MakeTapStimulusSource(options);
 }
 
 void Run(const RunOptions& o) {
@@ -152,10 +150,7 @@ void Simulate(const SimulateOptions& o) {
       throw Error(o.log_dir + ": cannot create the log directory (" + error.message() + ")");
     config.log_dir = o.log_dir;
   }
-  st::TapSourceOptions source_options;
-  source_options.scene = o.scene;
-  source_options.device = o.device;
-  const std::unique_ptr<st::StimulusSource> source = st::MakeTapStimulusSource(source_options);
+  const std::unique_ptr<st::StimulusSource> source = TapSource(o.scene, o.device);
   const std::vector<st::ParticipantRun> runs = st::SimulateCohort(protocol, *source, config);
   std::vector<st::LogInput> logs;
   for (const auto& run : runs) {
@@ -195,10 +190,7 @@ void Analyze(const AnalyzeOptions& o) {
 void Predict(const PredictOptions& o) {
   const st::Protocol protocol = st::LoadProtocol(o.protocol);
   const st::ObserverParams observer = LoadObserver(o.observer);
-  st::TapSourceOptions source_options;
-  source_options.scene = o.scene;
-  source_options.device = o.device;
-  const std::unique_ptr<st::StimulusSource> source = st::MakeTapStimulusSource(source_options);
+  const std::unique_ptr<st::StimulusSource> source = TapSource(o.scene, o.device);
   const auto predictions = st::PredictProtocol(protocol, *source, observer, o.seed, o.taps);
   if (o.json) {
     json tests = json::array();

@@ -48,9 +48,7 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
   if (!(f.spread >= 0.0 && f.spread <= 0.5)) {
     throw Error("--spread " + std::to_string(f.spread) + " is out of range: valid [0, 0.5]");
   }
-  analysis::TapExperimentConfig c;
-  c.scene_path = f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
-  c.load = ToLoadOptions(f.scene);
+  analysis::TapExperimentConfig c = TapConfig(f.scene, f.device, f.rate_hz, f.speed_mps, f.taps);
   if (wall) {
     const RenderParams r = analysis::WallRenderParams(*wall);
     c.load.render.renderer = r.renderer;
@@ -62,12 +60,6 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
   if (c.load.device.coupling == Coupling::kNone) {
     throw Error("--coupling none has no device; valid couplings for tap: direct, virtual");
   }
-  c.device_preset = f.device;
-  c.rate_hz = f.rate_hz;
-  c.stiffness_N_per_m = f.scene.stiffness_N_per_m;
-  c.damping_Ns_per_m = f.scene.damping_Ns_per_m;
-  c.script.approach_speed_mps = f.speed_mps;
-  c.script.taps = f.taps;
   c.script.seed = f.seed;
   c.script.speed_spread = f.spread;
   return c;
@@ -98,11 +90,6 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"band_energy_fraction", t.band_energy_fraction},
                     {"force_clipped", t.force_clipped}});
   }
-  nlohmann::json warnings = nlohmann::json::object();
-  for (int k = 0; k < static_cast<int>(Warning::kCount); ++k) {
-    if (run.warnings[k].count > 0)
-      warnings[WarningName(static_cast<Warning>(k))] = run.warnings[k].count;
-  }
   const bool train = m.render.renderer == RendererKind::kTrain;
   return {
       {"renderer", io::RendererName(m.render.renderer)},
@@ -122,7 +109,7 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"clipped_ticks", run.clipped_ticks},
       {"clipped_impulse_ticks", run.clipped_impulse_ticks},
       {"taps", taps},
-      {"warnings", warnings}};
+      {"warnings", WarningsJson(run.warnings)}};
 }
 
 // draws a figure; a missing matplotlib is reported, not fatal (the trace is already written)
@@ -242,9 +229,7 @@ void Run(const TapFlags& f) {
     return;
   }
   std::cout << kTableHeader << "\n" << Row(result["renderer"].get<std::string>(), run) << "\n";
-  for (const auto& [name, count] : result["warnings"].items()) {
-    std::cout << "warning: " << name << " x" << count << "\n";
-  }
+  PrintWarnings(result["warnings"], std::cout);
 }
 
 void Register(CLI::App& root) {

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <string>
 
+#include "io/normal_deviate.h"
+
 namespace rigidtouch::device {
 
 namespace {
@@ -40,7 +42,7 @@ double Uniform01(std::mt19937_64& rng) {
 double StandardNormal(std::mt19937_64& rng) {
   const double u1 = Uniform01(rng);
   const double u2 = Uniform01(rng);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  return io::BoxMuller(u1, u2);
 }
 
 // scalar motion profile: travelled distance, speed, acceleration

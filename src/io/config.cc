@@ -1,125 +1,106 @@
 #include "io/config.h"
 
-#include <fstream>
 #include <functional>
-#include <map>
-#include <nlohmann/json.hpp>
+#include <utility>
+#include <vector>
+
+#include "io/strict_json.h"
+#include "io/text.h"
 
 namespace rigidtouch::io {
 namespace {
 
-using nlohmann::json;
-using Setter = std::function<void(const json&)>;
+// in enum order: the index of a name is its enumerator
+const std::vector<std::string> kRendererNames = {"penalty", "impulse", "train"};
+const std::vector<std::string> kCouplingNames = {"none", "direct", "virtual"};
 
-std::string Keys(const std::map<std::string, Setter>& fields) {
-  std::string keys;
-  for (const auto& [k, v] : fields) keys += (keys.empty() ? "" : ", ") + k;
-  return keys;
+const char* NameOf(const std::vector<std::string>& names, int index) {
+  return index >= 0 && index < static_cast<int>(names.size()) ? names[index].c_str() : "unknown";
 }
 
-void ApplySection(const std::string& path, const std::string& section, const json& object,
-                  const std::map<std::string, Setter>& fields) {
-  if (!object.is_object()) {
-    throw Error("config file '" + path + "': \"" + section + "\" must be a JSON object");
-  }
-  for (const auto& [key, value] : object.items()) {
-    const auto it = fields.find(key);
-    if (it == fields.end()) {
-      throw Error("config file '" + path + "': unknown field \"" + section + "." + key +
-                  "\"; valid fields: " + Keys(fields));
-    }
-    try {
-      it->second(value);
-    } catch (const json::exception& e) {
-      throw Error("config file '" + path + "': field \"" + section + "." + key +
-                  "\" has the wrong type: " + e.what());
-    }
-  }
-}
+using NumberFields = std::vector<std::pair<std::string, double*>>;
 
-Setter Number(double& out) {
-  return [&out](const json& v) {
-    if (!v.is_number()) throw json::type_error::create(302, "expected a number", &v);
-    out = v.get<double>();
-  };
+// reads section `name` if present: `others` (the fields that are not numbers) with `read_others`,
+// then the number fields
+void ReadSection(const StrictObject& top, const std::string& name, const NumberFields& numbers,
+                 const std::vector<std::string>& others = {},
+                 const std::function<void(const StrictObject&)>& read_others = {}) {
+  if (!top.Has(name)) return;
+  std::vector<std::string> fields;
+  for (const auto& [field, unused] : numbers) fields.push_back(field);
+  fields.insert(fields.end(), others.begin(), others.end());
+  const StrictObject in = top.Object(name, fields, "the " + name + " section");
+  if (read_others) read_others(in);
+  for (const auto& [field, out] : numbers) in.Read(field, *out);
 }
 
 }  // namespace
 
 RendererKind ParseRenderer(const std::string& name) {
-  if (name == "penalty") return RendererKind::kPenalty;
-  if (name == "impulse") return RendererKind::kImpulse;
-  if (name == "train") return RendererKind::kTrain;
-  throw Error("unknown renderer '" + name + "'; valid renderers: penalty, impulse, train");
+  const int i = IndexOf(kRendererNames, name);
+  if (i < 0) {
+    throw Error("unknown renderer " + Quote(name) + "; valid renderers: " + Join(kRendererNames));
+  }
+  return static_cast<RendererKind>(i);
+}
+
+const std::vector<std::string>& RendererNames() {
+  return kRendererNames;
 }
 
 const char* RendererName(RendererKind kind) {
-  switch (kind) {
-    case RendererKind::kPenalty:
-      return "penalty";
-    case RendererKind::kImpulse:
-      return "impulse";
-    case RendererKind::kTrain:
-      return "train";
-  }
-  return "unknown";
+  return NameOf(kRendererNames, static_cast<int>(kind));
 }
 
 Coupling ParseCoupling(const std::string& name) {
-  if (name == "none") return Coupling::kNone;
-  if (name == "direct") return Coupling::kDirect;
-  if (name == "virtual") return Coupling::kVirtual;
-  throw Error("unknown coupling '" + name + "'; valid couplings: none, direct, virtual");
+  const int i = IndexOf(kCouplingNames, name);
+  if (i < 0) {
+    throw Error("unknown coupling " + Quote(name) + "; valid couplings: " + Join(kCouplingNames));
+  }
+  return static_cast<Coupling>(i);
 }
 
 void ApplyConfigFile(const std::string& path, LoadOptions& options) {
-  std::ifstream in(path);
-  if (!in) throw Error("config file '" + path + "' cannot be opened");
-  json root;
-  try {
-    root = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw Error("config file '" + path + "' is not valid JSON: " + e.what());
-  }
+  const nlohmann::json root = ReadJsonFile(path, "config file");
+  const JsonSource source(path);
+  const StrictObject top(source, root, "", {"tool", "timestep_s", "contact", "render", "device"},
+                         "a config object");
+  top.Read("tool", options.tool_name);
+  if (auto h = top.Number("timestep_s")) options.timestep_s = *h;
+
   ContactParams& c = options.contact;
+  ReadSection(top, "contact",
+              {{"stiffness_N_per_m", &c.stiffness_N_per_m},
+               {"damping_Ns_per_m", &c.damping_Ns_per_m},
+               {"scene_stiffness_N_per_m", &c.scene_stiffness_N_per_m},
+               {"scene_damping_Ns_per_m", &c.scene_damping_Ns_per_m},
+               {"friction_static", &c.friction_static},
+               {"friction_kinetic", &c.friction_kinetic},
+               {"tangential_ratio", &c.tangential_ratio},
+               {"onset_speed_mps", &c.onset_speed_mps}});
+
   RenderParams& r = options.render;
+  ReadSection(top, "render",
+              {{"restitution", &r.restitution},
+               {"t_collision_s", &r.t_collision_s},
+               {"frequency_hz", &r.frequency_hz}},
+              {"renderer", "reference_solver"}, [&r](const StrictObject& in) {
+                if (auto name = in.OneOf("renderer", kRendererNames, "renderer")) {
+                  r.renderer = ParseRenderer(*name);
+                }
+                in.Read("reference_solver", r.reference_solver);
+              });
+
   DeviceParams& d = options.device;
-  const std::map<std::string, Setter> contact = {
-      {"stiffness_N_per_m", Number(c.stiffness_N_per_m)},
-      {"damping_Ns_per_m", Number(c.damping_Ns_per_m)},
-      {"scene_stiffness_N_per_m", Number(c.scene_stiffness_N_per_m)},
-      {"scene_damping_Ns_per_m", Number(c.scene_damping_Ns_per_m)},
-      {"friction_static", Number(c.friction_static)},
-      {"friction_kinetic", Number(c.friction_kinetic)},
-      {"tangential_ratio", Number(c.tangential_ratio)},
-      {"onset_speed_mps", Number(c.onset_speed_mps)},
-  };
-  const std::map<std::string, Setter> render = {
-      {"renderer", [&r](const json& v) { r.renderer = ParseRenderer(v.get<std::string>()); }},
-      {"restitution", Number(r.restitution)},
-      {"t_collision_s", Number(r.t_collision_s)},
-      {"frequency_hz", Number(r.frequency_hz)},
-      {"reference_solver", [&r](const json& v) { r.reference_solver = v.get<bool>(); }},
-  };
-  const std::map<std::string, Setter> device = {
-      {"coupling", [&d](const json& v) { d.coupling = ParseCoupling(v.get<std::string>()); }},
-      {"max_force_N", Number(d.max_force_N)},
-      {"coupling_stiffness_N_per_m", Number(d.coupling_stiffness_N_per_m)},
-      {"coupling_damping_Ns_per_m", Number(d.coupling_damping_Ns_per_m)},
-  };
-  double timestep = 0.0;
-  const std::map<std::string, Setter> top = {
-      {"tool", [&options](const json& v) { options.tool_name = v.get<std::string>(); }},
-      {"timestep_s",
-       [&](const json& v) {
-         Number(timestep)(v);
-         options.timestep_s = timestep;
-       }},
-      {"contact", [&](const json& v) { ApplySection(path, "contact", v, contact); }},
-      {"render", [&](const json& v) { ApplySection(path, "render", v, render); }},
-      {"device", [&](const json& v) { ApplySection(path, "device", v, device); }},
-  };
-  ApplySection(path, "(top level)", root, top);
+  ReadSection(top, "device",
+              {{"max_force_N", &d.max_force_N},
+               {"coupling_stiffness_N_per_m", &d.coupling_stiffness_N_per_m},
+               {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m}},
+              {"coupling"}, [&d](const StrictObject& in) {
+                if (auto name = in.OneOf("coupling", kCouplingNames, "coupling")) {
+                  d.coupling = ParseCoupling(*name);
+                }
+              });
 }
 
 }  // namespace rigidtouch::io

@@ -2,19 +2,25 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::io {
 
-/// Reads `path` (a JSON object) into `options`. Keys: "tool", "timestep_s", "contact" {...},
-/// "render" {...}, "device" {...}, each field named as in ContactParams / RenderParams /
-/// DeviceParams. Throws Error naming the file and the unknown key (listing the valid ones) or the
-/// field with a wrong type.
+/// Reads `path` (a JSON object) into `options`; absent fields keep their values. Keys: "tool",
+/// "timestep_s", "contact" {...}, "render" {...}, "device" {...}, each field named as in
+/// ContactParams / RenderParams / DeviceParams. Read with the strict reader (io/strict_json.h):
+/// throws Error naming the file and the field's path ("contact.stiffness_N_per_m") for an unknown
+/// field (listing the valid ones), a wrong type or a non-finite number, and naming the file when
+/// it is missing, empty or not JSON (with line and column). Ranges are checked by Configure.
 void ApplyConfigFile(const std::string& path, LoadOptions& options);
 
 /// Parses a renderer name: "penalty", "impulse" or "train"; throws Error listing them.
 RendererKind ParseRenderer(const std::string& name);
+
+/// The renderer names ParseRenderer accepts, in enum order.
+const std::vector<std::string>& RendererNames();
 
 /// The name of a renderer.
 const char* RendererName(RendererKind kind);

@@ -4,6 +4,8 @@
 #include <string>
 
 #include "contact/schedule.h"
+#include "io/text.h"
+#include "render/limits.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -26,7 +28,9 @@ constexpr double kInf = INFINITY;
 }  // namespace
 
 void Configure(Model& model) {
-  RequireFinite("timestep_s", model.timestep_s, 1e-6, 0.1, "0 < h <= 0.1 s (at least 1 us)");
+  RequireFinite("timestep_s", model.timestep_s, render::kMinTimestep_s, render::kMaxTimestep_s,
+                "0 < h <= " + io::FormatNumber(render::kMaxTimestep_s) + " s (at least " +
+                    io::FormatNumber(render::kMinTimestep_s * 1e6) + " us)");
   Require(std::isfinite(model.timestep_s) && model.timestep_s > 0.0, "timestep_s", model.timestep_s,
           "h > 0");
   const ContactParams& c = model.contact;
@@ -48,14 +52,18 @@ void Configure(Model& model) {
   RequireFinite("onset_speed_mps", c.onset_speed_mps, 0.0, kInf, ">= 0 m/s");
 
   const RenderParams& r = model.render;
-  RequireFinite("restitution", r.restitution, 0.0, 1.0, "0 <= e <= 1 (Eq. 4)");
+  RequireFinite("restitution", r.restitution, render::kMinRestitution, render::kMaxRestitution,
+                io::FormatNumber(render::kMinRestitution) +
+                    " <= e <= " + io::FormatNumber(render::kMaxRestitution) + " (Eq. 4)");
   if (r.renderer == RendererKind::kTrain) {
-    RequireFinite("t_collision_s", r.t_collision_s, 0.0, 0.1,
-                  "0 < t_c <= 0.1 s (shorter than human reaction time, METHOD.md II.a)");
-    Require(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, "0 < t_c <= 0.1 s");
+    const std::string window =
+        "0 < t_c <= " + io::FormatNumber(render::kMaxCollisionWindow_s) + " s";
+    RequireFinite("t_collision_s", r.t_collision_s, 0.0, render::kMaxCollisionWindow_s,
+                  window + " (shorter than human reaction time, METHOD.md II.a)");
+    Require(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, window);
     Require(std::isfinite(r.frequency_hz) && r.frequency_hz > 0.0, "frequency_hz", r.frequency_hz,
             "f > 0 Hz, within [1/t_c, 1/h] (Eq. 6-7)");
-    if (r.restitution != 0.0) {
+    if (r.restitution != render::kTrainRestitution) {
       std::ostringstream msg;
       msg << "parameter restitution = " << r.restitution
           << " is not allowed with the train renderer: the method requires perfectly plastic "

@@ -2,10 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <numbers>
 
+#include "io/strict_json.h"
+#include "io/text.h"
 #include "rigidtouch/types.h"
 #include "study/random.h"
 #include "study/statistics.h"
@@ -14,6 +15,7 @@ namespace rigidtouch::study {
 
 namespace {
 
+using io::FormatNumber;
 using nlohmann::json;
 
 // stream tags: every random decision of a participant has its own derived seed
@@ -61,12 +63,6 @@ const ParamSpec kParamSpecs[] = {
     {"individual_jnd_log_sd", &ObserverParams::individual_jnd_log_sd, 0.0, false, kInf},
 };
 
-std::string FormatNumber(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", value);
-  return buffer;
-}
-
 std::string RangeText(const ParamSpec& spec) {
   std::string text = spec.lo_open ? "> " : ">= ";
   text += FormatNumber(spec.lo);
@@ -95,36 +91,29 @@ nlohmann::json ObserverParams::ToJson() const {
 }
 
 ObserverParams ParseObserverParams(const nlohmann::json& document, std::string_view source) {
-  const std::string src(source);
-  if (!document.is_object()) throw Error(src + ": expected a JSON object of observer parameters");
+  const io::JsonSource src(source);
+  std::vector<std::string> valid;
+  for (const ParamSpec& spec : kParamSpecs) valid.emplace_back(spec.name);
+  const io::StrictObject in(src, document, "", valid, "an object of observer parameters");
   ObserverParams params;
-  std::string valid;
-  for (const ParamSpec& spec : kParamSpecs)
-    valid += (valid.empty() ? "" : ", ") + std::string(spec.name);
-  for (const auto& [key, value] : document.items()) {
-    const ParamSpec* spec = nullptr;
-    for (const ParamSpec& s : kParamSpecs) {
-      if (key == s.name) spec = &s;
+  for (const ParamSpec& spec : kParamSpecs) {
+    const std::optional<double> v = in.Number(spec.name);  // finite
+    if (!v) continue;
+    if (!((spec.lo_open ? *v > spec.lo : *v >= spec.lo) && *v <= spec.hi)) {
+      in.FailAt(spec.name, FormatNumber(*v) + " is out of range; valid: " + RangeText(spec));
     }
-    if (spec == nullptr) {
-      throw Error(src + ": unknown observer parameter \"" + key + "\"; valid parameters: " + valid);
-    }
-    if (!value.is_number()) throw Error(src + ": " + key + ": expected a number");
-    const double v = value.get<double>();
-    const bool in_range =
-        std::isfinite(v) && (spec->lo_open ? v > spec->lo : v >= spec->lo) && v <= spec->hi;
-    if (!in_range) {
-      throw Error(src + ": " + key + ": " + FormatNumber(v) +
-                  " is out of range; valid: " + RangeText(*spec));
-    }
-    params.*(spec->member) = v;
+    params.*(spec.member) = *v;
   }
   if (params.non_pacinian_corner_hz >= params.pacinian_best_frequency_hz) {
-    throw Error(src + ": non_pacinian_corner_hz (" + FormatNumber(params.non_pacinian_corner_hz) +
-                ") must be below pacinian_best_frequency_hz (" +
-                FormatNumber(params.pacinian_best_frequency_hz) + ")");
+    in.FailAt("non_pacinian_corner_hz", FormatNumber(params.non_pacinian_corner_hz) +
+                                            " must be below pacinian_best_frequency_hz (" +
+                                            FormatNumber(params.pacinian_best_frequency_hz) + ")");
   }
   return params;
+}
+
+ObserverParams LoadObserverParams(const std::string& path) {
+  return ParseObserverParams(io::ReadJsonFile(path, "observer parameter file"), path);
 }
 
 double PacinianGain_dB(const ObserverParams& p, double frequency_hz) {

@@ -53,10 +53,14 @@ struct ObserverParams {
   nlohmann::json ToJson() const;
 };
 
-/// Reads observer parameters from a JSON object; absent fields keep their defaults. `source`
-/// names the input in errors. Throws rigidtouch::Error naming an unknown field (with the valid
-/// ones) or a value out of range.
+/// Reads observer parameters from a JSON object with the strict reader (io/strict_json.h); absent
+/// fields keep their defaults. `source` names the input in errors. Throws rigidtouch::Error naming
+/// an unknown field (with the valid ones), a wrong type, or a value out of range.
 ObserverParams ParseObserverParams(const nlohmann::json& document, std::string_view source);
+
+/// Reads and parses an observer parameter file; throws rigidtouch::Error naming the file if it
+/// cannot be read, is empty or is not JSON, and as ParseObserverParams.
+ObserverParams LoadObserverParams(const std::string& path);
 
 /// Number of axes of the perceptual space.
 inline constexpr int kPerceptDimensions = 4;

@@ -50,30 +50,27 @@ std::vector<Step> MakePlan(const Protocol& protocol, std::uint64_t seed) {
   for (std::size_t position = 0; position < test_order.size(); ++position) {
     const int t = test_order[position];
     const StudyTest& test = protocol.tests[t];
-    for (int c = 0; c < 2; ++c) {
+    // appends the next step of this test
+    auto add = [&](StepKind kind, int series, int condition, int taps) {
       Step step;
-      step.kind = StepKind::kFamiliarization;
+      step.kind = kind;
       step.index = static_cast<int>(plan.size());
       step.test = t;
       step.test_position = static_cast<int>(position);
-      step.condition = c;
-      step.taps = test.familiarization_taps;
+      step.series = series;
+      step.condition = condition;
+      step.taps = taps;
       plan.push_back(step);
+    };
+    for (int c = 0; c < 2; ++c) {
+      add(StepKind::kFamiliarization, /*series=*/-1, c, test.familiarization_taps);
     }
     // each test's series order has its own stream: reordering tests does not change it
     Rng rng(DeriveSeed(seed, {kSeriesOrderStream, static_cast<std::uint64_t>(t)}));
     const std::vector<int> conditions =
         SeriesConditions(test, protocol.randomization.series_order, rng);
     for (int s = 0; s < test.series; ++s) {
-      Step step;
-      step.kind = StepKind::kSeries;
-      step.index = static_cast<int>(plan.size());
-      step.test = t;
-      step.test_position = static_cast<int>(position);
-      step.series = s;
-      step.condition = conditions[s];
-      step.taps = test.taps_per_series;
-      plan.push_back(step);
+      add(StepKind::kSeries, s, conditions[s], test.taps_per_series);
     }
   }
   return plan;

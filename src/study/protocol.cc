@@ -2,144 +2,33 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <limits>
-#include <sstream>
 
+#include "io/config.h"
+#include "io/strict_json.h"
+#include "io/text.h"
+#include "render/limits.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::study {
 
 namespace {
 
+using io::FormatNumber;
+using io::IndexOf;
+using io::Join;
+using io::JsonSource;
+using io::Lower;
+using io::Quote;
+using io::StrictObject;
 using nlohmann::json;
 
 constexpr std::string_view kFormat = "rigidtouch-study-protocol";
 constexpr int kFormatVersion = 1;
-constexpr double kMaxCollisionWindow_s = 0.1;  // METHOD.md II.a: shorter than reaction time
 constexpr int kMaxTaps = 100;
 constexpr int kMaxSeries = 1000;
 constexpr int kMaxTests = 100;
 constexpr std::size_t kMaxKeyLength = 16;
-
-std::string Quote(std::string_view s) {
-  // built with append: GCC 12 reports a false -Wrestrict on "literal" + std::string
-  std::string out;
-  out.reserve(s.size() + 2);
-  out.push_back('"');
-  out.append(s);
-  out.push_back('"');
-  return out;
-}
-
-std::string FormatNumber(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", value);
-  return buffer;
-}
-
-std::string Join(const std::vector<std::string>& items) {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    if (i > 0) out += ", ";
-    out += items[i];
-  }
-  return out;
-}
-
-std::string Lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::string TypeName(const json& value) {
-  if (value.is_null()) return "null";
-  if (value.is_boolean()) return "a boolean";
-  if (value.is_number()) return "a number";
-  if (value.is_string()) return "a string";
-  if (value.is_array()) return "an array";
-  return "an object";
-}
-
-// every problem is reported as "<source>: <field path>: <what is wrong>"
-class Context {
- public:
-  explicit Context(std::string_view source) : source_(source) {}
-
-  [[noreturn]] void Fail(const std::string& path, const std::string& message) const {
-    const std::string where = path.empty() ? std::string() : path + ": ";
-    throw Error(source_ + ": " + where + message);
-  }
-
- private:
-  std::string source_;
-};
-
-// strict reader for one JSON object: unknown keys are errors that list the valid ones
-class ObjectReader {
- public:
-  ObjectReader(const Context& context, const json& value, std::string path,
-               const std::vector<std::string>& valid_keys, std::string_view what)
-      : context_(context), value_(value), path_(std::move(path)) {
-    if (!value.is_object()) {
-      context_.Fail(path_,
-                    "expected " + std::string(what) + " (a JSON object), got " + TypeName(value));
-    }
-    for (const auto& [key, unused] : value.items()) {
-      if (std::find(valid_keys.begin(), valid_keys.end(), key) == valid_keys.end()) {
-        context_.Fail(path_, "unknown field " + Quote(key) + "; valid fields: " + Join(valid_keys));
-      }
-    }
-  }
-
-  bool Has(const std::string& key) const { return value_.contains(key); }
-  const json& Get(const std::string& key) const { return value_.at(key); }
-  std::string Path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-
-  std::optional<std::string> String(const std::string& key) const {
-    if (!Has(key)) return std::nullopt;
-    const json& v = Get(key);
-    if (!v.is_string()) context_.Fail(Path(key), "expected a string, got " + TypeName(v));
-    return v.get<std::string>();
-  }
-
-  std::string RequiredString(const std::string& key) const {
-    auto s = String(key);
-    if (!s) context_.Fail(path_, "missing required field " + Quote(key));
-    if (s->empty()) context_.Fail(Path(key), "must not be empty");
-    return *s;
-  }
-
-  int Integer(const std::string& key, int fallback, int lo, int hi) const {
-    if (!Has(key)) return fallback;
-    const json& v = Get(key);
-    const std::string range = "valid: integers " + std::to_string(lo) + " to " + std::to_string(hi);
-    if (!v.is_number_integer()) {
-      context_.Fail(Path(key), "expected an integer, got " + v.dump() + "; " + range);
-    }
-    const auto i = v.get<std::int64_t>();
-    if (i < lo || i > hi)
-      context_.Fail(Path(key), std::to_string(i) + " is out of range; " + range);
-    return static_cast<int>(i);
-  }
-
-  std::optional<double> Number(const std::string& key) const {
-    if (!Has(key)) return std::nullopt;
-    const json& v = Get(key);
-    if (!v.is_number()) context_.Fail(Path(key), "expected a number, got " + TypeName(v));
-    const double d = v.get<double>();
-    if (!std::isfinite(d)) context_.Fail(Path(key), "must be finite");
-    return d;
-  }
-
- private:
-  const Context& context_;
-  const json& value_;
-  std::string path_;
-};
 
 const std::vector<std::string> kTopKeys = {
     "format",          "format_version",       "name",         "description",
@@ -149,16 +38,16 @@ const std::vector<std::string> kTestKeys = {"name",           "conditions",     
                                             "instructions",   "familiarization_taps", "series",
                                             "taps_per_series"};
 const std::vector<std::string> kRandomizationKeys = {"series_order", "test_order", "seed"};
+const std::vector<std::string> kSeriesOrders = {"balanced", "independent"};  // SeriesOrder
+const std::vector<std::string> kTestOrders = {"fixed", "shuffled"};          // TestOrder
 const std::vector<std::string> kAllConditionKeys = {
     "renderer",         "restitution", "t_collision_s", "frequency_hz",      "stiffness_N_per_m",
     "damping_Ns_per_m", "scene",       "device",        "approach_speed_mps"};
-const std::vector<std::string> kRendererNames = {"penalty", "impulse", "train"};
-
-std::vector<std::string> ConditionKeysFor(Renderer renderer) {
+std::vector<std::string> ConditionKeysFor(RendererKind renderer) {
   std::vector<std::string> keys = {"renderer", "stiffness_N_per_m", "damping_Ns_per_m", "scene",
                                    "device",   "approach_speed_mps"};
-  if (renderer != Renderer::kPenalty) keys.push_back("restitution");
-  if (renderer == Renderer::kTrain) {
+  if (renderer != RendererKind::kPenalty) keys.push_back("restitution");
+  if (renderer == RendererKind::kTrain) {
     keys.push_back("t_collision_s");
     keys.push_back("frequency_hz");
   }
@@ -175,7 +64,7 @@ bool IsCleanText(std::string_view s) {
                       [](char c) { return std::iscntrl(static_cast<unsigned char>(c)) != 0; });
 }
 
-Condition ParseCondition(const Context& ctx, const std::string& label, const json& value,
+Condition ParseCondition(const JsonSource& ctx, const std::string& label, const json& value,
                          const std::string& path) {
   Condition c;
   c.label = label;
@@ -186,27 +75,24 @@ Condition ParseCondition(const Context& ctx, const std::string& label, const jso
   }
   if (Lower(label) == "quit") ctx.Fail(path, "\"quit\" is reserved for stopping a session");
   if (!value.is_object()) {
-    ctx.Fail(path, "expected a renderer configuration (a JSON object), got " + TypeName(value));
+    ctx.Fail(path,
+             "expected a renderer configuration (a JSON object), got " + io::JsonTypeName(value));
   }
+  const std::vector<std::string>& renderers = io::RendererNames();
   if (!value.contains("renderer")) {
-    ctx.Fail(path, "missing required field \"renderer\"; valid renderers: " + Join(kRendererNames));
+    ctx.Fail(path, "missing required field \"renderer\"; valid renderers: " + Join(renderers));
   }
   const json& r = value.at("renderer");
   if (!r.is_string()) {
-    ctx.Fail(path + ".renderer", "expected a string, got " + TypeName(r) +
-                                     "; valid renderers: " + Join(kRendererNames));
+    ctx.Fail(path + ".renderer", "expected a string, got " + io::JsonTypeName(r) +
+                                     "; valid renderers: " + Join(renderers));
   }
   const std::string name = r.get<std::string>();
-  if (name == "penalty") {
-    c.renderer = Renderer::kPenalty;
-  } else if (name == "impulse") {
-    c.renderer = Renderer::kImpulse;
-  } else if (name == "train") {
-    c.renderer = Renderer::kTrain;
-  } else {
+  if (std::find(renderers.begin(), renderers.end(), name) == renderers.end()) {
     ctx.Fail(path + ".renderer",
-             "unknown renderer " + Quote(name) + "; valid renderers: " + Join(kRendererNames));
+             "unknown renderer " + Quote(name) + "; valid renderers: " + Join(renderers));
   }
+  c.renderer = io::ParseRenderer(name);
 
   // parameters of another renderer are errors rather than silently ignored settings
   const std::vector<std::string> valid = ConditionKeysFor(c.renderer);
@@ -218,56 +104,58 @@ Condition ParseCondition(const Context& ctx, const std::string& label, const jso
                           : "unknown parameter " + Quote(key)) +
                        "; valid parameters for renderer " + name + ": " + Join(valid));
   }
-  const ObjectReader in(ctx, value, path, valid, "a renderer configuration");
+  const StrictObject in(ctx, value, path, valid, "a renderer configuration");
 
   if (auto e = in.Number("restitution")) {
-    if (c.renderer == Renderer::kTrain && *e != 0.0) {
-      ctx.Fail(in.Path("restitution"), FormatNumber(*e) +
-                                           " is not allowed; a train is only consistent with "
-                                           "perfectly plastic collisions (Eq. 8): valid: 0");
+    if (c.renderer == RendererKind::kTrain && *e != render::kTrainRestitution) {
+      in.FailAt("restitution", FormatNumber(*e) +
+                                   " is not allowed; a train is only consistent with perfectly "
+                                   "plastic collisions (Eq. 8): valid: " +
+                                   FormatNumber(render::kTrainRestitution));
     }
-    if (*e < 0.0 || *e > 1.0) {
-      ctx.Fail(in.Path("restitution"),
-               FormatNumber(*e) + " is out of range; valid: 0 to 1 (Eq. 4)");
+    if (*e < render::kMinRestitution || *e > render::kMaxRestitution) {
+      in.FailAt("restitution", FormatNumber(*e) + " is out of range; valid: " +
+                                   FormatNumber(render::kMinRestitution) + " to " +
+                                   FormatNumber(render::kMaxRestitution) + " (Eq. 4)");
     }
     c.restitution = *e;
   }
-  if (c.renderer == Renderer::kTrain) {
-    c.t_collision_s = in.Number("t_collision_s").value_or(kMaxCollisionWindow_s);
-    if (!(c.t_collision_s > 0.0 && c.t_collision_s <= kMaxCollisionWindow_s)) {
-      ctx.Fail(in.Path("t_collision_s"), FormatNumber(c.t_collision_s) +
-                                             " s is out of range; valid: > 0 and <= 0.1 s (II.a)");
+  if (c.renderer == RendererKind::kTrain) {
+    c.t_collision_s = in.Number("t_collision_s").value_or(render::kMaxCollisionWindow_s);
+    if (!(c.t_collision_s > 0.0 && c.t_collision_s <= render::kMaxCollisionWindow_s)) {
+      in.FailAt("t_collision_s", FormatNumber(c.t_collision_s) +
+                                     " s is out of range; valid: > 0 and <= " +
+                                     FormatNumber(render::kMaxCollisionWindow_s) + " s (II.a)");
     }
     auto f = in.Number("frequency_hz");
     if (!f) ctx.Fail(path, "missing required field \"frequency_hz\" for renderer train");
     c.frequency_hz = *f;
     const double f_min_hz = 1.0 / c.t_collision_s;
-    // a relative tolerance so that e.g. t_c = 0.1, f = 10 is accepted despite rounding
-    if (!(c.frequency_hz > 0.0) || c.frequency_hz * c.t_collision_s < 1.0 - 1e-9) {
-      ctx.Fail(in.Path("frequency_hz"),
-               FormatNumber(c.frequency_hz) +
-                   " Hz is out of range; valid: >= 1 / t_collision_s = " + FormatNumber(f_min_hz) +
-                   " Hz (II.b; the upper bound 1/h is checked by the "
-                   "engine)");
+    if (!render::TrainFrequencyFitsWindow(c.frequency_hz, c.t_collision_s)) {
+      in.FailAt("frequency_hz",
+                FormatNumber(c.frequency_hz) +
+                    " Hz is out of range; valid: >= 1 / t_collision_s = " + FormatNumber(f_min_hz) +
+                    " Hz (II.b; the upper bound 1/h is checked by the "
+                    "engine)");
     }
   }
   if (auto k = in.Number("stiffness_N_per_m")) {
-    if (!(*k > 0.0)) ctx.Fail(in.Path("stiffness_N_per_m"), FormatNumber(*k) + " N/m; valid: > 0");
+    if (!(*k > 0.0)) in.FailAt("stiffness_N_per_m", FormatNumber(*k) + " N/m; valid: > 0");
     c.stiffness_N_per_m = k;
   }
   if (auto b = in.Number("damping_Ns_per_m")) {
-    if (*b < 0.0) ctx.Fail(in.Path("damping_Ns_per_m"), FormatNumber(*b) + " Ns/m; valid: >= 0");
+    if (*b < 0.0) in.FailAt("damping_Ns_per_m", FormatNumber(*b) + " Ns/m; valid: >= 0");
     c.damping_Ns_per_m = b;
   }
   if (auto v = in.Number("approach_speed_mps")) {
     if (!(*v > 0.0)) {
-      ctx.Fail(in.Path("approach_speed_mps"), FormatNumber(*v) + " m/s; valid: > 0");
+      in.FailAt("approach_speed_mps", FormatNumber(*v) + " m/s; valid: > 0");
     }
     c.approach_speed_mps = v;
   }
   for (const char* key : {"scene", "device"}) {
     if (auto s = in.String(key)) {
-      if (s->empty()) ctx.Fail(in.Path(key), "must not be empty (omit it for the default)");
+      if (s->empty()) in.FailAt(key, "must not be empty (omit it for the default)");
       (std::string(key) == "scene" ? c.scene : c.device) = *s;
     }
   }
@@ -281,12 +169,12 @@ int FindCondition(const std::vector<Condition>& conditions, const std::string& l
   return -1;
 }
 
-StudyTest ParseTest(const Context& ctx, const json& value, const std::string& path,
+StudyTest ParseTest(const JsonSource& ctx, const json& value, const std::string& path,
                     const std::vector<Condition>& conditions, const StudyTest& defaults) {
-  const ObjectReader in(ctx, value, path, kTestKeys, "a test");
+  const StrictObject in(ctx, value, path, kTestKeys, "a test");
   StudyTest t = defaults;
   t.name = in.RequiredString("name");
-  if (!IsCleanText(t.name)) ctx.Fail(in.Path("name"), "must not start or end with spaces");
+  if (!IsCleanText(t.name)) in.FailAt("name", "must not start or end with spaces");
   t.instructions = in.String("instructions").value_or("");
   t.familiarization_taps =
       in.Integer("familiarization_taps", defaults.familiarization_taps, 1, kMaxTaps);
@@ -300,8 +188,7 @@ StudyTest ParseTest(const Context& ctx, const json& value, const std::string& pa
   }
   const json& cs = in.Get("conditions");
   if (!cs.is_array() || cs.size() != 2) {
-    ctx.Fail(in.Path("conditions"),
-             "expected an array of exactly two condition labels, got " + cs.dump());
+    in.FailAt("conditions", "expected an array of exactly two condition labels, got " + cs.dump());
   }
   for (int i = 0; i < 2; ++i) {
     const std::string item_path = in.Path("conditions") + "[" + std::to_string(i) + "]";
@@ -314,16 +201,16 @@ StudyTest ParseTest(const Context& ctx, const json& value, const std::string& pa
     t.conditions[i] = index;
   }
   if (t.conditions[0] == t.conditions[1]) {
-    ctx.Fail(in.Path("conditions"),
-             "the two conditions must differ (to test identical walls, "
-             "define two labels with the same configuration)");
+    in.FailAt("conditions",
+              "the two conditions must differ (to test identical walls, "
+              "define two labels with the same configuration)");
   }
 
   t.keys = {"1", "2"};
   if (in.Has("keys")) {
     const json& ks = in.Get("keys");
     if (!ks.is_array() || ks.size() != 2) {
-      ctx.Fail(in.Path("keys"), "expected an array of exactly two answer keys, got " + ks.dump());
+      in.FailAt("keys", "expected an array of exactly two answer keys, got " + ks.dump());
     }
     for (int i = 0; i < 2; ++i) {
       if (!ks[i].is_string()) {
@@ -351,30 +238,18 @@ StudyTest ParseTest(const Context& ctx, const json& value, const std::string& pa
     }
   }
   if (Lower(t.keys[0]) == Lower(t.keys[1])) {
-    ctx.Fail(in.Path("keys"), "the two keys must differ (compared without case)");
+    in.FailAt("keys", "the two keys must differ (compared without case)");
   }
   return t;
 }
 
 }  // namespace
 
-std::string_view RendererName(Renderer renderer) {
-  switch (renderer) {
-    case Renderer::kPenalty:
-      return "penalty";
-    case Renderer::kImpulse:
-      return "impulse";
-    case Renderer::kTrain:
-      return "train";
-  }
-  return "penalty";
-}
-
 nlohmann::json Condition::ToJson() const {
   json j = json::object();
-  j["renderer"] = std::string(RendererName(renderer));
-  if (renderer != Renderer::kPenalty) j["restitution"] = restitution;
-  if (renderer == Renderer::kTrain) {
+  j["renderer"] = io::RendererName(renderer);
+  if (renderer != RendererKind::kPenalty) j["restitution"] = restitution;
+  if (renderer == RendererKind::kTrain) {
     j["t_collision_s"] = t_collision_s;
     j["frequency_hz"] = frequency_hz;
   }
@@ -397,9 +272,8 @@ nlohmann::json Protocol::ToJson() const {
   for (const auto& c : conditions) cs[c.label] = c.ToJson();
   j["conditions"] = cs;
   json r = json::object();
-  r["series_order"] =
-      randomization.series_order == SeriesOrder::kBalanced ? "balanced" : "independent";
-  r["test_order"] = randomization.test_order == TestOrder::kFixed ? "fixed" : "shuffled";
+  r["series_order"] = kSeriesOrders[static_cast<int>(randomization.series_order)];
+  r["test_order"] = kTestOrders[static_cast<int>(randomization.test_order)];
   if (randomization.seed) r["seed"] = *randomization.seed;
   j["randomization"] = r;
   json ts = json::array();
@@ -419,8 +293,8 @@ nlohmann::json Protocol::ToJson() const {
 }
 
 Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) {
-  const Context ctx(source);
-  const ObjectReader in(ctx, document, "", kTopKeys, "a protocol");
+  const JsonSource ctx(source);
+  const StrictObject in(ctx, document, "", kTopKeys, "a protocol");
   Protocol p;
   if (auto format = in.String("format"); format && *format != kFormat) {
     ctx.Fail("format", Quote(*format) + " is not a study protocol; valid: " + Quote(kFormat));
@@ -436,35 +310,15 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
   defaults.taps_per_series = in.Integer("taps_per_series", 3, 1, kMaxTaps);
 
   if (in.Has("randomization")) {
-    const ObjectReader r(ctx, in.Get("randomization"), "randomization", kRandomizationKeys,
-                         "randomization settings");
-    if (auto order = r.String("series_order")) {
-      if (*order == "balanced") {
-        p.randomization.series_order = SeriesOrder::kBalanced;
-      } else if (*order == "independent") {
-        p.randomization.series_order = SeriesOrder::kIndependent;
-      } else {
-        ctx.Fail(r.Path("series_order"),
-                 "unknown order " + Quote(*order) + "; valid: \"balanced\", \"independent\"");
-      }
+    const StrictObject r = in.Object("randomization", kRandomizationKeys, "randomization settings");
+    // the names in enum order: the index of the name is the enumerator
+    if (auto order = r.OneOf("series_order", kSeriesOrders, "series order")) {
+      p.randomization.series_order = static_cast<SeriesOrder>(IndexOf(kSeriesOrders, *order));
     }
-    if (auto order = r.String("test_order")) {
-      if (*order == "fixed") {
-        p.randomization.test_order = TestOrder::kFixed;
-      } else if (*order == "shuffled") {
-        p.randomization.test_order = TestOrder::kShuffled;
-      } else {
-        ctx.Fail(r.Path("test_order"),
-                 "unknown order " + Quote(*order) + "; valid: \"fixed\", \"shuffled\"");
-      }
+    if (auto order = r.OneOf("test_order", kTestOrders, "test order")) {
+      p.randomization.test_order = static_cast<TestOrder>(IndexOf(kTestOrders, *order));
     }
-    if (r.Has("seed")) {
-      const json& s = r.Get("seed");
-      if (!s.is_number_unsigned()) {
-        ctx.Fail(r.Path("seed"), "expected a non-negative integer below 2^64, got " + s.dump());
-      }
-      p.randomization.seed = s.get<std::uint64_t>();
-    }
+    p.randomization.seed = r.Unsigned("seed");
   }
 
   if (!in.Has("conditions")) ctx.Fail("", "missing required field \"conditions\"");
@@ -505,18 +359,7 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
 }
 
 Protocol LoadProtocol(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw Error(path + ": cannot open the protocol file");
-  std::stringstream buffer;
-  buffer << file.rdbuf();
-  if (file.bad()) throw Error(path + ": cannot read the protocol file");
-  json document;
-  try {
-    document = json::parse(buffer.str());
-  } catch (const json::parse_error& e) {
-    throw Error(path + ": not valid JSON (" + e.what() + ")");
-  }
-  return ParseProtocol(document, path);
+  return ParseProtocol(io::ReadJsonFile(path, "protocol file"), path);
 }
 
 std::uint64_t Fnv1a64(std::string_view bytes) {

@@ -13,23 +13,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rigidtouch/model.h"
+
 namespace rigidtouch::study {
-
-/// How the wall of one condition is rendered (shared METHOD.md).
-enum class Renderer {
-  kPenalty,  ///< penalty feedback only, no impulses
-  kImpulse,  ///< one collision impulse at contact onset, Eq. 5 (the [IAP] model)
-  kTrain,    ///< a train of impulses over the collision window, Eq. 6-9
-};
-
-/// The protocol spelling of a renderer: "penalty", "impulse" or "train".
-std::string_view RendererName(Renderer renderer);
 
 /// One rendered wall: a renderer configuration and the label participants know it by. Optional
 /// fields left empty mean "the engine's default" and are omitted from the canonical JSON.
 struct Condition {
-  std::string label;                         ///< e.g. "wall 1"; unique within the protocol
-  Renderer renderer = Renderer::kPenalty;    ///< rendering method
+  std::string label;                               ///< e.g. "wall 1"; unique within the protocol
+  RendererKind renderer = RendererKind::kPenalty;  ///< rendering method (io::RendererName)
   double restitution = 0.0;                  ///< e in Eq. 4/5; impulse: [0, 1], train: 0 (Eq. 8)
   double t_collision_s = 0.0;                ///< train only: window t_c in (0, 0.1] s (II.a)
   double frequency_hz = 0.0;                 ///< train only: f >= 1 / t_c (II.b, Eq. 7)

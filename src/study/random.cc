@@ -1,7 +1,6 @@
 #include "study/random.h"
 
-#include <cmath>
-#include <numbers>
+#include "io/normal_deviate.h"
 
 namespace rigidtouch::study {
 
@@ -50,7 +49,7 @@ bool Rng::Bernoulli(double p) {
 double Rng::Normal() {
   const double u1 = 1.0 - Uniform();  // (0, 1]: log is finite
   const double u2 = Uniform();
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  return io::BoxMuller(u1, u2);
 }
 
 }  // namespace rigidtouch::study

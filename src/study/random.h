@@ -29,8 +29,8 @@ class Rng {
   std::uint64_t Below(std::uint64_t n);
   /// True with probability p (p <= 0 never, p >= 1 always).
   bool Bernoulli(double p);
-  /// Standard normal deviate (Box-Muller, two uniforms per call, no cached second value so that
-  /// the sequence does not depend on call history).
+  /// Standard normal deviate (io::BoxMuller of 1 - Uniform() then Uniform(): two uniforms per
+  /// call, no cached second value so that the sequence does not depend on call history).
   double Normal();
 
  private:

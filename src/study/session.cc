@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "io/text.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::study {
@@ -18,27 +19,9 @@ namespace {
 
 using nlohmann::json;
 
-std::string Lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::string_view Trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-  return s;
-}
-
-std::string Quote(std::string_view s) {
-  // built with append: GCC 12 reports a false -Wrestrict on "literal" + std::string
-  std::string out;
-  out.reserve(s.size() + 2);
-  out.push_back('"');
-  out.append(s);
-  out.push_back('"');
-  return out;
-}
+using io::Lower;
+using io::Quote;
+using io::Trim;
 
 const Condition& ConditionOf(const Protocol& protocol, const Step& step) {
   return protocol.conditions[protocol.tests[step.test].conditions[step.condition]];

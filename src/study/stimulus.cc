@@ -2,12 +2,14 @@
 
 #include <ostream>
 
+#include "io/config.h"
+
 namespace rigidtouch::study {
 
 void TextPresenter::Present(const Condition& condition, int taps) {
   out_ << "  [text presenter] rendering " << condition.label << " ("
-       << RendererName(condition.renderer) << ") for " << taps << " tap" << (taps == 1 ? "" : "s")
-       << "\n";
+       << io::RendererName(condition.renderer) << ") for " << taps << " tap"
+       << (taps == 1 ? "" : "s") << "\n";
   out_.flush();
 }
 

@@ -16,19 +16,9 @@ namespace {
 
 RenderParams ToRenderParams(const Condition& c) {
   RenderParams r;
-  switch (c.renderer) {
-    case Renderer::kPenalty:
-      r.renderer = RendererKind::kPenalty;
-      break;
-    case Renderer::kImpulse:
-      r.renderer = RendererKind::kImpulse;
-      break;
-    case Renderer::kTrain:
-      r.renderer = RendererKind::kTrain;
-      break;
-  }
+  r.renderer = c.renderer;
   r.restitution = c.restitution;
-  if (c.renderer == Renderer::kTrain) {
+  if (c.renderer == RendererKind::kTrain) {
     r.t_collision_s = c.t_collision_s;
     r.frequency_hz = c.frequency_hz;
   }

@@ -12,6 +12,7 @@
 #include "study/plan.h"
 #include "study/random.h"
 #include "study/statistics.h"
+#include "study/test_files.h"
 #include "study/toy_stimulus.h"
 
 namespace rigidtouch::study {
@@ -23,7 +24,7 @@ using testing::ToyStimulusSource;
 Condition Penalty(double stiffness_N_per_m) {
   Condition c;
   c.label = "penalty";
-  c.renderer = Renderer::kPenalty;
+  c.renderer = RendererKind::kPenalty;
   c.stiffness_N_per_m = stiffness_N_per_m;
   return c;
 }
@@ -31,7 +32,7 @@ Condition Penalty(double stiffness_N_per_m) {
 Condition Impulse(double restitution) {
   Condition c;
   c.label = "impulse";
-  c.renderer = Renderer::kImpulse;
+  c.renderer = RendererKind::kImpulse;
   c.restitution = restitution;
   return c;
 }
@@ -39,7 +40,7 @@ Condition Impulse(double restitution) {
 Condition Train(double frequency_hz) {
   Condition c;
   c.label = "train";
-  c.renderer = Renderer::kTrain;
+  c.renderer = RendererKind::kTrain;
   c.t_collision_s = 0.1;
   c.frequency_hz = frequency_hz;
   return c;
@@ -312,7 +313,7 @@ TEST(ObserverTest, ParametersParseWithNamedErrors) {
     FAIL();
   } catch (const Error& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("unknown observer parameter \"lapse\""), std::string::npos) << m;
+    EXPECT_NE(m.find("o.json: unknown field \"lapse\"; valid fields: "), std::string::npos) << m;
     EXPECT_NE(m.find("lapse_rate"), std::string::npos) << m;
   }
   try {
@@ -323,8 +324,33 @@ TEST(ObserverTest, ParametersParseWithNamedErrors) {
               std::string::npos)
         << e.what();
   }
+  try {
+    ParseObserverParams(json{{"lapse_rate", "high"}}, "o.json");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("o.json: lapse_rate: expected a number, got a string"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_THROW(ParseObserverParams(json{{"intensity_jnd_dB", 0}}, "o.json"), Error);
   EXPECT_THROW(ParseObserverParams(json{{"non_pacinian_corner_hz", 300}}, "o.json"), Error);
+}
+
+TEST(ObserverTest, ParameterFilesAreReadStrictly) {
+  testing::ScratchDir dir;
+  const std::string path = dir.File("observer.json");
+  testing::WriteFile(path, R"({"lapse_rate": 0.1})");
+  EXPECT_EQ(LoadObserverParams(path).lapse_rate, 0.1);
+  testing::WriteFile(path, R"({"lapse_rate": 1e400})");
+  try {
+    LoadObserverParams(path);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("observer.json: lapse_rate: 1e400 is not a finite number"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(LoadObserverParams(dir.File("missing.json")), Error);
 }
 
 }  // namespace

@@ -4,7 +4,9 @@
 
 #include <string>
 
+#include "render/limits.h"
 #include "rigidtouch/types.h"
+#include "study/test_files.h"
 
 namespace rigidtouch::study {
 namespace {
@@ -44,12 +46,12 @@ TEST(ProtocolTest, ShippedWallsStudyIsTheMethodsStudy) {
   const Condition& wall1 = p.conditions[1];
   const Condition& wall2 = p.conditions[2];
   EXPECT_EQ(wall0.label, "wall 0");
-  EXPECT_EQ(wall0.renderer, Renderer::kImpulse);
+  EXPECT_EQ(wall0.renderer, RendererKind::kImpulse);
   EXPECT_EQ(wall0.restitution, 0.0);
-  EXPECT_EQ(wall1.renderer, Renderer::kTrain);
+  EXPECT_EQ(wall1.renderer, RendererKind::kTrain);
   EXPECT_EQ(wall1.frequency_hz, 250.0);
   EXPECT_EQ(wall1.t_collision_s, 0.1);
-  EXPECT_EQ(wall2.renderer, Renderer::kTrain);
+  EXPECT_EQ(wall2.renderer, RendererKind::kTrain);
   EXPECT_EQ(wall2.frequency_hz, 50.0);
   EXPECT_EQ(wall2.t_collision_s, 0.1);
   const StudyTest& t1 = p.tests[0];
@@ -219,7 +221,9 @@ TEST(ProtocolTest, MalformedStructureNamesTheField) {
     d["randomization"] = {{"series_order", "random"}};
     const std::string e = ErrorOf(d);
     EXPECT_NE(e.find("randomization.series_order"), std::string::npos) << e;
-    EXPECT_NE(e.find("\"balanced\", \"independent\""), std::string::npos) << e;
+    EXPECT_NE(e.find("unknown series order \"random\"; valid series orders: balanced, independent"),
+              std::string::npos)
+        << e;
   }
   {
     json d = Minimal();
@@ -256,6 +260,45 @@ TEST(ProtocolTest, UnreadableOrNonJsonFileNamesTheFile) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("list.json: expected a protocol"), std::string::npos);
   }
+}
+
+TEST(ProtocolTest, FileProblemsNameTheFileAndTheField) {
+  testing::ScratchDir dir;
+  const std::string path = dir.File("p.json");
+  auto error = [&](const std::string& text) {
+    testing::WriteFile(path, text);
+    try {
+      LoadProtocol(path);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::string e = error("");
+  EXPECT_NE(e.find("p.json: the protocol file is empty"), std::string::npos) << e;
+  e = error(R"({"name": "x", "conditions": {"a": {"renderer": "impulse", "restitution": 1e999}}})");
+  EXPECT_NE(e.find("p.json: conditions.a.restitution: 1e999 is not a finite number"),
+            std::string::npos)
+      << e;
+  e = error(R"({"name": "x", "name": "y"})");
+  EXPECT_NE(e.find("p.json: name: the field is given twice"), std::string::npos) << e;
+  e = error("{\n\"name\": x}");
+  EXPECT_NE(e.find("p.json: not valid JSON at line 2, column 9 (reading field name)"),
+            std::string::npos)
+      << e;
+}
+
+TEST(ProtocolTest, RenderLimitsAreTheEngines) {
+  // the protocol accepts exactly the window the engine accepts
+  json d = Minimal();
+  d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s;
+  EXPECT_EQ(ErrorOf(d), "");
+  d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s * 1.001;
+  EXPECT_NE(ErrorOf(d).find("valid: > 0 and <= 0.1 s"), std::string::npos) << ErrorOf(d);
+  d = Minimal();
+  d["conditions"]["b"]["t_collision_s"] = 0.1;
+  d["conditions"]["b"]["frequency_hz"] = 10;  // f t_c = 1 up to rounding: one impulse
+  EXPECT_EQ(ErrorOf(d), "");
 }
 
 }  // namespace

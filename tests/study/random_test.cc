@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <set>
 #include <vector>
 
@@ -24,6 +25,18 @@ TEST(RandomTest, DerivedSeedsDependOnEveryPartAndItsOrder) {
   EXPECT_NE(DeriveSeed(7, {1, 2}), DeriveSeed(7, {2, 1}));
   EXPECT_NE(DeriveSeed(7, {1}), DeriveSeed(8, {1}));
   EXPECT_NE(DeriveSeed(7, {}), DeriveSeed(7, {0}));
+}
+
+// the stream of Normal is part of every seeded result: 1 - Uniform() then Uniform(), Box-Muller
+TEST(RandomTest, NormalIsBoxMullerOfOneMinusUniformThenUniform) {
+  Rng normal(123);
+  Rng uniform(123);
+  for (int i = 0; i < 100; ++i) {
+    const double u1 = 1.0 - uniform.Uniform();
+    const double u2 = uniform.Uniform();
+    ASSERT_EQ(normal.Normal(),
+              std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2));
+  }
 }
 
 TEST(RandomTest, UniformAndNormalMoments) {

@@ -37,12 +37,12 @@ class ToyStimulusSource : public StimulusSource {
         c.stiffness_N_per_m.value_or(1000.0) * v * 0.01 + c.damping_Ns_per_m.value_or(0.0) * v;
     double pulse_N = 0.0;
     int pulses = 0;
-    if (c.renderer == Renderer::kImpulse) {
+    if (c.renderer == RendererKind::kImpulse) {
       pulse_N = (1.0 + c.restitution) * kMass_kg * v / kStep_s;
       pulses = 1;
       p.band_energy_fraction = {40.0 / 500.0, 60.0 / 500.0, 300.0 / 500.0, 100.0 / 500.0};
       p.dominant_frequency_hz = 0.0;
-    } else if (c.renderer == Renderer::kTrain) {
+    } else if (c.renderer == RendererKind::kTrain) {
       pulses = std::max(1, static_cast<int>(std::lround(c.frequency_hz * c.t_collision_s)));
       pulse_N = kMass_kg * v / (pulses * kStep_s);
       const double f = c.frequency_hz;

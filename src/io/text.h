@@ -1,0 +1,62 @@
+// Small text helpers for messages and answers, shared by the file readers and the study code.
+#pragma once
+
+#include <cctype>
+#include <cstdio>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace rigidtouch::io {
+
+/// `s` in double quotes, as error messages show names and values.
+inline std::string Quote(std::string_view s) {
+  // built with append: GCC 12 reports a false -Wrestrict on "literal" + std::string
+  std::string out;
+  out.reserve(s.size() + 2);
+  out.push_back('"');
+  out.append(s);
+  out.push_back('"');
+  return out;
+}
+
+/// ASCII lower case (answers and labels are compared without case).
+inline std::string Lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+/// `s` without leading and trailing white space.
+inline std::string_view Trim(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+  return s;
+}
+
+/// The items separated by ", ".
+inline std::string Join(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (i > 0) out += ", ";
+    out += items[i];
+  }
+  return out;
+}
+
+/// The index of `name` in `names`, or -1 (tables of names in enum order map names to enums).
+inline int IndexOf(const std::vector<std::string>& names, std::string_view name) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+/// A number as messages print it: six significant digits (%.6g).
+inline std::string FormatNumber(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", value);
+  return buffer;
+}
+
+}  // namespace rigidtouch::io

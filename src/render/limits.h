@@ -1,0 +1,32 @@
+// The collision-rendering method's limits, in one place: Configure enforces them on a model and
+// the study protocol checks its walls against them, so a protocol cannot accept a wall the engine
+// would refuse (or the other way round).
+#pragma once
+
+namespace rigidtouch::render {
+
+/// Longest collision-rendering window t_c: shorter than human reaction time (II.a).
+inline constexpr double kMaxCollisionWindow_s = 0.1;
+
+/// Restitution e lies in [0, 1] (Eq. 4).
+inline constexpr double kMinRestitution = 0.0;
+inline constexpr double kMaxRestitution = 1.0;
+
+/// The only restitution a train allows: perfectly plastic collisions (Eq. 8).
+inline constexpr double kTrainRestitution = 0.0;
+
+/// Relative tolerance of f >= 1 / t_c (at least one impulse in the window, Eq. 6-7), so that e.g.
+/// t_c = 0.1 s, f = 10 Hz is accepted despite rounding.
+inline constexpr double kTrainFrequencyTolerance = 1e-9;
+
+/// Whether a train of `frequency_hz` holds at least one impulse in a window of `t_collision_s`.
+/// The upper bound f <= 1/h depends on the time step and is checked with the schedule.
+constexpr bool TrainFrequencyFitsWindow(double frequency_hz, double t_collision_s) {
+  return frequency_hz > 0.0 && frequency_hz * t_collision_s >= 1.0 - kTrainFrequencyTolerance;
+}
+
+/// Time step h in [kMinTimestep_s, kMaxTimestep_s].
+inline constexpr double kMinTimestep_s = 1e-6;
+inline constexpr double kMaxTimestep_s = 0.1;
+
+}  // namespace rigidtouch::render

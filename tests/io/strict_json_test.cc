@@ -1,0 +1,157 @@
+#include "io/strict_json.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include "io/text.h"
+#include "rigidtouch/types.h"
+#include "test_util.h"
+
+namespace rigidtouch::io {
+namespace {
+
+using nlohmann::json;
+
+// the message of the Error `f` throws, or "" if it throws none
+template <typename F>
+std::string ErrorOf(F f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const JsonSource kSource("s.json");
+
+json Parse(const std::string& text) {
+  return ParseJsonText(text, kSource);
+}
+
+TEST(StrictJsonTest, ParsesValidText) {
+  const json j = Parse(R"({"a": [1, {"b": true}], "c": "x"})");
+  EXPECT_EQ(j["a"][1]["b"], true);
+  EXPECT_EQ(j["c"], "x");
+}
+
+TEST(StrictJsonTest, SyntaxErrorsGiveLineColumnAndField) {
+  const std::string line2 = ErrorOf([] { Parse("{\"a\": 1,\n \"b\": tru}"); });
+  EXPECT_NE(line2.find("s.json: not valid JSON at line 2, column 10 (reading field b): "),
+            std::string::npos)
+      << line2;
+  const std::string e = ErrorOf([] { Parse(R"({"tests": [{"name": "x"}, {"name": nan}]})"); });
+  EXPECT_NE(e.find("(reading field tests[1].name)"), std::string::npos) << e;
+  EXPECT_NE(e.find("invalid literal"), std::string::npos) << e;
+  // no "[json.exception...]" noise in the message
+  EXPECT_EQ(e.find("json.exception"), std::string::npos) << e;
+}
+
+TEST(StrictJsonTest, OverflowingNumbersNameTheField) {
+  EXPECT_EQ(ErrorOf([] { Parse(R"({"a": {"b": [0, 1e309]}})"); }),
+            "s.json: a.b[1]: 1e309 is not a finite number");
+  EXPECT_EQ(ErrorOf([] { Parse("-2e308"); }), "s.json: -2e308 is not a finite number");
+}
+
+TEST(StrictJsonTest, DuplicateFieldsAreErrors) {
+  EXPECT_EQ(ErrorOf([] { Parse(R"({"a": {"b": 1, "c": 2, "b": 3}})"); }),
+            "s.json: a.b: the field is given twice; give it once");
+  // the same name in different objects is fine
+  EXPECT_EQ(ErrorOf([] { Parse(R"([{"b": 1}, {"b": 2}])"); }), "");
+}
+
+TEST(StrictJsonTest, ReadJsonFileNamesTheFileAndTheProblem) {
+  EXPECT_EQ(ErrorOf([] { ReadJsonFile("missing.json", "widget file"); }),
+            "missing.json: cannot open the widget file");
+  const std::string empty = test::WriteTempFile("empty.json", "  \n");
+  EXPECT_EQ(ErrorOf([&] { ReadJsonFile(empty, "widget file"); }),
+            empty + ": the widget file is empty");
+  const std::string dir = test::TempDir().string();
+  EXPECT_EQ(ErrorOf([&] { ReadJsonFile(dir, "widget file"); }),
+            dir + ": is a directory, not a widget file");
+  const std::string bad = test::WriteTempFile("bad.json", "{\"x\": 1e999}");
+  EXPECT_EQ(ErrorOf([&] { ReadJsonFile(bad, "widget file"); }),
+            bad + ": x: 1e999 is not a finite number");
+  const std::string good = test::WriteTempFile("good.json", "{\"x\": 2}");
+  EXPECT_EQ(ReadJsonFile(good, "widget file")["x"], 2);
+}
+
+TEST(StrictJsonTest, UnknownFieldsListTheValidOnes) {
+  const json j = {{"a", 1}, {"z", 2}};
+  EXPECT_EQ(ErrorOf([&] {
+              StrictObject(kSource, j, "top", {"a", "b"});
+            }),
+            "s.json: top: unknown field \"z\"; valid fields: a, b");
+  EXPECT_EQ(ErrorOf([&] { StrictObject(kSource, j, "", {"a", "z"}); }), "");
+  EXPECT_EQ(ErrorOf([&] { StrictObject(kSource, json(3), "", {"a"}, "a widget"); }),
+            "s.json: expected a widget (a JSON object), got a number 3");
+}
+
+TEST(StrictJsonTest, GettersCheckTypesAndNameThePath) {
+  const json j = json::parse(R"({"n": 2.5, "s": "text", "b": false, "i": 7, "o": {"k": "v"},
+                                 "big": 18446744073709551615, "neg": -3})");
+  const StrictObject in(kSource, j, "sec", {"n", "s", "b", "i", "o", "big", "neg", "absent"});
+  EXPECT_EQ(in.Number("n"), 2.5);
+  EXPECT_EQ(in.Number("i"), 7.0);
+  EXPECT_EQ(in.Number("absent"), std::nullopt);
+  EXPECT_EQ(in.String("s"), "text");
+  EXPECT_EQ(in.Bool("b"), false);
+  EXPECT_EQ(in.Integer("i", 0, 1, 10), 7);
+  EXPECT_EQ(in.Integer("absent", 4, 1, 10), 4);
+  EXPECT_EQ(in.Unsigned("big"), 18446744073709551615ULL);
+  EXPECT_EQ(in.Path("n"), "sec.n");
+  EXPECT_EQ(in.Object("o", {"k"}, "an o").String("k"), "v");
+  double d = 1.0;
+  in.Read("absent", d);
+  EXPECT_EQ(d, 1.0);
+  in.Read("n", d);
+  EXPECT_EQ(d, 2.5);
+
+  EXPECT_EQ(ErrorOf([&] { in.Number("s"); }),
+            "s.json: sec.s: expected a number, got a string \"text\"");
+  EXPECT_EQ(ErrorOf([&] { in.String("n"); }), "s.json: sec.n: expected a string, got a number 2.5");
+  EXPECT_EQ(ErrorOf([&] { in.Bool("i"); }),
+            "s.json: sec.i: expected true or false, got a number 7");
+  EXPECT_EQ(ErrorOf([&] { in.Integer("n", 0, 1, 10); }),
+            "s.json: sec.n: expected an integer, got 2.5; valid: integers 1 to 10");
+  EXPECT_EQ(ErrorOf([&] { in.Integer("i", 0, 1, 5); }),
+            "s.json: sec.i: 7 is out of range; valid: integers 1 to 5");
+  EXPECT_EQ(ErrorOf([&] { in.Integer("big", 0, 1, 5); }),
+            "s.json: sec.big: 18446744073709551615 is out of range; valid: integers 1 to 5");
+  EXPECT_EQ(ErrorOf([&] { in.Unsigned("neg"); }),
+            "s.json: sec.neg: expected a non-negative integer below 2^64, got -3");
+  EXPECT_EQ(ErrorOf([&] { in.RequiredString("absent"); }),
+            "s.json: sec: missing required field \"absent\"");
+  EXPECT_EQ(ErrorOf([&] {
+              in.OneOf("s", {"a", "b"}, "mode");
+            }),
+            "s.json: sec.s: unknown mode \"text\"; valid modes: a, b");
+  EXPECT_EQ(ErrorOf([&] { in.Object("o", {"q"}, "an o"); }),
+            "s.json: sec.o: unknown field \"k\"; valid fields: q");
+}
+
+TEST(StrictJsonTest, NonFiniteNumbersBuiltInCodeAreRejected) {
+  const json j = {{"x", std::numeric_limits<double>::quiet_NaN()},
+                  {"y", std::numeric_limits<double>::infinity()}};
+  const StrictObject in(kSource, j, "", {"x", "y"});
+  EXPECT_EQ(ErrorOf([&] { in.Number("x"); }), "s.json: x: nan is not a finite number");
+  EXPECT_EQ(ErrorOf([&] { in.Number("y"); }), "s.json: y: inf is not a finite number");
+}
+
+TEST(TextTest, QuoteLowerTrimJoinFormat) {
+  EXPECT_EQ(Quote("a b"), "\"a b\"");
+  EXPECT_EQ(Lower("QuIt"), "quit");
+  EXPECT_EQ(Trim("  x y \t\n"), "x y");
+  EXPECT_EQ(Trim(" \t"), "");
+  EXPECT_EQ(Join({"a", "b", "c"}), "a, b, c");
+  EXPECT_EQ(Join({}), "");
+  EXPECT_EQ(FormatNumber(0.1), "0.1");
+  EXPECT_EQ(FormatNumber(1234567.0), "1.23457e+06");
+}
+
+}  // namespace
+}  // namespace rigidtouch::io
