@@ -86,26 +86,9 @@ BodyState StateFromFreejoint(const BodyModel& b, const mjtNum* qpos, const mjtNu
   return s;
 }
 
-}  // namespace
-
-Model LoadModel(const std::string& path, const LoadOptions& options) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw Error("scene file '" + path + "' does not exist or is not a regular file");
-  }
-  char error[1024] = "";
-  mjModel* raw = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
-  if (raw == nullptr) {
-    throw Error("scene file '" + path + "': MuJoCo could not compile it: " + error);
-  }
-  Model model;
-  model.collision = std::shared_ptr<mjModel>(raw, [](mjModel* m) { mj_deleteModel(m); });
-  const mjModel* m = raw;
-  model.source = path;
-  model.timestep_s = options.timestep_s.value_or(m->opt.timestep);
-  model.gravity_W = Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
-
-  // bodies: freejoint children of the world are dynamic; joint-less bodies are static
+// the free bodies: freejoint children of the world are dynamic; joint-less bodies are static.
+// Returns the index in model.bodies of every MuJoCo body (-1: static).
+std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& model) {
   std::vector<int> body_index(m->nbody, -1);
   for (int b = 1; b < m->nbody; ++b) {
     const std::string name = MjName(m, mjOBJ_BODY, b);
@@ -143,8 +126,34 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   if (model.bodies.empty()) {
     throw Error("scene file '" + path + "': no free bodies (<freejoint/>); nothing to simulate");
   }
+  return body_index;
+}
 
-  // geoms
+// geom g's pose relative to its owner: the body's principal frame, or the world for static geoms
+void GeomPose(const mjModel* m, const Model& model, int g, GeomModel& geom) {
+  const Vec3 pos(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]);
+  const Quat quat = MjQuat(m->geom_quat + 4 * g).normalized();
+  if (geom.body >= 0) {
+    const BodyModel& owner = model.bodies[geom.body];
+    geom.pos_B = owner.iquat_B.conjugate() * (pos - owner.ipos_B);
+    geom.quat_B = (owner.iquat_B.conjugate() * quat).normalized();
+    return;
+  }
+  // static: compose the chain of static bodies up to the world (MuJoCo's body_pos/quat)
+  Vec3 p_W = pos;
+  Quat q_W = quat;
+  for (int b = m->geom_bodyid[g]; b != 0; b = m->body_parentid[b]) {
+    const Vec3 bp(m->body_pos[3 * b], m->body_pos[3 * b + 1], m->body_pos[3 * b + 2]);
+    const Quat bq = MjQuat(m->body_quat + 4 * b).normalized();
+    p_W = bp + bq * p_W;
+    q_W = bq * q_W;
+  }
+  geom.pos_B = p_W;
+  geom.quat_B = q_W.normalized();
+}
+
+void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>& body_index,
+               Model& model) {
   for (int g = 0; g < m->ngeom; ++g) {
     GeomModel geom;
     geom.name = MjName(m, mjOBJ_GEOM, g);
@@ -164,48 +173,31 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
     geom.rbound_m = m->geom_rbound[g];
     geom.contype = m->geom_contype[g];
     geom.conaffinity = m->geom_conaffinity[g];
-    // pose relative to the owner: the body's principal frame, or the world for static geoms
-    const Vec3 pos(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]);
-    const Quat quat = MjQuat(m->geom_quat + 4 * g).normalized();
-    if (geom.body >= 0) {
-      const BodyModel& owner = model.bodies[geom.body];
-      geom.pos_B = owner.iquat_B.conjugate() * (pos - owner.ipos_B);
-      geom.quat_B = (owner.iquat_B.conjugate() * quat).normalized();
-    } else {
-      // static: compose the chain of static bodies up to the world (MuJoCo's body_pos/quat)
-      Vec3 p_W = pos;
-      Quat q_W = quat;
-      for (int b = m->geom_bodyid[g]; b != 0; b = m->body_parentid[b]) {
-        const Vec3 bp(m->body_pos[3 * b], m->body_pos[3 * b + 1], m->body_pos[3 * b + 2]);
-        const Quat bq = MjQuat(m->body_quat + 4 * b).normalized();
-        p_W = bp + bq * p_W;
-        q_W = bq * q_W;
-      }
-      geom.pos_B = p_W;
-      geom.quat_B = q_W.normalized();
-    }
+    GeomPose(m, model, g, geom);
     geom.mj_geom = g;
     model.geoms.push_back(geom);
   }
-
   if (m->npair > 0 || m->nexclude > 0) {
     throw Error("scene file '" + path +
                 "': <contact> <pair> and <exclude> elements are not supported; use the geoms' "
                 "contype and conaffinity bits to filter contacts");
   }
+}
 
-  // the tool
+int FindTool(const Model& model, const std::string& path, const std::string& tool_name) {
   const auto tool = std::find_if(model.bodies.begin(), model.bodies.end(),
-                                 [&](const BodyModel& b) { return b.name == options.tool_name; });
+                                 [&](const BodyModel& b) { return b.name == tool_name; });
   if (tool == model.bodies.end()) {
     std::string names;
     for (const auto& b : model.bodies) names += (names.empty() ? "" : ", ") + b.name;
-    throw Error("scene file '" + path + "': no free body named '" + options.tool_name +
+    throw Error("scene file '" + path + "': no free body named '" + tool_name +
                 "' to use as the tool (free bodies: " + names + "); pass --tool NAME");
   }
-  model.tool = static_cast<int>(tool - model.bodies.begin());
+  return static_cast<int>(tool - model.bodies.begin());
+}
 
-  // initial state: keyframe "initial" when present, else the model defaults (qpos0, zero qvel)
+// keyframe "initial" when present, else the model defaults (qpos0, zero qvel)
+void InitialState(const mjModel* m, Model& model) {
   std::vector<mjtNum> qpos(m->qpos0, m->qpos0 + m->nq);
   std::vector<mjtNum> qvel(m->nv, 0.0);
   const int key = mj_name2id(m, mjOBJ_KEY, "initial");
@@ -217,7 +209,30 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
     model.initial.push_back(
         StateFromFreejoint(b, qpos.data() + b.mj_qpos_adr, qvel.data() + b.mj_qvel_adr));
   }
+}
 
+}  // namespace
+
+Model LoadModel(const std::string& path, const LoadOptions& options) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw Error("scene file '" + path + "' does not exist or is not a regular file");
+  }
+  char error[1024] = "";
+  mjModel* raw = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  if (raw == nullptr) {
+    throw Error("scene file '" + path + "': MuJoCo could not compile it: " + error);
+  }
+  Model model;
+  model.collision = std::shared_ptr<mjModel>(raw, [](mjModel* m) { mj_deleteModel(m); });
+  const mjModel* m = raw;
+  model.source = path;
+  model.timestep_s = options.timestep_s.value_or(m->opt.timestep);
+  model.gravity_W = Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
+  const std::vector<int> body_index = CopyBodies(m, path, model);
+  CopyGeoms(m, path, body_index, model);
+  model.tool = FindTool(model, path, options.tool_name);
+  InitialState(m, model);
   model.contact = options.contact;
   model.render = options.render;
   model.device = options.device;

@@ -245,6 +245,92 @@ SessionState InspectSession(const Protocol& protocol, const SessionConfig& confi
   }
 }
 
+namespace {
+
+// a new session: its plan and the durable start record
+SessionState StartSession(const Protocol& protocol, const SessionConfig& config, RecordSink& sink,
+                          Responder& responder) {
+  SessionState state;
+  state.seed = config.seed ? *config.seed : protocol.randomization.seed.value_or(FreshSeed());
+  state.plan = MakePlan(protocol, state.seed);
+  json start = config.start_extra.is_object() ? config.start_extra : json::object();
+  start["type"] = "session_start";
+  start["format"] = std::string(kLogFormat);
+  start["format_version"] = kLogFormatVersion;
+  start["time_utc"] = UtcNow();
+  start["software_version"] = config.software_version;
+  start["protocol_name"] = protocol.name;
+  start["protocol_hash"] = ProtocolHash(protocol);
+  start["protocol_hash_method"] = "FNV-1a 64 of the canonical protocol JSON";
+  start["protocol"] = protocol.ToJson();
+  start["participant"] = config.participant;
+  start["mode"] = config.mode;
+  start["seed"] = state.seed;
+  start["steps"] = state.plan.size();
+  sink.Append(start, /*durable=*/true);
+  responder.Show("Protocol " + Quote(protocol.name) + ", participant " + config.participant + ", " +
+                 std::to_string(protocol.tests.size()) + " test(s).");
+  if (!protocol.instructions.empty()) responder.Show(protocol.instructions);
+  return state;
+}
+
+// the durable resume record of a session continued at state.next_step
+void WriteResume(const Protocol& protocol, const SessionConfig& config, const SessionState& state,
+                 std::size_t torn_tail_bytes, RecordSink& sink, Responder& responder) {
+  json resume = json::object();
+  resume["type"] = "resume";
+  resume["time_utc"] = UtcNow();
+  resume["software_version"] = config.software_version;
+  resume["next_step"] = state.next_step;
+  resume["answers_so_far"] = state.answers;
+  resume["torn_tail_bytes_dropped"] = torn_tail_bytes;
+  sink.Append(resume, /*durable=*/true);
+  responder.Show("Resuming participant " + config.participant + " at step " +
+                 std::to_string(state.next_step + 1) + " of " + std::to_string(state.plan.size()) +
+                 " (" + std::to_string(state.answers) + " answers recorded).");
+  if (!protocol.instructions.empty()) responder.Show(protocol.instructions);
+}
+
+// one series step k: present, ask, record the answer durably. False (a stop record written) if
+// the participant stopped instead of answering.
+bool RunSeries(const Protocol& protocol, const Step& step, int k, bool repeated, RecordSink& sink,
+               WallPresenter& presenter, Responder& responder) {
+  const StudyTest& test = protocol.tests[step.test];
+  const Condition& condition = ConditionOf(protocol, step);
+  responder.Show("Series " + std::to_string(step.series + 1) + " of " +
+                 std::to_string(test.series) + ": tap the wall " + std::to_string(step.taps) +
+                 " times.");
+  presenter.Present(condition, step.taps);
+  json series = StepRecord("series", protocol, step);
+  series["taps"] = step.taps;
+  series["rendered"] = condition.ToJson();
+  if (repeated) series["repeated"] = true;
+  sink.Append(series, /*durable=*/false);
+
+  const auto asked = std::chrono::steady_clock::now();
+  const std::optional<int> answer = responder.Ask(protocol, step);
+  const double response_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
+  if (!answer) {
+    json stop = json::object();
+    stop["type"] = "stop";
+    stop["time_utc"] = UtcNow();
+    stop["reason"] = responder.StopReason();
+    stop["next_step"] = k;
+    sink.Append(stop, /*durable=*/true);
+    return false;
+  }
+  json a = StepRecord("answer", protocol, step);
+  a["answer"] = *answer;
+  a["answer_label"] = protocol.conditions[test.conditions[*answer]].label;
+  a["correct"] = *answer == step.condition;
+  a["response_time_s"] = response_time_s;
+  sink.Append(a, /*durable=*/true);
+  return true;
+}
+
+}  // namespace
+
 SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,
                           const std::vector<nlohmann::json>& existing, std::string_view source,
                           RecordSink& sink, WallPresenter& presenter, Responder& responder,
@@ -255,26 +341,7 @@ SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,
   SessionState state;
   std::set<int> presented;  // series steps already presented (a repeat is marked as such)
   if (existing.empty()) {
-    state.seed = config.seed ? *config.seed : protocol.randomization.seed.value_or(FreshSeed());
-    state.plan = MakePlan(protocol, state.seed);
-    json start = config.start_extra.is_object() ? config.start_extra : json::object();
-    start["type"] = "session_start";
-    start["format"] = std::string(kLogFormat);
-    start["format_version"] = kLogFormatVersion;
-    start["time_utc"] = UtcNow();
-    start["software_version"] = config.software_version;
-    start["protocol_name"] = protocol.name;
-    start["protocol_hash"] = ProtocolHash(protocol);
-    start["protocol_hash_method"] = "FNV-1a 64 of the canonical protocol JSON";
-    start["protocol"] = protocol.ToJson();
-    start["participant"] = config.participant;
-    start["mode"] = config.mode;
-    start["seed"] = state.seed;
-    start["steps"] = state.plan.size();
-    sink.Append(start, /*durable=*/true);
-    responder.Show("Protocol " + Quote(protocol.name) + ", participant " + config.participant +
-                   ", " + std::to_string(protocol.tests.size()) + " test(s).");
-    if (!protocol.instructions.empty()) responder.Show(protocol.instructions);
+    state = StartSession(protocol, config, sink, responder);
   } else {
     if (!config.resume) {
       throw Error(std::string(source) + ": the log already holds a session (" +
@@ -299,30 +366,19 @@ SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,
       responder.Show("The session of participant " + config.participant + " is already complete.");
       return outcome;
     }
-    json resume = json::object();
-    resume["type"] = "resume";
-    resume["time_utc"] = UtcNow();
-    resume["software_version"] = config.software_version;
-    resume["next_step"] = state.next_step;
-    resume["answers_so_far"] = state.answers;
-    resume["torn_tail_bytes_dropped"] = torn_tail_bytes;
-    sink.Append(resume, /*durable=*/true);
-    responder.Show("Resuming participant " + config.participant + " at step " +
-                   std::to_string(state.next_step + 1) + " of " + std::to_string(steps) + " (" +
-                   std::to_string(state.answers) + " answers recorded).");
-    if (!protocol.instructions.empty()) responder.Show(protocol.instructions);
+    WriteResume(protocol, config, state, torn_tail_bytes, sink, responder);
   }
 
   int shown_test = -1;
   for (int k = state.next_step; k < steps; ++k) {
     const Step& step = state.plan[k];
-    const StudyTest& test = protocol.tests[step.test];
-    const Condition& condition = ConditionOf(protocol, step);
     if (step.test_position != shown_test) {
       responder.Show(TestIntro(protocol, step));
       shown_test = step.test_position;
     }
     if (step.kind == StepKind::kFamiliarization) {
+      const StudyTest& test = protocol.tests[step.test];
+      const Condition& condition = ConditionOf(protocol, step);
       responder.Show("Familiarization: tap " + condition.label + " (key " +
                      test.keys[step.condition] + ") " + std::to_string(step.taps) + " times.");
       presenter.Present(condition, step.taps);
@@ -333,27 +389,7 @@ SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,
       sink.Append(r, /*durable=*/false);
       continue;
     }
-    responder.Show("Series " + std::to_string(step.series + 1) + " of " +
-                   std::to_string(test.series) + ": tap the wall " + std::to_string(step.taps) +
-                   " times.");
-    presenter.Present(condition, step.taps);
-    json series = StepRecord("series", protocol, step);
-    series["taps"] = step.taps;
-    series["rendered"] = condition.ToJson();
-    if (presented.count(k) > 0) series["repeated"] = true;
-    sink.Append(series, /*durable=*/false);
-
-    const auto asked = std::chrono::steady_clock::now();
-    const std::optional<int> answer = responder.Ask(protocol, step);
-    const double response_time_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
-    if (!answer) {
-      json stop = json::object();
-      stop["type"] = "stop";
-      stop["time_utc"] = UtcNow();
-      stop["reason"] = responder.StopReason();
-      stop["next_step"] = k;
-      sink.Append(stop, /*durable=*/true);
+    if (!RunSeries(protocol, step, k, presented.count(k) > 0, sink, presenter, responder)) {
       outcome.status = SessionStatus::kStopped;
       outcome.next_step = k;
       responder.Show("Session stopped after " +
@@ -362,12 +398,6 @@ SessionOutcome RunSession(const Protocol& protocol, const SessionConfig& config,
                      " answers; it can be continued with --resume.");
       return outcome;
     }
-    json a = StepRecord("answer", protocol, step);
-    a["answer"] = *answer;
-    a["answer_label"] = protocol.conditions[test.conditions[*answer]].label;
-    a["correct"] = *answer == step.condition;
-    a["response_time_s"] = response_time_s;
-    sink.Append(a, /*durable=*/true);
     ++outcome.answers_recorded;
   }
   json end = json::object();
