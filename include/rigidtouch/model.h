@@ -15,14 +15,14 @@ namespace rigidtouch {
 /// Geometric primitive of a collision geom (the MJCF geom types rigidtouch accepts).
 enum class GeomType { kPlane, kSphere, kCapsule, kBox, kMesh };
 
-/// Which rendering method produces the collision impulses (METHOD.md).
+/// Which rendering method produces the collision impulses (docs/method.md).
 enum class RendererKind {
   kPenalty,  ///< penalty feedback only, no impulses
   kImpulse,  ///< one impulse at contact onset, Eq. 5 with restitution e (the [IAP] model)
   kTrain,    ///< a modulated train of N impulses over the collision window, Eq. 8 (e = 0)
 };
 
-/// How the device drives the virtual tool (DESIGN.md tick stage 1).
+/// How the device drives the virtual tool (tick stage 1, docs/architecture.md).
 enum class Coupling {
   kNone,     ///< no device: the user wrench comes from TickInput::tool_wrench (offline simulation)
   kDirect,   ///< the tool is the device end effector: its pose and velocity are the device's
@@ -75,7 +75,7 @@ struct ContactParams {
   double onset_speed_mps = 1.0e-3;
 };
 
-/// Collision rendering (METHOD.md II.a, II.b).
+/// Collision rendering (Eq. 6-7, docs/method.md).
 struct RenderParams {
   RendererKind renderer = RendererKind::kTrain;
   double restitution = 0.0;       // e in [0, 1]; the train requires e = 0
@@ -116,7 +116,7 @@ struct Model {
   std::vector<BodyModel> bodies;   // dynamic bodies (MJCF freejoint bodies)
   std::vector<GeomModel> geoms;    // collision geoms, static (body -1) and dynamic
   std::vector<BodyState> initial;  // per body, from keyframe "initial" or the MJCF defaults
-  int tool = 0;                    // index of the tool in `bodies` (METHOD.md body 1)
+  int tool = 0;                    // index of the tool in `bodies` (the method's body 1)
   ContactParams contact;
   RenderParams render;
   Schedule schedule;  // derived by Configure from render and timestep_s

@@ -2,7 +2,7 @@
 // and kinetic energy. They are shared by the reference solver, the production solver's tests and
 // the engine.
 //
-// Notation (METHOD.md Eq. 1-3): a group of b dynamic bodies with block-diagonal mass matrix
+// Notation (Eq. 1-3, docs/method.md): a group of b dynamic bodies with block-diagonal mass matrix
 // M = diag(m_i I3, I_i) and velocity v = (v_i, w_i), and c frictionless contact rows. Row j of the
 // contact Jacobian Jc (c x 6b) is, for body a of the contact, [n^T, (r_a x n)^T] and, for body b,
 // -[n^T, (r_b x n)^T], so that (Jc v)_j = n . (v_a + w_a x r_a - v_b - w_b x r_b) is the relative

@@ -1,4 +1,4 @@
-// The reference impulse solver: METHOD.md Eq. 5 and Eq. 8 exactly, with a pseudo-inverse.
+// The reference impulse solver: Eq. 5 and Eq. 8 exactly, with a pseudo-inverse.
 //
 //   p = -(1 + e) (Jc M^-1 Jc^T)^# Jc v0 / remaining                              Eq. 5, Eq. 8
 //

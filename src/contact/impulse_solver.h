@@ -10,7 +10,8 @@
 // p . w = 0, where w = Jc v+ is the relative normal velocity after the impulse. It returns
 // p_out = scale p*, with scale = (1 + e) / (N - i + 1) chosen by the caller (Eq. 5: N = 1,
 // scale = 1 + e; Eq. 8: e = 0, scale = 1 / (N - i + 1)). Impulses never pull: this is how the
-// implementation settles METHOD.md's open point about adhesive components of Eq. 5 / Eq. 8.
+// implementation settles the method's open point about adhesive components of Eq. 5 / Eq. 8
+// (docs/decisions.md).
 //
 // Minimum norm. When A is singular (redundant rows: a box face on a plane gives 4 rows of rank
 // 3) the minimisers form the set S = {p >= 0 : A p = A p*}; A p*, hence w and the velocity change

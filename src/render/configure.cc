@@ -59,7 +59,7 @@ void Configure(Model& model) {
     const std::string window =
         "0 < t_c <= " + io::FormatNumber(render::kMaxCollisionWindow_s) + " s";
     RequireFinite("t_collision_s", r.t_collision_s, 0.0, render::kMaxCollisionWindow_s,
-                  window + " (shorter than human reaction time, METHOD.md II.a)");
+                  window + " (shorter than human reaction time, docs/method.md)");
     Require(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, window);
     Require(std::isfinite(r.frequency_hz) && r.frequency_hz > 0.0, "frequency_hz", r.frequency_hz,
             "f > 0 Hz, within [1/t_c, 1/h] (Eq. 6-7)");
@@ -68,7 +68,7 @@ void Configure(Model& model) {
       msg << "parameter restitution = " << r.restitution
           << " is not allowed with the train renderer: the method requires perfectly plastic "
              "collisions (e = 0), the only post-collision velocity compatible with every "
-             "intermediate velocity of the train (METHOD.md Eq. 8)";
+             "intermediate velocity of the train (Eq. 8, docs/method.md)";
       throw Error(msg.str());
     }
   }
