@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds rigidtouch with warnings as errors and runs every test; then rebuilds the unit tests with
-# AddressSanitizer + UndefinedBehaviorSanitizer and runs them again. `--quick` skips the
-# sanitizer pass. Usage: bash scripts/test.sh [--quick]
+# AddressSanitizer + UndefinedBehaviorSanitizer and runs them again, and the loop and device
+# tests (the threaded ones) with ThreadSanitizer. `--quick` skips the sanitizer passes.
+# Usage: bash scripts/test.sh [--quick]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -19,10 +20,13 @@ cmake --build build -j"$jobs"
 
 echo "== install, and find_package(rigidtouch) from another project"
 prefix="$(pwd)/build/install-check"
+rm -rf "$prefix"
 cmake --install build --prefix "$prefix" >/dev/null
 cmake -S tests/install -B build/consumer -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+# the consumer and the OpenHaptics vendor bridge (against a stub of the HD API: never run)
 cmake --build build/consumer -j"$jobs" >/dev/null
 ./build/consumer/consumer scenes/tap.xml
+test -x build/consumer/openhaptics_bridge && echo "vendor bridge example built"
 
 if [ "${1:-}" != "--quick" ]; then
   echo "== AddressSanitizer + UndefinedBehaviorSanitizer over the unit tests"
@@ -31,4 +35,20 @@ if [ "${1:-}" != "--quick" ]; then
   cmake --build build-asan -j"$jobs"
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --output-on-failure -j"$jobs" -LE no_sanitize)
+
+  echo "== ThreadSanitizer over the loop and device tests and the UDP bridge end to end"
+  start_s=$(date +%s)
+  # -O1 -g1: line-number stacks in the reports at about 60% of the -O2 -g compile time
+  cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGIDTOUCH_WERROR=ON \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+    -DRIGIDTOUCH_SANITIZE_THREAD=ON -DRIGIDTOUCH_BUILD_TESTS=ON >/dev/null
+  tsan_targets=$(ls tests/loop/*_test.cc tests/device/*_test.cc tests/cli/bridge_cli_test.cc |
+    xargs -n1 basename | sed 's/\.cc$//')
+  # shellcheck disable=SC2086
+  cmake --build build-tsan -j"$jobs" --target $tsan_targets
+  # -j1: the loop tests measure timing, and TSan slows every thread
+  (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+    ctest --output-on-failure -L '^(loop|device)$' &&
+    TSAN_OPTIONS="halt_on_error=1" ctest --output-on-failure -R '^(BridgeCliTest|ServeCliTest)\.')
+  echo "ThreadSanitizer pass: $(($(date +%s) - start_s)) s"
 fi

@@ -5,11 +5,11 @@
 #include "command.h"
 #include "device/presets.h"
 #include "device/simulated_device.h"
-#include "device/udp_device_server.h"
 #include "device/udp_json.h"
 #include "loop/loop_json.h"
 #include "loop/rate_loop.h"
 #include "loop/stop_signal.h"
+#include "rigidtouch/bridge.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::cli {
@@ -53,8 +53,8 @@ void Run(const DeviceSimFlags& f) {
   const double period_s = 1.0 / f.rate_hz;
   const loop::LoopStats stats = loop.Run(
       [&](std::int64_t, double) {
-        server.Step();
-        sim.Advance(period_s);
+        server.Step();  // Read and Write
+        sim.EndPeriod(period_s);
         return true;
       },
       &stop);

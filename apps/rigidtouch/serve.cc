@@ -84,8 +84,7 @@ void Run(const ServeFlags& f) {
     analysis::TapSetup setup = analysis::PrepareTap(c);
     lo.duration_s = f.duration_s > 0.0 ? f.duration_s : setup.simulated->duration_s();
     Data data = MakeData(setup.model);
-    r = loop::RunHapticLoop(setup.model, data, *setup.simulated, lo, &stop, setup.simulated.get(),
-                            traces.get());
+    r = loop::RunHapticLoop(setup.model, data, *setup.simulated, lo, &stop, traces.get());
     result["device"] = {{"kind", "simulated"},
                         {"preset", f.preset},
                         {"energy_to_user_J", setup.simulated->energy_to_user_J()}};
@@ -108,7 +107,7 @@ void Run(const ServeFlags& f) {
     device::UdpDevice dev(o);
     lo.duration_s = f.duration_s;
     Data data = MakeData(model);
-    r = loop::RunHapticLoop(model, data, dev, lo, &stop, nullptr, traces.get());
+    r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get());
     result["device"] = {{"kind", "udp"},
                         {"server", f.device},
                         {"link", ToJson(dev.counters())},

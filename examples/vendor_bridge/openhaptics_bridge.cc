@@ -1,20 +1,29 @@
 // UNTESTED EXAMPLE: written against the OpenHaptics HD API documentation; no SDK or device was
-// available, so it was never compiled against the SDK nor run. Not built by default (README.md).
+// available, so it was never compiled against the SDK nor run. It uses only the installed
+// rigidtouch package (README.md); tests/install compiles and links it against a stub of the HD
+// declarations it uses.
 //
 // Bridges a 3D Systems Touch / Phantom (OpenHaptics HD API) to the rigidtouch UDP device
 // protocol: the HD servo scheduler calls UdpDeviceServer::Step once per servo tick (1 kHz), which
 // reads the device, streams its state, and displays the renderer's newest force.
 #include <HD/hd.h>
+#include <rigidtouch/bridge.h>
+#include <rigidtouch/device.h>
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <thread>
 
-#include "device/udp_device_server.h"
-#include "loop/stop_signal.h"
-
 namespace {
+
+// set by SIGINT / SIGTERM; a lock-free atomic store is async-signal-safe
+std::atomic<bool> g_stop{false};
+void OnStopSignal(int) {
+  g_stop.store(true);
+}
 
 // the HD API's state, in SI units; call only between hdBeginFrame and hdEndFrame
 class HdDevice final : public rigidtouch::device::Device {
@@ -70,11 +79,12 @@ int main() try {
   hdEnable(HD_FORCE_OUTPUT);
   HdDevice device;
   rigidtouch::device::UdpDeviceServer server(device, {});  // udp://127.0.0.1:47000
-  const auto& stop = rigidtouch::loop::InstallStopSignalHandlers();
+  std::signal(SIGINT, OnStopSignal);
+  std::signal(SIGTERM, OnStopSignal);
   const HDSchedulerHandle tick =
       hdScheduleAsynchronous(ServoTick, &server, HD_MAX_SCHEDULER_PRIORITY);
   hdStartScheduler();
-  while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  while (!g_stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   hdStopScheduler();
   hdUnschedule(tick);
   hdDisableDevice(handle);

@@ -126,13 +126,13 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
     dev.Write(command);
     TraceSample s = MakeTraceSample(model, data, command);
     // the trace describes the tick as the device lived it: the true handle position at the start
-    // of the tick, and the force held from here to the next sample (zero-order hold)
+    // of the tick, and the force held from here to the next sample (zero-order hold); tap and
+    // hand force through the same hook as loop::RunHapticLoop
     s.step = tick;
     s.time_s = dev.time_s();
-    s.tap = dev.current_tap();
+    dev.AnnotateTrace(s);
     s.tool_position_m = dev.true_position_m();
     s.tool_velocity_mps = dev.true_velocity_mps();
-    s.hand_force_N = dev.hand_force_N();
     s.device_force_N = dev.displayed_force_N();
     // the engine clips to the preset's limit before the device sees the command
     s.clipped = command.clipped || dev.last_command_clipped();
@@ -141,7 +141,8 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
       if (command.impulsive_force_N.squaredNorm() > 0.0) ++run.clipped_impulse_ticks;
     }
     run.trace.push_back(s);
-    dev.Advance(1.0 / config.rate_hz);
+    // the same per-period hook as loop::RunHapticLoop, so both paths advance the plant alike
+    dev.EndPeriod(1.0 / config.rate_hz);
   }
   run.energy_to_user_J = dev.energy_to_user_J();
   run.warnings = data.warnings;

@@ -4,7 +4,7 @@
 #include <span>
 #include <string_view>
 
-#include "device/device.h"
+#include "rigidtouch/device.h"
 
 namespace rigidtouch::device {
 

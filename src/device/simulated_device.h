@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "device/device.h"
+#include "rigidtouch/device.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::device {
@@ -107,8 +107,8 @@ struct TapTiming {
 /// A simulated hand + device. Read, Write and Advance never allocate or throw; the constructor
 /// validates every parameter and throws rigidtouch::Error naming the field and its range.
 ///
-/// Offline use, one haptic tick:
-///   s = dev.Read(); cmd = Tick(model, data, s); dev.Write(cmd); dev.Advance(h);
+/// One haptic tick, as loop::RunHapticLoop and the offline tap experiment drive it:
+///   s = dev.Read(); cmd = Tick(model, data, s); dev.Write(cmd); dev.EndPeriod(h);
 class SimulatedDevice : public Device {
  public:
   /// Builds the device at rest at the script's start point, t = 0.
@@ -124,6 +124,13 @@ class SimulatedDevice : public Device {
   void Write(const DeviceCommand& command) override;
   /// Display limits of this device.
   const DeviceLimits& limits() const override { return limits_; }
+  /// Advances the plant by the loop's period: the device lives in loop time.
+  void EndPeriod(double period_s) override { Advance(period_s); }
+  /// Sets the sample's tap index and the hand's force at the current time.
+  void AnnotateTrace(TraceSample& sample) const override {
+    sample.tap = current_tap();
+    sample.hand_force_N = hand_force_N_;
+  }
 
   /// Integrates the hand + device plant over dt_s with `substeps` RK4 steps, the displayed force
   /// held constant, then samples the encoder. A non-finite or non-positive dt_s is counted as

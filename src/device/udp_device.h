@@ -7,10 +7,10 @@
 #include <cstdint>
 #include <string>
 
-#include "device/device.h"
 #include "device/udp_link.h"
 #include "device/udp_protocol.h"
 #include "device/udp_socket.h"
+#include "rigidtouch/device.h"
 
 namespace rigidtouch::device {
 

@@ -1,7 +1,6 @@
 #include "device/udp_link.h"
 
 #include <cmath>
-#include <ctime>
 #include <numeric>
 #include <string>
 
@@ -29,12 +28,6 @@ void ValidateWatchdog(double watchdog_s, std::string_view what) {
     throw Error(std::string(what) + ": watchdog_s = " + std::to_string(watchdog_s) +
                 " is outside (0, 10] s");
   }
-}
-
-std::int64_t MonotonicNowNs() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
 }
 
 std::int64_t WatchdogNs(double watchdog_s, std::string_view what) {

@@ -9,6 +9,7 @@
 #include <span>
 #include <string_view>
 
+#include "rigidtouch/bridge.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::device {
@@ -41,21 +42,7 @@ enum class PacketType : std::uint16_t {
   kCommand = 2,  // renderer -> device
 };
 
-/// Outcome of decoding one datagram. Every value except kOk means the datagram was dropped.
-enum class DecodeResult : std::uint8_t {
-  kOk = 0,
-  kTooShort,       // fewer bytes than the header or than the payload the header announces
-  kBadMagic,       // the first four bytes are not the protocol magic
-  kWrongVersion,   // a protocol version this build does not speak
-  kWrongType,      // a known header, but not the packet type the receiver expects
-  kOversized,      // more bytes than the header announces or than the type allows
-  kBadChecksum,    // the CRC-32 does not match the bytes
-  kNonFinite,      // a NaN or infinite value in the payload
-  kBadQuaternion,  // orientation quaternion norm further than kQuaternionNormTolerance from 1
-};
-
-/// Number of DecodeResult values, for per-reason counter arrays.
-inline constexpr std::size_t kDecodeResultCount = 9;
+// DecodeResult and kDecodeResultCount are in rigidtouch/bridge.h: the server's counters use them.
 
 /// Largest accepted deviation of the received quaternion's norm from 1 (it is renormalised).
 inline constexpr double kQuaternionNormTolerance = 1e-3;

@@ -9,20 +9,11 @@
 #include <string>
 #include <string_view>
 
+#include "rigidtouch/bridge.h"
+
 namespace rigidtouch::device {
 
-/// An IPv4 address and port, both in host byte order.
-struct UdpEndpoint {
-  std::uint32_t address = 0;  // e.g. 0x7f000001 for 127.0.0.1
-  std::uint16_t port = 0;     // 0 when binding means "any free port"
-
-  /// True for 127.0.0.0/8.
-  bool IsLoopback() const { return (address >> 24) == 127; }
-  /// "udp://A.B.C.D:PORT".
-  std::string ToString() const;
-  /// Same address and port.
-  bool operator==(const UdpEndpoint&) const = default;
-};
+// UdpEndpoint is in rigidtouch/bridge.h: the server's public accessors return it.
 
 /// Parses "udp://HOST:PORT" where HOST is a dotted IPv4 address or "localhost" and PORT is in
 /// [0, 65535]. Throws Error naming `what` (e.g. "--listen") and the text when it is malformed.

@@ -6,7 +6,7 @@ namespace rigidtouch::loop {
 
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
                                const LoopOptions& options, const std::atomic<bool>* stop,
-                               device::SimulatedDevice* simulated, TraceQueue* traces) {
+                               TraceQueue* traces) {
   HapticLoopResult r;
   RateLoop loop(options);
   const double period_s = 1.0 / options.rate_hz;
@@ -17,7 +17,6 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
         if (!input.device.valid) ++r.invalid_device_ticks;
         const DeviceCommand command = Tick(model, data, input);
         device.Write(command);
-        if (simulated != nullptr) simulated->Advance(period_s);
         if (command.safe_fallback) ++r.safe_fallback_ticks;
         if (command.clipped) ++r.clipped_ticks;
         const double f = command.force_N.norm();
@@ -26,12 +25,12 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
         for (int k = 0; k < data.nimpulse; ++k) r.impulses += data.impulses[k].tool ? 1 : 0;
         if (traces != nullptr) {
           TraceSample s = MakeTraceSample(model, data, command);
-          if (simulated != nullptr) {
-            s.tap = simulated->current_tap();
-            s.hand_force_N = simulated->hand_force_N();
-          }
+          // before EndPeriod: the sample describes the start of the period, as the offline
+          // tap experiment's does
+          device.AnnotateTrace(s);
           traces->Push(s);
         }
+        device.EndPeriod(period_s);
         return true;
       },
       stop);

@@ -1,14 +1,14 @@
-// The real-time haptic loop: at each deadline Read the device, Tick, Write the command, and hand
-// a trace sample to the writer thread (STYLE.md 6: read, compute, write, count the rate).
+// The real-time haptic loop: at each deadline Read the device, Tick, Write the command, end the
+// device's period, and hand a trace sample to the writer thread (read, compute, write, count the
+// rate). Every device, real or simulated, runs this same path.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 
-#include "device/device.h"
-#include "device/simulated_device.h"
 #include "loop/rate_loop.h"
 #include "loop/trace_queue.h"
+#include "rigidtouch/device.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::loop {
@@ -25,12 +25,12 @@ struct HapticLoopResult {
 };
 
 /// Runs `model` against `device` at options.rate_hz (the model's time step should be its period).
-/// `simulated`, when given, is advanced by one period after each Write (an in-process simulated
-/// device lives in loop time). `traces`, when given, receives one sample per tick (never blocks).
-/// Stops at the duration, on `*stop`, or never throws inside the loop.
+/// Each tick: Read, Tick, Write, AnnotateTrace (when tracing), EndPeriod(1 / rate_hz); a device
+/// that lives in loop time (the simulated one) advances in EndPeriod. `traces`, when given,
+/// receives one sample per tick (never blocks). Stops at the duration or on `*stop`; never
+/// throws inside the loop.
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
                                const LoopOptions& options, const std::atomic<bool>* stop,
-                               device::SimulatedDevice* simulated = nullptr,
                                TraceQueue* traces = nullptr);
 
 }  // namespace rigidtouch::loop

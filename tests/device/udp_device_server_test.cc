@@ -1,4 +1,4 @@
-#include "device/udp_device_server.h"
+#include "rigidtouch/bridge.h"
 
 #include <gtest/gtest.h>
 

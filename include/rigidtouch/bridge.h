@@ -1,0 +1,161 @@
+// The device side of the UDP device link (docs/device-protocol.md): streams a local Device's
+// state to a renderer and applies the renderer's newest command to it. Used by
+// `rigidtouch device-sim` and by vendor bridges (examples/vendor_bridge/), which link the installed
+// rigidtouch::rigidtouch and implement rigidtouch/device.h.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "rigidtouch/device.h"
+
+namespace rigidtouch::device {
+
+/// An IPv4 address and port, both in host byte order.
+struct UdpEndpoint {
+  /// The address, e.g. 0x7f000001 for 127.0.0.1.
+  std::uint32_t address = 0;
+  /// The port; 0 when binding means "any free port".
+  std::uint16_t port = 0;
+
+  /// Returns true for an address in 127.0.0.0/8.
+  bool IsLoopback() const { return (address >> 24) == 127; }
+  /// Returns the endpoint as "udp://A.B.C.D:PORT".
+  std::string ToString() const;
+  /// Returns true when address and port are equal.
+  bool operator==(const UdpEndpoint&) const = default;
+};
+
+/// Outcome of decoding one datagram. Every value except kOk means the datagram was dropped.
+enum class DecodeResult : std::uint8_t {
+  kOk = 0,         ///< A valid packet of the expected type.
+  kTooShort,       ///< Fewer bytes than the header or than the payload the header announces.
+  kBadMagic,       ///< The first four bytes are not the protocol magic.
+  kWrongVersion,   ///< A protocol version this build does not speak.
+  kWrongType,      ///< A known header, but not the packet type the receiver expects.
+  kOversized,      ///< More bytes than the header announces or than the type allows.
+  kBadChecksum,    ///< The CRC-32 does not match the bytes.
+  kNonFinite,      ///< A NaN or infinite value in the payload.
+  kBadQuaternion,  ///< An orientation quaternion whose norm differs from 1 by more than 1e-3.
+};
+
+/// Number of DecodeResult values, the size of per-reason counter arrays.
+inline constexpr std::size_t kDecodeResultCount = 9;
+
+/// Test-only loss simulation: each datagram is dropped with the given probability, drawn from a
+/// seeded generator so runs are reproducible. Both fractions default to 0 (no loss).
+struct PacketLoss {
+  /// Probability in [0, 1] of discarding a received datagram.
+  double incoming_fraction = 0.0;
+  /// Probability in [0, 1] of not sending a datagram.
+  double outgoing_fraction = 0.0;
+  /// Seed of the generator that draws the drops.
+  std::uint64_t seed = 1;
+};
+
+/// What one end of the link has seen since construction, in datagrams unless stated. Plain
+/// counters: read them from the thread that drives the device (or after it has stopped).
+struct UdpCounters {
+  /// Datagrams read from the socket, valid or not.
+  std::uint64_t received = 0;
+  /// Decoded packets that became the newest state or command.
+  std::uint64_t accepted = 0;
+  /// Valid packets older than the newest sequence, dropped.
+  std::uint64_t stale = 0;
+  /// Valid states with the same sequence as the newest one, dropped (client side).
+  std::uint64_t duplicate = 0;
+  /// Datagrams from an address other than the peer, dropped.
+  std::uint64_t wrong_source = 0;
+  /// Malformed datagrams, dropped, indexed by DecodeResult.
+  std::array<std::uint64_t, kDecodeResultCount> malformed{};
+  /// Transitions from fresh to stale (the watchdog tripped).
+  std::uint64_t watchdog_trips = 0;
+  /// Transitions from stale back to fresh.
+  std::uint64_t recoveries = 0;
+  /// Datagrams handed to the socket.
+  std::uint64_t sent = 0;
+  /// Send failures (see last_errno).
+  std::uint64_t send_errors = 0;
+  /// Receive failures other than "nothing pending" (see last_errno).
+  std::uint64_t receive_errors = 0;
+  /// Received datagrams discarded by the test-only loss simulation.
+  std::uint64_t test_dropped_incoming = 0;
+  /// Datagrams not sent because of the test-only loss simulation.
+  std::uint64_t test_dropped_outgoing = 0;
+  /// Server side: zero-force writes because there was no command yet or the watchdog tripped.
+  std::uint64_t fallback_writes = 0;
+  /// Server side: Device::Read calls that returned valid = false.
+  std::uint64_t invalid_device_states = 0;
+  /// Server side: times the client address changed.
+  std::uint64_t peer_changes = 0;
+  /// The errno value of the last send or receive failure, 0 if none.
+  int last_errno = 0;
+
+  /// Returns the number of malformed datagrams over all reasons.
+  std::uint64_t MalformedTotal() const;
+  /// Returns the number of malformed datagrams for one reason.
+  std::uint64_t Malformed(DecodeResult reason) const {
+    return malformed[static_cast<std::size_t>(reason)];
+  }
+};
+
+/// Configuration of a UdpDeviceServer (immutable once the server is built).
+struct UdpDeviceServerOptions {
+  /// Address to bind as "udp://HOST:PORT"; port 0 picks a free port.
+  std::string listen = "udp://127.0.0.1:47000";
+  /// Fixed renderer address; empty means the last client that sent a valid command.
+  std::string peer;
+  /// Time without a fresh command after which the device gets zero force [s], in (0, 10].
+  double watchdog_s = 0.05;
+  /// Must be true for any address outside 127.0.0.0/8.
+  bool allow_non_loopback = false;
+  /// Test-only simulated packet loss; keep it zero in real use.
+  PacketLoss test_loss;
+};
+
+/// Serves one Device over UDP. Call Step once per device period (from the vendor's servo
+/// callback or a rate loop): it reads the device, sends its state to the peer, drains commands
+/// (newest sequence wins) and writes the newest command to the device, or zero force flagged
+/// safe-fallback when there is none yet or the watchdog has tripped. Step never blocks,
+/// allocates or throws. Not thread-safe: call every member from the thread that drives it.
+class UdpDeviceServer {
+ public:
+  /// Validates the options and binds. Throws Error naming the option when an address is
+  /// malformed, not loopback without allow_non_loopback, or cannot be bound (e.g. in use).
+  /// `device` must outlive the server.
+  UdpDeviceServer(Device& device, const UdpDeviceServerOptions& options);
+  /// Closes the socket.
+  ~UdpDeviceServer();
+  /// Moves the server; the moved-from object may only be destroyed or assigned to.
+  UdpDeviceServer(UdpDeviceServer&&) noexcept;
+  /// Moves the server; the moved-from object may only be destroyed or assigned to.
+  UdpDeviceServer& operator=(UdpDeviceServer&&) noexcept;
+  UdpDeviceServer(const UdpDeviceServer&) = delete;
+  UdpDeviceServer& operator=(const UdpDeviceServer&) = delete;
+
+  /// Runs one device period (see the class comment).
+  void Step();
+
+  /// Returns the counters since construction.
+  const UdpCounters& counters() const;
+  /// Returns true while no fresh command has arrived for watchdog_s (after a first one did).
+  bool watchdog_tripped() const;
+  /// Returns the bound address (with the chosen port when bound to port 0).
+  const UdpEndpoint& local_endpoint() const;
+  /// Returns true once states have somewhere to go (a fixed peer, or a client has spoken).
+  bool has_peer() const;
+  /// Returns where states are sent; meaningful when has_peer().
+  const UdpEndpoint& peer() const;
+  /// Returns the sequence number of the last state sent (0 before the first).
+  std::uint64_t last_sequence() const;
+
+ private:
+  // the socket and the loss generator stay out of the installed header
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rigidtouch::device
