@@ -17,49 +17,7 @@
 #include "contact/impulse_examples.h"
 #include "contact/impulse_math.h"
 #include "contact/impulse_reference.h"
-
-// Counts heap allocations of the whole process while g_count_allocations is set: malloc and its
-// relatives are replaced here and forward to glibc (operator new and Eigen's aligned_malloc both
-// end in malloc). Not with the sanitizers, which replace malloc themselves.
-#if !defined(RIGIDTOUCH_SANITIZE) && defined(__GLIBC__)
-#define RIGIDTOUCH_COUNT_ALLOCATIONS 1
-namespace {
-std::atomic<bool> g_count_allocations{false};
-std::atomic<long> g_allocations{0};
-void CountAllocation() {
-  if (g_count_allocations.load(std::memory_order_relaxed)) {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-  }
-}
-}  // namespace
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t count, std::size_t size);
-void* __libc_realloc(void* pointer, std::size_t size);
-void* __libc_memalign(std::size_t alignment, std::size_t size);
-void* malloc(std::size_t size) noexcept {
-  CountAllocation();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t count, std::size_t size) noexcept {
-  CountAllocation();
-  return __libc_calloc(count, size);
-}
-void* realloc(void* pointer, std::size_t size) noexcept {
-  CountAllocation();
-  return __libc_realloc(pointer, size);
-}
-void* aligned_alloc(std::size_t alignment, std::size_t size) noexcept {
-  CountAllocation();
-  return __libc_memalign(alignment, size);
-}
-int posix_memalign(void** pointer, std::size_t alignment, std::size_t size) noexcept {
-  CountAllocation();
-  *pointer = __libc_memalign(alignment, size);
-  return *pointer != nullptr ? 0 : ENOMEM;
-}
-}
-#endif
+#include "limit_malloc.h"
 
 namespace rigidtouch::contact {
 namespace {
@@ -586,7 +544,7 @@ TEST(ImpulseSolver, ConstructorRejectsBadOptions) {
 }
 
 TEST(ImpulseSolver, SolveDoesNotAllocate) {
-#if defined(RIGIDTOUCH_COUNT_ALLOCATIONS)
+  if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
   const ImpulseExample pile = BoxGrid(5, 5, 4, 5);
   std::mt19937_64 rng(37);
   std::vector<ImpulseExample> groups;
@@ -596,15 +554,15 @@ TEST(ImpulseSolver, SolveDoesNotAllocate) {
   for (const bool matrix_free : {false, true}) {
     ImpulseSolver solver(401, 101, PathOptions(matrix_free));
     std::vector<double> p(401);
-    // the allocation counter must see allocations at all (or the test proves nothing)
-    g_count_allocations = true;
-    void* (*volatile allocate)(std::size_t) = std::malloc;
-    void* probe = allocate(64);
-    g_count_allocations = false;
-    std::free(probe);
-    ASSERT_GT(g_allocations.exchange(0), 0);
-
-    g_count_allocations = true;
+    {
+      // the allocation counter must see allocations at all (or the test proves nothing)
+      test::LimitMalloc probe_guard;
+      void* (*volatile allocate)(std::size_t) = std::malloc;
+      void* probe = allocate(64);
+      std::free(probe);
+      ASSERT_GT(probe_guard.allocations(), 0);
+    }
+    test::LimitMalloc guard;
     int failures = 0;
     for (const ImpulseExample& group : groups) {
       const auto c = group.rows.size();
@@ -622,14 +580,10 @@ TEST(ImpulseSolver, SolveDoesNotAllocate) {
       energy_J -= KineticEnergy(pile_after.bodies);
       energy_J += NormalVelocity(pile_after.problem(), 0);
     }
-    g_count_allocations = false;
-    EXPECT_EQ(g_allocations.exchange(0), 0) << (matrix_free ? "matrix-free" : "dense");
+    EXPECT_EQ(guard.allocations(), 0) << (matrix_free ? "matrix-free" : "dense");
     EXPECT_EQ(failures, 0);
   }
   EXPECT_TRUE(std::isfinite(energy_J));
-#else
-  GTEST_SKIP() << "allocation counting needs glibc and no sanitizer";
-#endif
 }
 
 }  // namespace

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <new>
@@ -11,28 +10,8 @@
 #include <vector>
 
 #include "device/presets.h"
+#include "limit_malloc.h"
 #include "rigidtouch/types.h"
-
-// counts heap allocations while armed, to prove the haptic-loop calls never allocate
-namespace {
-std::atomic<bool> g_count_allocations{false};
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// gcc flags free() in a replacement operator delete as mismatched once inlined: a false positive
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t size) {
-  if (g_count_allocations.load()) ++g_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace rigidtouch::device {
 namespace {
@@ -450,23 +429,22 @@ TEST(SimulatedDeviceTest, UncompensatedGravitySagsByWeightOverStiffness) {
 }
 
 TEST(SimulatedDeviceTest, ReadWriteAdvanceNeverAllocate) {
+  if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
   DeviceModelParams model;
   model.delay_ticks = 1;
   TapScript script;
   script.taps = 2;
   script.speed_spread = 0.1;
   SimulatedDevice dev(FindPreset("touch"), HandParams{}, model, script);
-  // self-check: the counter sees a heap allocation
-  g_allocations = 0;
-  g_count_allocations = true;
-  // (a direct call: a new-expression may be elided by the compiler)
-  ::operator delete(::operator new(sizeof(double)));
-  g_count_allocations = false;
-  ASSERT_EQ(g_allocations.load(), 1);
-
+  {
+    // self-check: the counter sees a heap allocation (a direct call: a new-expression may be
+    // elided by the compiler)
+    test::LimitMalloc probe;
+    ::operator delete(::operator new(sizeof(double)));
+    ASSERT_EQ(probe.allocations(), 1);
+  }
   long ticks = 0;
-  g_allocations = 0;
-  g_count_allocations = true;
+  test::LimitMalloc guard;
   while (!dev.finished()) {
     const DeviceState s = dev.Read();
     const double p_m = -s.position_m.z();
@@ -475,8 +453,7 @@ TEST(SimulatedDeviceTest, ReadWriteAdvanceNeverAllocate) {
     dev.Advance(dev.tick_s());
     ++ticks;
   }
-  g_count_allocations = false;
-  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(guard.allocations(), 0);
   EXPECT_GT(ticks, 1000);
   EXPECT_GT(dev.clipped_count(), 0);
 }
