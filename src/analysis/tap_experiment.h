@@ -14,8 +14,8 @@
 
 namespace rigidtouch::analysis {
 
-/// The three walls of the method's perception study (docs/method.md, docs/study.md): 0 single impulse, 1 train at
-/// 250 Hz, 2 train at 50 Hz (t_c = 0.1 s, e = 0).
+/// The three walls of the method's perception study (docs/method.md, docs/study.md): 0 single
+/// impulse, 1 train at 250 Hz, 2 train at 50 Hz (t_c = 0.1 s, e = 0).
 RenderParams WallRenderParams(int wall);
 
 /// Everything a tap run needs.

@@ -1,4 +1,5 @@
-// rigidtouch parameters from a JSON config file, kept apart from the MJCF scene (docs/architecture.md).
+// rigidtouch parameters from a JSON config file, kept apart from the MJCF scene
+// (docs/architecture.md).
 #pragma once
 
 #include <string>
