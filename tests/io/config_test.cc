@@ -163,6 +163,20 @@ TEST(ConfigTest, MissingEmptyAndMalformedFilesNameTheFile) {
   EXPECT_TRUE(Has(e, "config.json: not valid JSON at line 4, column 3")) << e;
 }
 
+TEST(ConfigTest, AFolderGivenAsTheConfigIsNamed) {
+  const std::string dir = test::TempDir().string();
+  LoadOptions o;
+  try {
+    ApplyConfigFile(dir, o);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), dir + ": is a directory, not a config file");
+  }
+  // a number too large for a double at the top level, too
+  const std::string e = ErrorOf(R"({"timestep_s": 1e309})");
+  EXPECT_TRUE(Has(e, "config.json: timestep_s: 1e309 is not a finite number")) << e;
+}
+
 TEST(ConfigTest, AFieldGivenTwiceIsAnError) {
   const std::string e = ErrorOf(R"({"contact": {"damping_Ns_per_m": 1, "damping_Ns_per_m": 2}})");
   EXPECT_TRUE(Has(e, "config.json: contact.damping_Ns_per_m: the field is given twice")) << e;
