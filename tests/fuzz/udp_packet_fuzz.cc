@@ -10,14 +10,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   namespace d = rigidtouch::device;
   const std::span<const std::uint8_t> datagram(data, size);
   rigidtouch::DeviceState state;
-  if (d::DecodeState(datagram, &state) == rigidtouch::DecodeResult::kOk) {
+  if (d::DecodeState(datagram, &state) == d::DecodeResult::kOk) {
     const d::StatePacket again = d::EncodeState(state);
-    if (d::DecodeState(again, &state) != rigidtouch::DecodeResult::kOk) __builtin_trap();
+    if (d::DecodeState(again, &state) != d::DecodeResult::kOk) __builtin_trap();
   }
   rigidtouch::DeviceCommand command;
-  if (d::DecodeCommand(datagram, &command) == rigidtouch::DecodeResult::kOk) {
+  if (d::DecodeCommand(datagram, &command) == d::DecodeResult::kOk) {
     const d::CommandPacket again = d::EncodeCommand(command);
-    if (d::DecodeCommand(again, &command) != rigidtouch::DecodeResult::kOk) __builtin_trap();
+    if (d::DecodeCommand(again, &command) != d::DecodeResult::kOk) __builtin_trap();
   }
   return 0;
 }
