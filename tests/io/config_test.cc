@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -165,6 +166,7 @@ TEST(ConfigTest, MissingEmptyAndMalformedFilesNameTheFile) {
 
 TEST(ConfigTest, AFolderGivenAsTheConfigIsNamed) {
   const std::string dir = test::TempDir().string();
+  std::filesystem::create_directories(dir);
   LoadOptions o;
   try {
     ApplyConfigFile(dir, o);
