@@ -1,8 +1,12 @@
 // rigidtouch command-line tool: `rigidtouch <subcommand> [options]`. Errors go to stderr with a
-// non-zero exit; with --json a subcommand prints exactly one JSON object on stdout.
+// non-zero exit; with --json a subcommand prints exactly one JSON object on stdout. Exit codes
+// (README, "Exit codes"): 0 success, 2 bad input (a file, field, value or output path), 3 an
+// internal error, 4 an output file could not be written (disk full, file size limit), CLI11's own
+// codes (above 100) for a malformed command line.
 #include <exception>
 #include <iostream>
 
+#include "io/output_file.h"
 #include "rigidtouch/command.h"
 #include "rigidtouch/types.h"
 
@@ -19,11 +23,16 @@ int main(int argc, char** argv) {
   CLI::App app{"rigidtouch: haptic rendering of rigid contact with impulse trains"};
   app.set_version_flag("--version", RIGIDTOUCH_VERSION);
   app.require_subcommand(1);
+  // past `ulimit -f` a write then fails with EFBIG, which the writers report (exit 4)
+  rigidtouch::io::IgnoreFileSizeSignal();
   for (auto factory : rigidtouch::cli::Commands()) factory(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const rigidtouch::io::OutputError& e) {
+    std::cerr << "rigidtouch: error: " << e.what() << "\n";
+    return 4;
   } catch (const rigidtouch::Error& e) {
     std::cerr << "rigidtouch: error: " << e.what() << "\n";
     return 2;

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/output_file.h"
 #include "rigidtouch/command.h"
 #include "rigidtouch/types.h"
 #include "study/analysis.h"
@@ -144,6 +145,7 @@ void Simulate(const SimulateOptions& o) {
   config.observer = LoadObserver(o.observer);
   config.software_version = kSoftwareVersion;
   if (!o.log_dir.empty()) {
+    io::CheckOutputDir(o.log_dir, "log directory (--log-dir)");
     std::error_code error;
     std::filesystem::create_directories(o.log_dir, error);
     if (error)

@@ -2,7 +2,6 @@
 // figures; `--compare-walls` runs the method's three walls side by side (the main job).
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -11,6 +10,7 @@
 #include "analysis/tap_experiment.h"
 #include "command.h"
 #include "io/config.h"
+#include "io/output_file.h"
 #include "io/resources.h"
 #include "io/trace_csv.h"
 #include "scene_flags.h"
@@ -151,8 +151,35 @@ const char* kTableHeader =
     "max penetration [mm] | impulses per tap | bounces | energy to user [J] |\n"
     "|---|---|---|---|---|---|---|---|";
 
+const char* kWallKeys[] = {"penalty", "wall0", "wall1", "wall2"};
+
+std::string OutPath(const TapFlags& f, const std::string& name) {
+  return (std::filesystem::path(f.out_dir) / name).string();
+}
+
+// every file --compare-walls writes, checked before the four runs
+void CheckCompareWallsOutputs(const TapFlags& f) {
+  io::CheckOutputDir(f.out_dir, "output folder (--out-dir)");
+  std::error_code ec;
+  if (!std::filesystem::exists(f.out_dir, ec)) return;
+  for (const char* key : kWallKeys) {
+    io::CheckOutputPath(OutPath(f, std::string(key) + ".csv"), "trace file");
+  }
+  io::CheckOutputPath(OutPath(f, "walls.md"), "table");
+  io::CheckOutputPath(OutPath(f, "walls.png"), "figure");
+  for (int w = 0; w <= 2; ++w) {
+    io::CheckOutputPath(OutPath(f, "wall" + std::to_string(w) + "_tap.png"), "figure");
+  }
+}
+
 void CompareWalls(const TapFlags& f) {
-  std::filesystem::create_directories(f.out_dir);
+  CheckCompareWallsOutputs(f);
+  std::error_code created;
+  std::filesystem::create_directories(f.out_dir, created);
+  if (created) {
+    throw Error("cannot create the output folder (--out-dir) '" + f.out_dir +
+                "': " + created.message());
+  }
   const char* names[] = {"penalty (no impulses)", "wall 0: single impulse", "wall 1: train 250 Hz",
                          "wall 2: train 50 Hz"};
   std::vector<std::string> traces;
@@ -168,29 +195,28 @@ void CompareWalls(const TapFlags& f) {
       wall = w;
     }
     const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(g, wall));
-    const std::string key = w < 0 ? "penalty" : "wall" + std::to_string(w);
-    const std::string trace = (std::filesystem::path(f.out_dir) / (key + ".csv")).string();
+    const std::string key = kWallKeys[w + 1];
+    const std::string trace = OutPath(f, key + ".csv");
     io::WriteTraceCsv(trace, run.trace);
     if (w >= 0) traces.push_back(trace);
     results[key] = RunJson(run, g.coupling.c_str());
     results[key]["trace"] = trace;
     table << Row(names[w + 1], run) << "\n";
   }
-  const std::string table_path = (std::filesystem::path(f.out_dir) / "walls.md").string();
+  const std::string table_path = OutPath(f, "walls.md");
   {
-    std::ofstream out(table_path);
+    std::ostringstream out;
     out << "Means over " << f.taps << " taps at " << f.speed_mps << " m/s on the " << f.device
         << " preset (" << f.coupling << " coupling, " << f.rate_hz << " Hz)\n\n"
         << table.str();
-    if (!out) throw Error("cannot write " + table_path);
+    io::WriteFileAtomically(table_path, out.str(), "table");
   }
-  const std::string fig = (std::filesystem::path(f.out_dir) / "walls.png").string();
+  const std::string fig = OutPath(f, "walls.png");
   std::vector<std::string> args = traces;
   args.insert(args.end(), {"--out", fig});
   Plot("python/plot_walls.py", args, f.json);
   for (int w = 0; w <= 2; ++w) {
-    const std::string tap_fig =
-        (std::filesystem::path(f.out_dir) / ("wall" + std::to_string(w) + "_tap.png")).string();
+    const std::string tap_fig = OutPath(f, "wall" + std::to_string(w) + "_tap.png");
     Plot("python/plot_tap.py", {traces[w], "--out", tap_fig}, f.json);
   }
   results["table"] = table_path;
@@ -210,17 +236,27 @@ void Run(const TapFlags& f) {
     return;
   }
   if (f.wall && f.scene.renderer) throw Error("give either --wall or --renderer, not both");
-  const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, f.wall));
   std::string trace = f.trace;
   bool temporary = false;
   if (trace.empty() && !f.plot.empty()) {
     trace = f.plot + ".trace.csv";
     temporary = true;
   }
+  // a bad output path fails now, not after the run
+  if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
+  if (!f.plot.empty()) io::CheckOutputPath(f.plot, "figure");
+  const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, f.wall));
   if (!trace.empty()) io::WriteTraceCsv(trace, run.trace);
   if (!f.plot.empty()) {
-    Plot("python/plot_tap.py", {trace, "--out", f.plot}, f.json);
-    if (temporary) std::filesystem::remove(trace);
+    // the temporary trace goes whether or not the figure could be drawn
+    std::error_code ignored;
+    try {
+      Plot("python/plot_tap.py", {trace, "--out", f.plot}, f.json);
+    } catch (...) {
+      if (temporary) std::filesystem::remove(trace, ignored);
+      throw;
+    }
+    if (temporary) std::filesystem::remove(trace, ignored);
   }
   nlohmann::json result = RunJson(run, f.coupling.c_str());
   if (!f.trace.empty()) result["trace"] = f.trace;

@@ -1,9 +1,12 @@
 // Scene loading: MJCF compiled by libmujoco, copied into rigidtouch's Model (docs/architecture.md).
+// Every number copied is checked against the bounds of docs/decisions.md ("Scene bounds"): MuJoCo
+// compiles 1e300 masses and NaN keyframes without complaint, and a tick on them yields NaN.
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <sstream>
 #include <string>
 
@@ -68,6 +71,40 @@ bool ToGeomType(int mj_type, GeomType* out) {
   }
 }
 
+// scene bounds (docs/decisions.md, "Scene bounds"): wide enough for any haptic scene, narrow
+// enough that products of them (m v^2, k x, m g) stay far from overflow
+constexpr double kMinMass = 1e-9, kMaxMass = 1e9;  // kg
+constexpr double kMaxInertia = 1e9;                // kg m^2 (and > 0)
+constexpr double kMinSize = 1e-9, kMaxSize = 1e9;  // m, geom sizes
+constexpr double kMaxPosition = 1e4;               // m, |coordinate| of poses and keys
+constexpr double kMaxSpeed = 1e3;                  // m/s, keyframe linear velocity
+constexpr double kMaxAngularSpeed = 1e4;           // rad/s, keyframe angular velocity
+constexpr double kMaxGravity = 1e3;                // m/s^2, |gravity|
+constexpr double kMaxFriction = 1e2;               // friction coefficient
+constexpr double kMaxInitialOverlap = 1e-3;        // m, deeper overlaps at start fail
+
+std::string Num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// throws unless v is finite and lo <= v <= hi
+void CheckRange(const std::string& path, const std::string& what, double v, double lo, double hi,
+                const char* unit) {
+  if (std::isfinite(v) && v >= lo && v <= hi) return;
+  throw Error("scene file '" + path + "': " + what + " is " + Num(v) + (unit[0] ? " " : "") + unit +
+              ", outside the valid range [" + Num(lo) + ", " + Num(hi) + "]" +
+              (unit[0] ? " " : "") + unit);
+}
+
+void CheckVec(const std::string& path, const std::string& what, const mjtNum* v, int n,
+              double bound, const char* unit) {
+  for (int i = 0; i < n; ++i) {
+    CheckRange(path, what + "[" + std::to_string(i) + "]", v[i], -bound, bound, unit);
+  }
+}
+
 Quat MjQuat(const mjtNum* q) {
   return Quat(q[0], q[1], q[2], q[3]);
 }
@@ -120,6 +157,13 @@ std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& mo
       throw Error("scene file '" + path + "': free body '" + name +
                   "' has no positive mass and inertia (give its geoms a mass or density)");
     }
+    CheckRange(path, "the mass of body '" + name + "'", body.mass_kg, kMinMass, kMaxMass, "kg");
+    for (int i = 0; i < 3; ++i) {
+      CheckRange(path, "inertia[" + std::to_string(i) + "] of body '" + name + "'",
+                 body.inertia_kgm2[i], 0.0, kMaxInertia, "kg m^2");
+    }
+    CheckVec(path, "the centre of mass of body '" + name + "'", m->body_ipos + 3 * b, 3,
+             kMaxPosition, "m");
     body_index[b] = static_cast<int>(model.bodies.size());
     model.bodies.push_back(body);
   }
@@ -152,6 +196,25 @@ void GeomPose(const mjModel* m, const Model& model, int g, GeomModel& geom) {
   geom.quat_B = q_W.normalized();
 }
 
+// the sizes a geom type uses (a plane's may be 0: infinite), its pose, friction and bound
+void CheckGeomNumbers(const mjModel* m, const std::string& path, int g, const GeomModel& geom) {
+  const std::string who = "geom '" + geom.name + "'";
+  const int used = geom.type == GeomType::kSphere    ? 1
+                   : geom.type == GeomType::kCapsule ? 2
+                   : geom.type == GeomType::kBox     ? 3
+                                                     : 0;
+  for (int i = 0; i < 3; ++i) {
+    const double lo = i < used ? kMinSize : 0.0;
+    CheckRange(path, "size[" + std::to_string(i) + "] of " + who, m->geom_size[3 * g + i], lo,
+               kMaxSize, "m");
+  }
+  if (geom.type != GeomType::kPlane) {
+    CheckRange(path, "the bounding radius of " + who, m->geom_rbound[g], 0.0, kMaxSize, "m");
+  }
+  CheckVec(path, "the position of " + who, m->geom_pos + 3 * g, 3, kMaxPosition, "m");
+  CheckRange(path, "the friction of " + who, m->geom_friction[3 * g], 0.0, kMaxFriction, "");
+}
+
 void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>& body_index,
                Model& model) {
   for (int g = 0; g < m->ngeom; ++g) {
@@ -168,6 +231,7 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
       throw Error("scene file '" + path + "': geom '" + geom.name +
                   "' is a plane on a free body; planes must be static (in the worldbody)");
     }
+    CheckGeomNumbers(m, path, g, geom);
     geom.friction = m->geom_friction[3 * g];
     geom.size = Vec3(m->geom_size[3 * g], m->geom_size[3 * g + 1], m->geom_size[3 * g + 2]);
     geom.rbound_m = m->geom_rbound[g];
@@ -197,7 +261,7 @@ int FindTool(const Model& model, const std::string& path, const std::string& too
 }
 
 // keyframe "initial" when present, else the model defaults (qpos0, zero qvel)
-void InitialState(const mjModel* m, Model& model) {
+void InitialState(const mjModel* m, const std::string& path, Model& model) {
   std::vector<mjtNum> qpos(m->qpos0, m->qpos0 + m->nq);
   std::vector<mjtNum> qvel(m->nv, 0.0);
   const int key = mj_name2id(m, mjOBJ_KEY, "initial");
@@ -205,9 +269,42 @@ void InitialState(const mjModel* m, Model& model) {
     std::copy(m->key_qpos + key * m->nq, m->key_qpos + (key + 1) * m->nq, qpos.begin());
     std::copy(m->key_qvel + key * m->nv, m->key_qvel + (key + 1) * m->nv, qvel.begin());
   }
+  const std::string from = key >= 0 ? "keyframe 'initial'" : "the default pose";
+  for (const auto& b : model.bodies) {
+    const std::string who = " of body '" + b.name + "' in " + from;
+    const mjtNum* q = qpos.data() + b.mj_qpos_adr;
+    const mjtNum* v = qvel.data() + b.mj_qvel_adr;
+    CheckVec(path, "the position" + who, q, 3, kMaxPosition, "m");
+    CheckVec(path, "the quaternion" + who, q + 3, 4, 1e9, "");
+    const double norm = std::sqrt(q[3] * q[3] + q[4] * q[4] + q[5] * q[5] + q[6] * q[6]);
+    if (!(norm > 1e-9)) throw Error("scene file '" + path + "': the quaternion" + who + " is zero");
+    CheckVec(path, "the velocity" + who, v, 3, kMaxSpeed, "m/s");
+    CheckVec(path, "the angular velocity" + who, v + 3, 3, kMaxAngularSpeed, "rad/s");
+  }
   for (const auto& b : model.bodies) {
     model.initial.push_back(
         StateFromFreejoint(b, qpos.data() + b.mj_qpos_adr, qvel.data() + b.mj_qvel_adr));
+  }
+}
+
+// MuJoCo's collision detection on the initial state: free bodies that start inside each other (or
+// inside a static geom) by more than kMaxInitialOverlap are a scene error, since the penalty
+// contact would fling them apart on the first tick
+void CheckInitialOverlap(const mjModel* m, const std::string& path) {
+  std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(m), mj_deleteData);
+  if (!d) throw Error("scene file '" + path + "': MuJoCo could not allocate its data");
+  const int key = mj_name2id(m, mjOBJ_KEY, "initial");
+  if (key >= 0) mj_resetDataKeyframe(m, d.get(), key);
+  mj_fwdPosition(m, d.get());
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    const bool both_static = m->body_weldid[m->geom_bodyid[c.geom1]] == 0 &&
+                             m->body_weldid[m->geom_bodyid[c.geom2]] == 0;
+    if (both_static || !(c.dist < -kMaxInitialOverlap)) continue;
+    throw Error("scene file '" + path + "': geoms '" + MjName(m, mjOBJ_GEOM, c.geom1) + "' and '" +
+                MjName(m, mjOBJ_GEOM, c.geom2) + "' overlap by " + Num(-c.dist) +
+                " m at the start (more than " + Num(kMaxInitialOverlap) +
+                " m); move them apart in the scene or its keyframe 'initial'");
   }
 }
 
@@ -229,10 +326,17 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   model.source = path;
   model.timestep_s = options.timestep_s.value_or(m->opt.timestep);
   model.gravity_W = Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
+  if (!model.gravity_W.allFinite() || model.gravity_W.norm() > kMaxGravity) {
+    throw Error("scene file '" + path + "': option gravity (" + Num(model.gravity_W.x()) + " " +
+                Num(model.gravity_W.y()) + " " + Num(model.gravity_W.z()) +
+                ") m/s^2 is not finite or longer than " + Num(kMaxGravity) + " m/s^2");
+  }
+
   const std::vector<int> body_index = CopyBodies(m, path, model);
   CopyGeoms(m, path, body_index, model);
   model.tool = FindTool(model, path, options.tool_name);
-  InitialState(m, model);
+  InitialState(m, path, model);
+  CheckInitialOverlap(m, path);
   model.contact = options.contact;
   model.render = options.render;
   model.device = options.device;

@@ -1,10 +1,5 @@
 #include "io/trace_csv.h"
 
-#include <fcntl.h>
-#include <stdlib.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <array>
 #include <cerrno>
 #include <charconv>
@@ -13,6 +8,7 @@
 #include <string>
 #include <system_error>
 
+#include "io/output_file.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::io {
@@ -108,22 +104,6 @@ void AppendRow(std::string& out, const TraceSample& s) {
   out += '\n';
 }
 
-// writes all of `data` to fd; false on error (errno set)
-bool WriteAll(int fd, const std::string& data) {
-  const char* p = data.data();
-  std::size_t left = data.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd, p, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return false;
-    }
-    p += n;
-    left -= static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
 std::string_view Trim(std::string_view s) {
   while (!s.empty() && (s.back() == '\r' || s.back() == ' ')) s.remove_suffix(1);
   while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
@@ -160,33 +140,7 @@ void WriteTraceCsv(const std::string& path, std::span<const TraceSample> samples
   text += '\n';
   for (const TraceSample& s : samples) AppendRow(text, s);
 
-  // the temporary file sits in the target's directory so rename is atomic (same file system)
-  std::string temp_path = path + ".tmp.XXXXXX";
-  const int fd = ::mkstemp(temp_path.data());
-  if (fd < 0) {
-    throw Error("cannot write trace file '" + path + "': " + SystemReason(errno));
-  }
-  const auto fail = [&](int error_number) {
-    ::close(fd);
-    ::unlink(temp_path.c_str());
-    throw Error("cannot write trace file '" + path + "': " + SystemReason(error_number));
-  };
-  // mkstemp creates 0600; give the trace the usual permissions (subject to umask)
-  const mode_t mask = ::umask(0);
-  ::umask(mask);
-  if (::fchmod(fd, 0666 & ~mask) != 0) fail(errno);
-  if (!WriteAll(fd, text)) fail(errno);
-  if (::fsync(fd) != 0) fail(errno);
-  if (::close(fd) != 0) {
-    const int error_number = errno;
-    ::unlink(temp_path.c_str());
-    throw Error("cannot write trace file '" + path + "': " + SystemReason(error_number));
-  }
-  if (::rename(temp_path.c_str(), path.c_str()) != 0) {
-    const int error_number = errno;
-    ::unlink(temp_path.c_str());
-    throw Error("cannot write trace file '" + path + "': " + SystemReason(error_number));
-  }
+  WriteFileAtomically(path, text, "trace file");
 }
 
 std::vector<TraceSample> ReadTraceCsv(const std::string& path) {

@@ -16,10 +16,11 @@ namespace rigidtouch::io {
 /// kinetic_energy_before_J; kinetic_energy_after_J; clipped (0/1); tap; step.
 std::span<const std::string_view> TraceColumns();
 
-/// Writes `samples` to `path` atomically: the rows go to a temporary file in the same directory,
-/// which is flushed and renamed over `path`, so readers never see a half-written trace. Numbers
-/// are written in the shortest form that reads back to the same double. Throws rigidtouch::Error
-/// naming the path and the system's reason on failure, and then leaves no file behind.
+/// Writes `samples` to `path` atomically with WriteFileAtomically (io/output_file.h), so readers
+/// never see a half-written trace and only a regular file is ever replaced. Numbers are written in
+/// the shortest form that reads back to the same double. Throws rigidtouch::Error for a bad path
+/// and io::OutputError for a failed write, naming the path and the reason, and then leaves no
+/// file behind.
 void WriteTraceCsv(const std::string& path, std::span<const TraceSample> samples);
 
 /// Reads a trace written by WriteTraceCsv (columns may come in any order; extra columns are

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "rigidtouch/types.h"
+#include "study/log.h"
 #include "study/protocol.h"
 
 namespace rigidtouch::study {
@@ -24,14 +25,6 @@ struct Counts {
   int hits = 0;          // condition 1 named 1
   int false_alarms = 0;  // condition 0 named 1
 };
-
-int RequireInt(const json& r, const char* key, const std::string& source, std::size_t i) {
-  if (!r.contains(key) || !r[key].is_number_integer()) {
-    throw Error(source + ": record " + std::to_string(i + 1) + " (answer) has no integer \"" + key +
-                "\"");
-  }
-  return r[key].get<int>();
-}
 
 json NumberOrNull(double v) {
   return std::isfinite(v) ? json(v) : json();
@@ -56,64 +49,38 @@ StudyReport AnalyzeLogs(const std::vector<LogInput>& logs) {
   std::map<std::string, std::string> modes;
 
   for (const LogInput& log : logs) {
-    try {
-      if (log.records.empty()) throw Error(log.source + ": empty log (no session)");
-      const json& start = log.records[0];
-      if (start.value("type", "") != "session_start" || !start.contains("protocol")) {
-        throw Error(log.source + ": does not start with a session_start record");
+    // the same check as `study run --resume` (ValidateLog): both accept and refuse alike
+    ValidLog valid = ValidateLog(log.records, log.source);
+    if (report.sessions == 0) {
+      protocol = valid.protocol;
+      report.protocol_name = protocol.name;
+      report.protocol_hash = valid.protocol_hash;
+    } else if (valid.protocol_hash != report.protocol_hash) {
+      throw Error(log.source + ": protocol " + valid.protocol_hash + " differs from " +
+                  report.protocol_hash + " of " + logs[0].source +
+                  "; analyse logs of one protocol at a time");
+    }
+    const std::string& id = valid.participant;
+    if (!ids.insert(id).second) {
+      throw Error(log.source + ": participant \"" + id +
+                  "\" appears in two logs; analyse one log per participant");
+    }
+    ++report.sessions;
+    modes[id] = valid.mode;
+    std::vector<Counts>& per_test = counts[id];
+    per_test.assign(protocol.tests.size(), Counts{});
+    for (const LoggedAnswer& answer : valid.answers) {
+      Counts& k = per_test[answer.test];
+      const int c = answer.condition, a = answer.answer;
+      ++k.answers;
+      k.correct += a == c ? 1 : 0;
+      if (c == 1) {
+        ++k.signal;
+        k.hits += a == 1 ? 1 : 0;
+      } else {
+        ++k.noise;
+        k.false_alarms += a == 1 ? 1 : 0;
       }
-      const std::string hash = start.value("protocol_hash", "");
-      if (report.sessions == 0) {
-        protocol = ParseProtocol(start["protocol"], log.source + " (embedded protocol)");
-        if (ProtocolHash(protocol) != hash) {
-          throw Error(log.source + ": the embedded protocol does not match its hash " + hash);
-        }
-        report.protocol_name = protocol.name;
-        report.protocol_hash = hash;
-      } else if (hash != report.protocol_hash) {
-        throw Error(log.source + ": protocol " + hash + " differs from " + report.protocol_hash +
-                    " of " + logs[0].source + "; analyse logs of one protocol at a time");
-      }
-      const std::string id = start.value("participant", "");
-      if (!ids.insert(id).second) {
-        throw Error(log.source + ": participant \"" + id +
-                    "\" appears in two logs; analyse one log per participant");
-      }
-      ++report.sessions;
-      modes[id] = start.value("mode", "");
-      std::vector<Counts>& per_test = counts[id];
-      per_test.assign(protocol.tests.size(), Counts{});
-      std::set<std::pair<int, int>> seen;
-      for (std::size_t i = 1; i < log.records.size(); ++i) {
-        const json& r = log.records[i];
-        if (r.value("type", "") != "answer") continue;
-        const int t = RequireInt(r, "test", log.source, i);
-        const int s = RequireInt(r, "series", log.source, i);
-        const int c = RequireInt(r, "condition", log.source, i);
-        const int a = RequireInt(r, "answer", log.source, i);
-        if (t < 0 || t >= static_cast<int>(protocol.tests.size()) || c < 0 || c > 1 || a < 0 ||
-            a > 1) {
-          throw Error(log.source + ": record " + std::to_string(i + 1) +
-                      " has a test, condition or answer out of range");
-        }
-        if (!seen.insert({t, s}).second) {
-          throw Error(log.source + ": two answers for series " + std::to_string(s) + " of test " +
-                      protocol.tests[t].name);
-        }
-        Counts& k = per_test[t];
-        ++k.answers;
-        k.correct += a == c ? 1 : 0;
-        if (c == 1) {
-          ++k.signal;
-          k.hits += a == 1 ? 1 : 0;
-        } else {
-          ++k.noise;
-          k.false_alarms += a == 1 ? 1 : 0;
-        }
-      }
-    } catch (const json::exception& e) {
-      // a field of the wrong type: the log was edited or written by something else
-      throw Error(log.source + ": malformed record (" + e.what() + ")");
     }
   }
 

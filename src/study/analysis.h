@@ -60,8 +60,9 @@ struct StudyReport {
   std::vector<TestResult> tests;  ///< in protocol order
 };
 
-/// Analyses logs of one protocol. Throws rigidtouch::Error if the logs belong to different
-/// protocols, two logs have the same participant, or a log is inconsistent.
+/// Analyses logs of one protocol. Throws rigidtouch::Error if a log is not valid (ValidateLog in
+/// study/log.h, the same check `study run --resume` makes, with the same message), the logs
+/// belong to different protocols or two logs have the same participant.
 StudyReport AnalyzeLogs(const std::vector<LogInput>& logs);
 
 /// The report as JSON: "protocol_name", "protocol_hash", "sessions", "methods" and "tests"

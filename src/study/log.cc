@@ -8,7 +8,12 @@
 #include <cerrno>
 #include <cstring>
 
+#include <algorithm>
+
+#include "io/output_file.h"
+#include "io/text.h"
 #include "rigidtouch/types.h"
+#include "study/session.h"
 
 namespace rigidtouch::study {
 
@@ -53,7 +58,110 @@ std::string ReadAll(int fd, const std::string& path) {
   return bytes;
 }
 
+int GetInt(const json& record, const char* key, const std::string& source, std::size_t i) {
+  if (!record.contains(key) || !record[key].is_number_integer()) {
+    throw Error(source + ": record " + std::to_string(i + 1) + " (" + record.value("type", "") +
+                ") has no integer \"" + key + "\"");
+  }
+  return record[key].get<int>();
+}
+
+ValidLog Validate(const std::vector<json>& records, const std::string& src) {
+  if (records.empty()) throw Error(src + ": empty log (no session)");
+  const json& start = records[0];
+  if (!start.is_object() || start.value("type", "") != "session_start") {
+    throw Error(src + ": does not start with a session_start record");
+  }
+  CheckFirstRecord(start, src);
+  ValidLog log;
+  if (!start.contains("protocol")) {
+    throw Error(src + ": the session_start record has no embedded protocol");
+  }
+  log.protocol = ParseProtocol(start["protocol"], src + " (embedded protocol)");
+  log.protocol_hash = ProtocolHash(log.protocol);
+  const std::string recorded_hash = start.value("protocol_hash", "");
+  if (recorded_hash != log.protocol_hash) {
+    throw Error(src + ": the embedded protocol does not match its hash " +
+                io::Quote(recorded_hash));
+  }
+  log.participant = start.value("participant", "");
+  try {
+    CheckParticipantId(log.participant);
+  } catch (const Error& e) {
+    throw Error(src + ": the session_start record's " + e.what());
+  }
+  log.mode = start.value("mode", "");
+  if (log.mode != "person" && log.mode != "simulated") {
+    throw Error(src + ": the session_start record's mode " + io::Quote(log.mode) +
+                " is neither \"person\" nor \"simulated\"");
+  }
+  if (!start.contains("seed") || !start["seed"].is_number_unsigned()) {
+    throw Error(src + ": the session_start record has no seed");
+  }
+  log.seed = start["seed"].get<std::uint64_t>();
+  log.plan = MakePlan(log.protocol, log.seed);
+
+  std::vector<bool> done(log.plan.size(), false);
+  for (std::size_t i = 1; i < records.size(); ++i) {
+    const json& r = records[i];
+    const std::string type = r.value("type", "");
+    if (type == "session_start") {
+      throw Error(src + ": record " + std::to_string(i + 1) + " starts a second session");
+    }
+    if (type == "session_end") log.ended = true;
+    if (type != "familiarization" && type != "series" && type != "answer") continue;
+    const int k = GetInt(r, "step", src, i);
+    if (k < 0 || k >= static_cast<int>(log.plan.size())) {
+      throw Error(src + ": record " + std::to_string(i + 1) + " refers to step " +
+                  std::to_string(k) + ", outside the plan of " + std::to_string(log.plan.size()) +
+                  " steps");
+    }
+    const Step& step = log.plan[k];
+    const bool kind_ok = (type == "familiarization") == (step.kind == StepKind::kFamiliarization);
+    const bool series_ok =
+        step.kind != StepKind::kSeries || GetInt(r, "series", src, i) == step.series;
+    if (!kind_ok || GetInt(r, "test", src, i) != step.test ||
+        GetInt(r, "condition", src, i) != step.condition || !series_ok) {
+      throw Error(src + ": record " + std::to_string(i + 1) + " does not match step " +
+                  std::to_string(k) + " of the plan for seed " + std::to_string(log.seed) +
+                  "; the log was not written by this protocol's plan");
+    }
+    if (type == "series") continue;  // presented but maybe unanswered: not done
+    if (type == "answer") {
+      const int answer = GetInt(r, "answer", src, i);
+      if (answer != 0 && answer != 1) {
+        throw Error(src + ": record " + std::to_string(i + 1) + " has answer " +
+                    std::to_string(answer) + "; valid answers: 0, 1");
+      }
+      if (done[k]) {
+        throw Error(src + ": two answers for step " + std::to_string(k) + " (record " +
+                    std::to_string(i + 1) + ")");
+      }
+      log.answers.push_back({k, step.test, step.series, step.condition, answer});
+    }
+    done[k] = true;
+  }
+  // steps are done in order, so the done ones must be a prefix of the plan
+  const auto first_open = std::find(done.begin(), done.end(), false);
+  log.next_step = static_cast<int>(first_open - done.begin());
+  if (std::find(first_open, done.end(), true) != done.end()) {
+    throw Error(src + ": steps are recorded out of order (step " + std::to_string(log.next_step) +
+                " is missing but later steps are done)");
+  }
+  return log;
+}
+
 }  // namespace
+
+ValidLog ValidateLog(const std::vector<nlohmann::json>& records, std::string_view source) {
+  const std::string src(source);
+  try {
+    return Validate(records, src);
+  } catch (const json::exception& e) {
+    // a field of the wrong type: the log was edited or written by something else
+    throw Error(src + ": malformed record (" + e.what() + ")");
+  }
+}
 
 LogContents ParseLog(std::string_view bytes, std::string_view source) {
   LogContents contents;
@@ -137,8 +245,17 @@ LogFile::~LogFile() {
 }
 
 std::unique_ptr<LogFile> LogFile::Open(const std::string& path) {
-  // O_APPEND: every write lands at the end even if something else extended the file
-  const int fd = open(path.c_str(), O_RDWR | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  // a link, FIFO, device or read-only file is refused before anything is opened
+  io::CheckOutputPath(path, "study log");
+  // O_APPEND: every write lands at the end even if something else extended the file;
+  // O_NOFOLLOW: a link put there since the check is refused, not written through
+  const int flags = O_RDWR | O_APPEND | O_CLOEXEC | O_NOFOLLOW;
+  bool created = true;
+  int fd = open(path.c_str(), flags | O_CREAT | O_EXCL, 0644);
+  if (fd < 0 && errno == EEXIST) {
+    created = false;
+    fd = open(path.c_str(), flags);
+  }
   if (fd < 0) throw Error(SystemError(path, "cannot open or create the log"));
   try {
     struct stat st {};
@@ -152,9 +269,12 @@ std::unique_ptr<LogFile> LogFile::Open(const std::string& path) {
     }
     const std::string bytes = ReadAll(fd, path);
     LogContents contents = ParseLog(bytes, path);
-    return std::unique_ptr<LogFile>(new LogFile(fd, path, std::move(contents), bytes.size()));
+    auto log = std::unique_ptr<LogFile>(new LogFile(fd, path, std::move(contents), bytes.size()));
+    log->created_ = created;
+    return log;
   } catch (...) {
     close(fd);
+    if (created) unlink(path.c_str());
     throw;
   }
 }
@@ -162,9 +282,9 @@ std::unique_ptr<LogFile> LogFile::Open(const std::string& path) {
 void LogFile::DropTornTail() {
   if (contents_.torn_tail_bytes == 0) return;
   if (ftruncate(fd_, static_cast<off_t>(contents_.valid_bytes)) != 0) {
-    throw Error(SystemError(path_, "cannot truncate the torn last line"));
+    throw io::OutputError(SystemError(path_, "cannot truncate the torn last line"));
   }
-  if (fsync(fd_) != 0) throw Error(SystemError(path_, "cannot sync the log"));
+  if (fsync(fd_) != 0) throw io::OutputError(SystemError(path_, "cannot sync the log"));
   size_bytes_ = contents_.valid_bytes;
   contents_.torn_tail_bytes = 0;
 }
@@ -172,21 +292,39 @@ void LogFile::DropTornTail() {
 void LogFile::Append(const nlohmann::json& record, bool durable) {
   if (contents_.torn_tail_bytes != 0) DropTornTail();
   const std::string line = RecordLine(record);
-  ssize_t written = -1;
-  do {
-    written = write(fd_, line.data(), line.size());
-  } while (written < 0 && errno == EINTR);
-  if (written != static_cast<ssize_t>(line.size())) {
-    const std::string reason = written < 0 ? std::strerror(errno) : "short write";
-    // a partial line would be a torn tail: take it back so the log stays whole lines
-    if (written > 0 && ftruncate(fd_, static_cast<off_t>(size_bytes_)) != 0) {
-      throw Error(path_ + ": cannot write a record (" + reason +
-                  ") nor remove the partial line; resume will drop it");
+  // normally one write(2); a short one is continued, and the error that cut it (EFBIG at the
+  // file size limit, ENOSPC) is reported
+  std::size_t done = 0;
+  int error_number = 0;
+  while (done < line.size()) {
+    const ssize_t n = write(fd_, line.data() + done, line.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      error_number = n < 0 ? errno : EIO;
+      break;
     }
-    throw Error(path_ + ": cannot write a record (" + reason + ")");
+    done += static_cast<std::size_t>(n);
+  }
+  if (done != line.size()) {
+    const std::string reason = io::WriteFailureReason(error_number);
+    if (created_ && size_bytes_ == 0) {
+      // nothing of this session reached the log this run created: leave no empty log behind
+      unlink(path_.c_str());
+      throw io::OutputError(path_ + ": cannot write the first record (" + reason +
+                            "); the log was not kept");
+    }
+    // a partial line would be a torn tail: take it back so the log stays whole lines
+    if (ftruncate(fd_, static_cast<off_t>(size_bytes_)) != 0) {
+      throw io::OutputError(path_ + ": cannot write a record (" + reason +
+                            ") nor remove the partial line; resume will drop it");
+    }
+    throw io::OutputError(path_ + ": cannot write a record (" + reason +
+                          "); the records before it are intact and the session can be resumed");
   }
   size_bytes_ += line.size();
-  if (durable && fsync(fd_) != 0) throw Error(SystemError(path_, "cannot sync the log"));
+  if (durable && fsync(fd_) != 0) {
+    throw io::OutputError(path_ + ": cannot sync the log (" + io::WriteFailureReason(errno) + ")");
+  }
 }
 
 }  // namespace rigidtouch::study

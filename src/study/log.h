@@ -6,12 +6,16 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "study/plan.h"
+#include "study/protocol.h"
 
 namespace rigidtouch::study {
 
@@ -38,6 +42,37 @@ LogContents ParseLog(std::string_view bytes, std::string_view source);
 /// the file cannot be read or is not a study log.
 LogContents ReadLog(const std::string& path);
 
+/// One answer record of a validated log.
+struct LoggedAnswer {
+  int step = 0;       ///< index in the plan
+  int test = 0;       ///< index into Protocol::tests
+  int series = 0;     ///< series number within the test
+  int condition = 0;  ///< 0 or 1: the condition rendered
+  int answer = 0;     ///< 0 or 1: the condition named
+};
+
+/// What a log that passed ValidateLog holds.
+struct ValidLog {
+  Protocol protocol;          ///< embedded in session_start, its hash checked
+  std::string protocol_hash;  ///< ProtocolHash(protocol)
+  std::string participant;
+  std::string mode;  ///< "person" or "simulated"
+  std::uint64_t seed = 0;
+  std::vector<Step> plan;             ///< MakePlan(protocol, seed)
+  int next_step = 0;                  ///< steps [0, next_step) are done
+  bool ended = false;                 ///< a session_end record exists
+  std::vector<LoggedAnswer> answers;  ///< in log order
+};
+
+/// The one check of a log's records, used by `study run --resume` (before continuing it) and
+/// `study analyze` (before counting it), so that both accept and refuse the same logs with the
+/// same message. Valid: the first record is this format's session_start with a valid participant
+/// ID, mode, unsigned seed and an embedded protocol matching its hash; there is no second
+/// session_start; every familiarization, series and answer record matches the step of the plan
+/// its seed implies (answers 0 or 1, at most one per step); the done steps are a prefix of the
+/// plan. `source` names the log in errors. Throws rigidtouch::Error "<source>: ..." otherwise.
+ValidLog ValidateLog(const std::vector<nlohmann::json>& records, std::string_view source);
+
 /// Destination of session records.
 class RecordSink {
  public:
@@ -60,7 +95,8 @@ class MemorySink : public RecordSink {
 class LogFile : public RecordSink {
  public:
   /// Opens (creating if missing) and reads `path`. Throws rigidtouch::Error, leaving the file
-  /// untouched, if it is not a regular file, is locked by another session or is not a study log.
+  /// untouched, if it is not a regular writable file (a symbolic link, FIFO or device is refused,
+  /// io::CheckOutputPath), is locked by another session or is not a study log.
   static std::unique_ptr<LogFile> Open(const std::string& path);
   ~LogFile() override;
   LogFile(const LogFile&) = delete;
@@ -70,7 +106,9 @@ class LogFile : public RecordSink {
   const LogContents& contents() const { return contents_; }
   /// Truncates a torn tail (if any) so that the next record starts on a new line; fsyncs.
   void DropTornTail();
-  /// Appends `record` as one line with a single write(2); fsyncs when `durable`.
+  /// Appends `record` as one line with a single write(2); fsyncs when `durable`. A failed write
+  /// (disk full, file size limit) throws io::OutputError after taking back any partial line; if
+  /// it was the first record of a log this Open created, the file is removed.
   void Append(const nlohmann::json& record, bool durable) override;
   /// The path the log was opened with.
   const std::string& path() const { return path_; }
@@ -81,6 +119,7 @@ class LogFile : public RecordSink {
   std::string path_;
   LogContents contents_;
   std::size_t size_bytes_;
+  bool created_ = false;  // this Open created the file (removed if its first record fails)
 };
 
 /// Serialises one record the way logs store it (compact JSON, invalid UTF-8 replaced).

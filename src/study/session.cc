@@ -33,14 +33,6 @@ std::uint64_t FreshSeed() {
   return (static_cast<std::uint64_t>(device()) << 32) ^ device();
 }
 
-int GetInt(const json& record, const char* key, std::string_view source, std::size_t line) {
-  if (!record.contains(key) || !record[key].is_number_integer()) {
-    throw Error(std::string(source) + ": record " + std::to_string(line + 1) + " (" +
-                record.value("type", "") + ") has no integer \"" + key + "\"");
-  }
-  return record[key].get<int>();
-}
-
 json StepRecord(const char* type, const Protocol& protocol, const Step& step) {
   const StudyTest& test = protocol.tests[step.test];
   const Condition& condition = ConditionOf(protocol, step);
@@ -142,28 +134,24 @@ std::string UtcNow() {
 
 namespace {
 
+// the log is valid (ValidateLog, shared with analysis); then it must be this session's
 SessionState InspectRecords(const Protocol& protocol, const SessionConfig& config,
                             const std::vector<nlohmann::json>& records, std::string_view source) {
   const std::string src(source);
-  if (records.empty() || records[0].value("type", "") != "session_start") {
-    throw Error(src + ": does not start with a session_start record");
-  }
+  const ValidLog log = ValidateLog(records, source);
   const json& start = records[0];
   const std::string hash = ProtocolHash(protocol);
-  const std::string log_hash = start.value("protocol_hash", "");
-  if (log_hash != hash) {
+  if (log.protocol_hash != hash) {
     throw Error(src + ": refusing to resume: the log was written for protocol " +
-                Quote(start.value("protocol_name", "?")) + " (" + log_hash + "), not for " +
+                Quote(log.protocol.name) + " (" + log.protocol_hash + "), not for " +
                 Quote(protocol.name) + " (" + hash + ")");
   }
-  const std::string log_participant = start.value("participant", "");
-  if (log_participant != config.participant) {
+  if (log.participant != config.participant) {
     throw Error(src + ": refusing to resume: the log belongs to participant " +
-                Quote(log_participant) + ", not " + Quote(config.participant));
+                Quote(log.participant) + ", not " + Quote(config.participant));
   }
-  const std::string log_mode = start.value("mode", "");
-  if (log_mode != config.mode) {
-    throw Error(src + ": refusing to resume: the log was written by a " + log_mode +
+  if (log.mode != config.mode) {
+    throw Error(src + ": refusing to resume: the log was written by a " + log.mode +
                 " session, not a " + config.mode + " one");
   }
   for (const std::string& field : config.resume_checked_fields) {
@@ -176,60 +164,17 @@ SessionState InspectRecords(const Protocol& protocol, const SessionConfig& confi
                   " (log: " + found.dump() + ", now: " + expected.dump() + ")");
     }
   }
-  if (!start.contains("seed") || !start["seed"].is_number_unsigned()) {
-    throw Error(src + ": the session_start record has no seed");
-  }
-  SessionState state;
-  state.seed = start["seed"].get<std::uint64_t>();
-  if (config.seed && *config.seed != state.seed) {
+  if (config.seed && *config.seed != log.seed) {
     throw Error(src + ": refusing to resume: the log's session seed is " +
-                std::to_string(state.seed) + ", not " + std::to_string(*config.seed) +
+                std::to_string(log.seed) + ", not " + std::to_string(*config.seed) +
                 " (omit --seed to resume with the log's seed)");
   }
-  state.plan = MakePlan(protocol, state.seed);
-
-  std::vector<bool> done(state.plan.size(), false);
-  for (std::size_t i = 1; i < records.size(); ++i) {
-    const json& r = records[i];
-    const std::string type = r.value("type", "");
-    if (type == "session_start") {
-      throw Error(src + ": record " + std::to_string(i + 1) + " starts a second session");
-    }
-    if (type == "session_end") state.ended = true;
-    if (type != "familiarization" && type != "series" && type != "answer") continue;
-    const int k = GetInt(r, "step", source, i);
-    if (k < 0 || k >= static_cast<int>(state.plan.size())) {
-      throw Error(src + ": record " + std::to_string(i + 1) + " refers to step " +
-                  std::to_string(k) + ", outside the plan of " + std::to_string(state.plan.size()) +
-                  " steps");
-    }
-    const Step& step = state.plan[k];
-    const bool kind_ok = (type == "familiarization") == (step.kind == StepKind::kFamiliarization);
-    const bool series_ok =
-        step.kind != StepKind::kSeries || GetInt(r, "series", source, i) == step.series;
-    if (!kind_ok || GetInt(r, "test", source, i) != step.test ||
-        GetInt(r, "condition", source, i) != step.condition || !series_ok) {
-      throw Error(src + ": record " + std::to_string(i + 1) + " does not match step " +
-                  std::to_string(k) + " of the plan for seed " + std::to_string(state.seed) +
-                  "; the log was not written by this protocol's plan");
-    }
-    if (type == "series") continue;  // presented but maybe unanswered: not done
-    if (type == "answer") {
-      if (done[k]) {
-        throw Error(src + ": two answers for step " + std::to_string(k) + " (record " +
-                    std::to_string(i + 1) + ")");
-      }
-      ++state.answers;
-    }
-    done[k] = true;
-  }
-  // steps are done in order, so the done ones must be a prefix of the plan
-  const auto first_open = std::find(done.begin(), done.end(), false);
-  state.next_step = static_cast<int>(first_open - done.begin());
-  if (std::find(first_open, done.end(), true) != done.end()) {
-    throw Error(src + ": steps are recorded out of order (step " + std::to_string(state.next_step) +
-                " is missing but later steps are done)");
-  }
+  SessionState state;
+  state.seed = log.seed;
+  state.plan = log.plan;
+  state.next_step = log.next_step;
+  state.answers = static_cast<int>(log.answers.size());
+  state.ended = log.ended;
   return state;
 }
 

@@ -94,9 +94,9 @@ struct SessionState {
   bool ended = false;  ///< a session_end record exists
 };
 
-/// Checks that `records` (a non-empty log) belong to this protocol, participant and mode (and seed,
-/// if the config gives one) and match the plan their seed implies. `source` names the log in
-/// errors. Throws rigidtouch::Error with the reason otherwise.
+/// Checks that `records` are a valid log (ValidateLog, the check `study analyze` makes too) and
+/// belong to this protocol, participant and mode (and seed, if the config gives one). `source`
+/// names the log in errors. Throws rigidtouch::Error with the reason otherwise.
 SessionState InspectSession(const Protocol& protocol, const SessionConfig& config,
                             const std::vector<nlohmann::json>& records, std::string_view source);
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -161,6 +162,21 @@ TEST(ConfigTest, MissingEmptyAndMalformedFilesNameTheFile) {
   EXPECT_TRUE(Has(ErrorOf(" \n\t", "blank.json"), "blank.json: the config file is empty"));
   const std::string e = ErrorOf("{\n  \"contact\": {\n    \"stiffness_N_per_m\": 10,\n  }\n}");
   EXPECT_TRUE(Has(e, "config.json: not valid JSON at line 4, column 3")) << e;
+}
+
+TEST(ConfigTest, AFolderGivenAsTheConfigIsNamed) {
+  const std::string dir = test::TempDir().string();
+  std::filesystem::create_directories(dir);
+  LoadOptions o;
+  try {
+    ApplyConfigFile(dir, o);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), dir + ": is a directory, not a config file");
+  }
+  // a number too large for a double at the top level, too
+  const std::string e = ErrorOf(R"({"timestep_s": 1e309})");
+  EXPECT_TRUE(Has(e, "config.json: timestep_s: 1e309 is not a finite number")) << e;
 }
 
 TEST(ConfigTest, AFieldGivenTwiceIsAnError) {

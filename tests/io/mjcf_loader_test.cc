@@ -130,5 +130,73 @@ TEST(MjcfLoaderTest, TrainRequiresPerfectlyPlasticCollisions) {
   EXPECT_EQ(LoadError(TestScene("sphere_plane.xml"), o), "");
 }
 
+// a tool sphere above a floor, with the parts the bounds tests change
+std::string BoundsScene(const std::string& option, const std::string& tool_attrs,
+                        const std::string& key, const std::string& extra_body = "") {
+  return "<mujoco><option " + option +
+         "/><worldbody><geom name=\"floor\" type=\"plane\" size=\"1 1 0.1\"/>"
+         "<body name=\"tool\" pos=\"0 0 0.1\"><freejoint/><geom name=\"tip\" type=\"sphere\" " +
+         tool_attrs + "/></body>" + extra_body + "</worldbody>" + key + "</mujoco>";
+}
+
+std::string BoundsError(const std::string& xml) {
+  return LoadError(test::WriteTempFile("bounds.xml", xml));
+}
+
+TEST(MjcfLoaderTest, SaneSceneLoads) {
+  EXPECT_EQ(BoundsError(BoundsScene("gravity=\"0 0 -9.81\"", "size=\"0.01\" mass=\"0.1\"", "")),
+            "");
+}
+
+TEST(MjcfLoaderTest, AbsurdOrNonFiniteValuesNameTheBodyGeomKeyframeOrOption) {
+  const std::string tool = "size=\"0.01\" mass=\"0.1\"";
+  std::string e = BoundsError(BoundsScene("", "size=\"0.01\" mass=\"1e300\"", ""));
+  EXPECT_NE(e.find("the mass of body 'tool' is 1e+300 kg, outside the valid range [1e-09, 1e+09]"),
+            std::string::npos)
+      << e;
+  e = BoundsError(BoundsScene("gravity=\"0 0 -1e6\"", tool, ""));
+  EXPECT_NE(e.find("option gravity (0 0 -1e+06) m/s^2 is not finite or longer than 1000"),
+            std::string::npos)
+      << e;
+  e = BoundsError(BoundsScene(
+      "", tool, "<keyframe><key name=\"initial\" qpos=\"1e300 0 0.1 1 0 0 0\"/></keyframe>"));
+  EXPECT_NE(e.find("the position of body 'tool' in keyframe 'initial'[0] is 1e+300 m"),
+            std::string::npos)
+      << e;
+  e = BoundsError(BoundsScene(
+      "", tool, "<keyframe><key name=\"initial\" qpos=\"nan 0 0.1 1 0 0 0\"/></keyframe>"));
+  EXPECT_NE(e.find("keyframe 'initial'[0] is nan m"), std::string::npos) << e;
+  e = BoundsError(BoundsScene("", tool,
+                              "<keyframe><key name=\"initial\" qpos=\"0 0 0.1 1 0 0 0\" "
+                              "qvel=\"0 0 -1e9 0 0 0\"/></keyframe>"));
+  EXPECT_NE(e.find("the velocity of body 'tool' in keyframe 'initial'[2] is -1e+09 m/s"),
+            std::string::npos)
+      << e;
+  e = BoundsError(BoundsScene(
+      "", tool, "", "<geom name=\"wall\" type=\"box\" size=\"1e12 1 1\" pos=\"0 5 0\"/>"));
+  EXPECT_NE(e.find("size[0] of geom 'wall' is 1e+12 m"), std::string::npos) << e;
+}
+
+TEST(MjcfLoaderTest, BodiesOverlappingAtTheStartNameBothGeomsAndTheDepth) {
+  const std::string tool = "size=\"0.01\" mass=\"0.1\"";
+  // a ball 5 mm into the tool
+  std::string e = BoundsError(
+      BoundsScene("gravity=\"0 0 0\"", tool, "",
+                  "<body name=\"ball\" pos=\"0.015 0 0.1\"><freejoint/><geom name=\"ball_geom\" "
+                  "type=\"sphere\" size=\"0.01\" mass=\"0.1\"/></body>"));
+  EXPECT_NE(e.find("geoms 'tip' and 'ball_geom' overlap by 0.005 m at the start"),
+            std::string::npos)
+      << e;
+  // the tool 5 mm into the floor
+  e = BoundsError(BoundsScene(
+      "", tool, "<keyframe><key name=\"initial\" qpos=\"0 0 0.005 1 0 0 0\"/></keyframe>"));
+  EXPECT_NE(e.find("geoms 'floor' and 'tip' overlap by 0.005 m"), std::string::npos) << e;
+  // touching within the 1 mm tolerance is a resting contact, not an error
+  EXPECT_EQ(
+      BoundsError(BoundsScene(
+          "", tool, "<keyframe><key name=\"initial\" qpos=\"0 0 0.0095 1 0 0 0\"/></keyframe>")),
+      "");
+}
+
 }  // namespace
 }  // namespace rigidtouch

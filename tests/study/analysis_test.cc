@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "rigidtouch/types.h"
+#include "study/log.h"
+#include "study/plan.h"
 #include "study/protocol.h"
 
 namespace rigidtouch::study {
@@ -27,26 +29,42 @@ Protocol TwoTests(const char* name = "analysis") {
   return ParseProtocol(d, "analysis.json");
 }
 
-// a log whose answers are given as (condition, answer) pairs per test
+// a valid log (study/log.h, ValidateLog) of a session with seed 7: per test, its series in plan
+// order take the given (condition, answer) pairs in turn, answered correctly when the pair is
+// (the plan decides which condition each series renders); the log stops at the first series left
+// without a pair
 LogInput MakeLog(const Protocol& p, const std::string& id,
                  const std::vector<std::vector<std::pair<int, int>>>& per_test,
                  const char* mode = "person") {
+  constexpr std::uint64_t kSeed = 7;
   LogInput log;
   log.source = id + ".jsonl";
   log.records.push_back({{"type", "session_start"},
+                         {"format", kLogFormat},
+                         {"format_version", kLogFormatVersion},
                          {"protocol", p.ToJson()},
                          {"protocol_hash", ProtocolHash(p)},
                          {"participant", id},
-                         {"mode", mode}});
-  for (std::size_t t = 0; t < per_test.size(); ++t) {
-    for (std::size_t s = 0; s < per_test[t].size(); ++s) {
-      const auto [condition, answer] = per_test[t][s];
-      log.records.push_back({{"type", "answer"},
-                             {"test", t},
-                             {"series", s},
-                             {"condition", condition},
-                             {"answer", answer}});
+                         {"mode", mode},
+                         {"seed", kSeed}});
+  std::vector<std::size_t> next(p.tests.size(), 0);
+  for (const Step& step : MakePlan(p, kSeed)) {
+    if (step.kind == StepKind::kFamiliarization) {
+      log.records.push_back({{"type", "familiarization"},
+                             {"step", step.index},
+                             {"test", step.test},
+                             {"condition", step.condition}});
+      continue;
     }
+    const std::size_t t = static_cast<std::size_t>(step.test);
+    if (t >= per_test.size() || next[t] >= per_test[t].size()) break;
+    const auto [condition, answer] = per_test[t][next[t]++];
+    log.records.push_back({{"type", "answer"},
+                           {"step", step.index},
+                           {"test", step.test},
+                           {"series", step.series},
+                           {"condition", step.condition},
+                           {"answer", answer == condition ? step.condition : 1 - step.condition}});
   }
   return log;
 }
@@ -165,7 +183,7 @@ TEST(AnalysisTest, RefusesMixedProtocolsAndDuplicateParticipants) {
   tampered.records[0]["protocol"]["tests"][0]["series"] = 11;
   EXPECT_THROW(AnalyzeLogs({tampered}), Error);
   LogInput doubled = MakeLog(p, "P01", {Series(2, 2)});
-  doubled.records.push_back(doubled.records[1]);
+  doubled.records.push_back(doubled.records.back());  // an answer, twice
   EXPECT_THROW(AnalyzeLogs({doubled}), Error);
   LogInput wrong_type = MakeLog(p, "P01", {Series(2, 2)});
   wrong_type.records[1]["test"] = "first";

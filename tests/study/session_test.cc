@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rigidtouch/types.h"
+#include "study/analysis.h"
 #include "study/test_files.h"
 
 namespace rigidtouch::study {
@@ -366,6 +367,65 @@ TEST(AnswerTest, TerminalAsksAgainAfterATypoAndStopsAtEndOfInput) {
   TerminalResponder quitter(quit, out);
   EXPECT_EQ(quitter.Ask(p, step), std::nullopt);
   EXPECT_EQ(quitter.StopReason(), "quit");
+}
+
+// `study run --resume` and `study analyze` make the one check (ValidateLog): a log one accepts
+// the other accepts, and a damaged log is refused by both with the same message
+TEST(SessionTest, ResumeAndAnalyzeAgreeOnWhichLogsAreValid) {
+  const Protocol p = SmallProtocol();
+  MemorySink sink;
+  RecordingPresenter presenter;
+  ScriptedResponder responder({0, 1, 1, 0});
+  RunSession(p, Config(), {}, "mem", sink, presenter, responder);
+  SessionConfig resume = Config();
+  resume.resume = true;
+  const auto resume_error = [&](const std::vector<json>& records) -> std::string {
+    try {
+      InspectSession(p, resume, records, "log.jsonl");
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const auto analyze_error = [&](const std::vector<json>& records) -> std::string {
+    try {
+      AnalyzeLogs({{"log.jsonl", records}});
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::vector<json> good = sink.records;
+  EXPECT_EQ(resume_error(good), "");
+  EXPECT_EQ(analyze_error(good), "");
+
+  std::size_t first_answer = 0;
+  while (good[first_answer]["type"] != "answer") ++first_answer;
+  std::vector<std::vector<json>> damaged;
+  damaged.push_back(good);
+  damaged.back()[first_answer]["answer"] = 7;  // answers are 0 or 1
+  damaged.push_back(good);
+  damaged.back()[first_answer]["condition"] = 1 - good[first_answer]["condition"].get<int>();
+  damaged.push_back(good);
+  damaged.back().push_back(good[first_answer]);  // a second answer for one step
+  damaged.push_back(good);
+  damaged.back()[0]["protocol"]["name"] =
+      "edited";  // the embedded protocol no longer matches its hash
+  damaged.push_back(good);
+  damaged.back()[0].erase("seed");
+  damaged.push_back(good);
+  damaged.back()[0]["participant"] = "../P01";
+  damaged.push_back(good);
+  damaged.back()[first_answer]["step"] = "one";
+  damaged.push_back(good);
+  damaged.back().erase(damaged.back().begin() + static_cast<long>(first_answer));  // out of order
+  damaged.push_back(good);
+  damaged.back().push_back(good[0]);  // a second session
+  for (std::size_t i = 0; i < damaged.size(); ++i) {
+    const std::string by_resume = resume_error(damaged[i]);
+    EXPECT_NE(by_resume, "") << "damage " << i;
+    EXPECT_EQ(by_resume, analyze_error(damaged[i])) << "damage " << i;
+  }
 }
 
 }  // namespace
