@@ -129,16 +129,17 @@ TEST(HapticLoop, CallsReadWriteEndPeriodOncePerTickInOrder) {
 // that died: the link still hands out its newest state), then invalid (the watchdog)
 class FreezingDevice final : public device::Device {
  public:
-  FreezingDevice(int fresh_reads, int stale_reads, double max_force_N)
-      : fresh_reads_(fresh_reads), stale_reads_(stale_reads) {
+  FreezingDevice(int fresh_reads, int stale_reads, double max_force_N, bool keep_moving = false)
+      : fresh_reads_(fresh_reads), stale_reads_(stale_reads), keep_moving_(keep_moving) {
     limits_.max_force_N = max_force_N;
     commands.reserve(4000);
   }
   DeviceState Read() override {
     const int k = std::min(reads_, fresh_reads_ - 1);
+    const int moved = keep_moving_ ? reads_ : k;  // a faulty bridge: new pose, old sequence
     DeviceState s;
     s.sequence = static_cast<std::uint64_t>(k) + 1;
-    s.position_m = Vec3(0.0, 0.0, kStart_m - kSpeed_mps * k / kRateHz);
+    s.position_m = Vec3(0.0, 0.0, kStart_m - kSpeed_mps * moved / kRateHz);
     s.velocity_mps = Vec3(0.0, 0.0, -kSpeed_mps);
     s.valid = reads_ < fresh_reads_ + stale_reads_;
     ++reads_;
@@ -155,6 +156,7 @@ class FreezingDevice final : public device::Device {
 
  private:
   int fresh_reads_, stale_reads_;
+  bool keep_moving_;
   int reads_ = 0;
   device::DeviceLimits limits_;
 };
@@ -195,6 +197,26 @@ TEST(HapticLoop, StaleStateDuringContactAppliesNoImpulseAndHoldsTheForce) {
     EXPECT_TRUE(c[k].safe_fallback);
   }
   EXPECT_EQ(r.stale_device_ticks, stale);
+}
+
+// whatever a reading with an old sequence says (here: deeper and deeper into the wall), the
+// loop does not let it raise the force above the last fresh tick's
+TEST(HapticLoop, RepeatedSequenceCannotRaiseTheForce) {
+  const Model model = DirectWall(0.0);
+  Data data = MakeData(model);
+  const int fresh = 11, stale = 30;
+  FreezingDevice dev(fresh, stale, 0.0, /*keep_moving=*/true);
+  const HapticLoopResult r = RunHapticLoop(model, data, dev, Options(0.1), nullptr);
+  const auto& c = dev.commands;
+  ASSERT_GE(static_cast<int>(c.size()), fresh + stale) << "too few ticks (loaded machine?)";
+  const double last_fresh_N = c[fresh - 1].force_N.norm();
+  ASSERT_GT(last_fresh_N, 0.0);
+  for (int k = fresh; k < fresh + stale; ++k) {
+    // k d alone would grow by k v h = 0.4 N per tick
+    EXPECT_LE(c[k].force_N.norm(), last_fresh_N) << "tick " << k;
+    EXPECT_GT(c[k].penalty_force_N.norm(), last_fresh_N) << "tick " << k;
+  }
+  EXPECT_EQ(r.held_force_ticks, stale);
 }
 
 // the loop's last guard clips every command to the device's own limit when the model has none
