@@ -62,7 +62,10 @@ void PrintResult(const nlohmann::json& result, bool json) {
                 us("period_error_p99_s"), us("period_error_p999_s"), us("period_error_max_s"));
   std::cout << line << "impulses " << result["impulses"] << ", invalid device ticks "
             << result["invalid_device_ticks"] << ", safe zero-force ticks "
-            << result["safe_fallback_ticks"] << "\n";
+            << result["safe_fallback_ticks"] << ", stale device ticks "
+            << result["stale_device_ticks"] << "\n"
+            << "max force " << result["max_force_N"] << " N (limit " << result["force_limit_N"]
+            << " N, 0: none), clipped ticks " << result["clipped_ticks"] << "\n";
   for (const auto& w : t["warnings"]) std::cout << "warning: " << w.get<std::string>() << "\n";
 }
 
