@@ -1,8 +1,8 @@
 // rigidtouch command-line tool: `rigidtouch <subcommand> [options]`. Errors go to stderr with a
 // non-zero exit; with --json a subcommand prints exactly one JSON object on stdout. Exit codes
 // (README, "Exit codes"): 0 success, 2 bad input (a file, field, value or output path), 3 an
-// internal error, 4 an output file could not be written (disk full, file size limit), CLI11's own
-// codes (above 100) for a malformed command line.
+// internal error, 4 an output file could not be written (disk full, file size limit), 5 serve's
+// device did not answer, CLI11's own codes (above 100) for a malformed command line.
 #include <exception>
 #include <iostream>
 

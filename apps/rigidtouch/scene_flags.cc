@@ -1,5 +1,7 @@
 #include "scene_flags.h"
 
+#include <cmath>
+
 #include "io/config.h"
 #include "io/resources.h"
 
@@ -35,6 +37,24 @@ LoadOptions ToLoadOptions(const SceneFlags& f) {
   if (f.stiffness_N_per_m) o.contact.stiffness_N_per_m = *f.stiffness_N_per_m;
   if (f.damping_Ns_per_m) o.contact.damping_Ns_per_m = *f.damping_Ns_per_m;
   if (f.reference_solver) o.render.reference_solver = true;
+  return o;
+}
+
+ContactOverrides ExplicitContact(const SceneFlags& f) {
+  ContactOverrides o{f.stiffness_N_per_m, f.damping_Ns_per_m};
+  if (!f.config.empty() && (!o.stiffness_N_per_m || !o.damping_Ns_per_m)) {
+    // the config reader leaves absent fields as they are, so NaN marks "not in the file"
+    LoadOptions probe;
+    probe.contact.stiffness_N_per_m = NAN;
+    probe.contact.damping_Ns_per_m = NAN;
+    io::ApplyConfigFile(f.config, probe);
+    if (!o.stiffness_N_per_m && !std::isnan(probe.contact.stiffness_N_per_m)) {
+      o.stiffness_N_per_m = probe.contact.stiffness_N_per_m;
+    }
+    if (!o.damping_Ns_per_m && !std::isnan(probe.contact.damping_Ns_per_m)) {
+      o.damping_Ns_per_m = probe.contact.damping_Ns_per_m;
+    }
+  }
   return o;
 }
 

@@ -36,6 +36,14 @@ void AddSceneFlags(CLI::App* app, SceneFlags& flags, bool scene_required = true)
 /// Load options from the config file (if any) overridden by the flags.
 LoadOptions ToLoadOptions(const SceneFlags& flags);
 
+/// The tool contact's stiffness and damping the user set, by flag or else in the config file;
+/// unset where neither gives one (a caller may then default them to what a device can display).
+struct ContactOverrides {
+  std::optional<double> stiffness_N_per_m;
+  std::optional<double> damping_Ns_per_m;
+};
+ContactOverrides ExplicitContact(const SceneFlags& flags);
+
 /// The warnings of a run as a JSON object {name: count}, only those that occurred.
 nlohmann::json WarningsJson(const std::array<WarningStat, static_cast<int>(Warning::kCount)>& w);
 inline nlohmann::json WarningsJson(const Data& data) {

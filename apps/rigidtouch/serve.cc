@@ -1,17 +1,22 @@
 // `rigidtouch serve`: the real-time haptic loop against a device (the UDP bridge or the
 // in-process simulated device), with loop statistics at the end.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
 #include "analysis/tap_experiment.h"
 #include "command.h"
+#include "device/presets.h"
 #include "device/udp_device.h"
 #include "device/udp_json.h"
 #include "io/resources.h"
+#include "io/output_file.h"
 #include "io/trace_csv.h"
 #include "loop/haptic_loop.h"
 #include "loop/loop_json.h"
 #include "loop/stop_signal.h"
+#include "render/limits.h"
 #include "scene_flags.h"
 
 namespace rigidtouch::cli {
@@ -29,9 +34,16 @@ struct ServeFlags {
   double test_drop = 0.0;
   int taps = 3;
   double speed_mps = 0.2;
+  double startup_timeout_s = 1.0;
+  double max_device_radius_m = DeviceParams{}.plausible_radius_m;
+  double max_device_speed_mps = DeviceParams{}.plausible_speed_mps;
   std::string trace;
   bool json = false;
 };
+
+// exit status when the device never answered (docs/device-protocol.md, Watchdogs); 2 is any
+// other error (bad parameter, e.g. a stiffness the device cannot display)
+constexpr int kExitNoDevice = 5;
 
 void PrintResult(const nlohmann::json& result, bool json) {
   if (json) {
@@ -51,8 +63,31 @@ void PrintResult(const nlohmann::json& result, bool json) {
                 us("period_error_p99_s"), us("period_error_p999_s"), us("period_error_max_s"));
   std::cout << line << "impulses " << result["impulses"] << ", invalid device ticks "
             << result["invalid_device_ticks"] << ", safe zero-force ticks "
-            << result["safe_fallback_ticks"] << "\n";
+            << result["safe_fallback_ticks"] << ", stale device ticks "
+            << result["stale_device_ticks"] << "\n"
+            << "max force " << result["max_force_N"] << " N (limit " << result["force_limit_N"]
+            << " N, 0: none), clipped ticks " << result["clipped_ticks"] << "\n";
   for (const auto& w : t["warnings"]) std::cout << "warning: " << w.get<std::string>() << "\n";
+}
+
+// What the run rendered and under which limits, for the summary.
+nlohmann::json RenderJson(const Model& model, const Data& data) {
+  const DeviceParams& d = model.device;
+  return {{"contact",
+           {{"stiffness_N_per_m", model.contact.stiffness_N_per_m},
+            {"damping_Ns_per_m", model.contact.damping_Ns_per_m}}},
+          {"limits",
+           {{"max_force_N", d.max_force_N},
+            {"max_stiffness_N_per_m", d.max_stiffness_N_per_m},
+            {"max_damping_Ns_per_m", d.max_damping_Ns_per_m},
+            {"plausible_radius_m", d.plausible_radius_m},
+            {"plausible_speed_mps", d.plausible_speed_mps}}},
+          {"warnings", WarningsJson(data)}};
+}
+
+void SetPlausibility(const ServeFlags& f, DeviceParams& d) {
+  d.plausible_radius_m = f.max_device_radius_m;
+  d.plausible_speed_mps = f.max_device_speed_mps;
 }
 
 void Run(const ServeFlags& f) {
@@ -62,14 +97,21 @@ void Run(const ServeFlags& f) {
   lo.lock_memory = f.realtime;
   lo.spin_us = f.spin_us;
   loop::ValidateLoopOptions(lo);
+  if (!(f.startup_timeout_s > 0.0) || !std::isfinite(f.startup_timeout_s)) {
+    throw Error("serve: --startup-timeout must be > 0 s, finite");
+  }
   std::vector<TraceSample> samples;
   std::unique_ptr<loop::TraceQueue> traces;
   if (!f.trace.empty()) {
+    io::CheckOutputPath(f.trace, "trace file");  // before the session, not after it
     traces = std::make_unique<loop::TraceQueue>(1 << 16, loop::VectorSink(&samples));
   }
   const std::atomic<bool>& stop = loop::InstallStopSignalHandlers();
   nlohmann::json result;
   loop::HapticLoopResult r;
+  const device::DeviceLimits& preset = device::FindPreset(f.preset);
+  // a force limit in the config file still applies where it is stricter than the preset's
+  const double config_max_force_N = ToLoadOptions(f.scene).device.max_force_N;
   if (f.device == "sim") {
     analysis::TapExperimentConfig c;
     c.scene_path = f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
@@ -82,9 +124,15 @@ void Run(const ServeFlags& f) {
     c.script.taps = f.taps;
     c.script.approach_speed_mps = f.speed_mps;
     analysis::TapSetup setup = analysis::PrepareTap(c);
+    Model& model = setup.model;
+    model.device.max_force_N = render::StricterLimit(model.device.max_force_N, config_max_force_N);
+    device::TightenDeviceParams(model.device, setup.simulated->limits());
+    SetPlausibility(f, model.device);
+    Configure(model);  // refuses a stiffness or damping the device cannot display
     lo.duration_s = f.duration_s > 0.0 ? f.duration_s : setup.simulated->duration_s();
-    Data data = MakeData(setup.model);
-    r = loop::RunHapticLoop(setup.model, data, *setup.simulated, lo, &stop, traces.get());
+    Data data = MakeData(model);
+    r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get());
+    result = RenderJson(model, data);
     result["device"] = {{"kind", "simulated"},
                         {"preset", f.preset},
                         {"energy_to_user_J", setup.simulated->energy_to_user_J()}};
@@ -92,32 +140,61 @@ void Run(const ServeFlags& f) {
     LoadOptions load = ToLoadOptions(f.scene);
     load.timestep_s = 1.0 / f.rate_hz;
     load.device.coupling = Coupling::kDirect;
+    // the wall defaults to what the device can display, as on the simulated path (and the tap
+    // experiment): the preset's stiffness, damping k h capped at the preset's
+    const ContactOverrides set = ExplicitContact(f.scene);
+    if (!set.stiffness_N_per_m && preset.max_stiffness_N_per_m > 0.0) {
+      load.contact.stiffness_N_per_m = preset.max_stiffness_N_per_m;
+    }
+    if (!set.damping_Ns_per_m && preset.max_damping_Ns_per_m > 0.0) {
+      load.contact.damping_Ns_per_m =
+          std::min(load.contact.stiffness_N_per_m / f.rate_hz, preset.max_damping_Ns_per_m);
+    }
+    device::TightenDeviceParams(load.device, preset);
+    SetPlausibility(f, load.device);
     const std::string scene =
         f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
-    Model model = LoadModel(scene, load);
+    Model model = LoadModel(scene, load);  // Configure refuses what the preset cannot display
     // the tool is the end effector; without a model of the real device, the simulated one's
     analysis::UseDeviceAndHandMass(model, device::DeviceModelParams{}, device::HandParams{});
     Configure(model);
     device::UdpDeviceOptions o;
     o.server = f.device;
     o.watchdog_s = f.watchdog_s;
-    o.limits = device::FindPreset(f.preset);
+    o.limits = preset;
     o.test_loss.incoming_fraction = f.test_drop;
     o.test_loss.outgoing_fraction = f.test_drop;
     device::UdpDevice dev(o);
+    if (!loop::AwaitFirstState(dev, f.startup_timeout_s, &stop)) {
+      if (stop.load()) return;  // interrupted before the device answered: nothing was rendered
+      std::cerr << "rigidtouch: error: serve: no state from the device at " << f.device
+                << " within " << f.startup_timeout_s
+                << " s (--startup-timeout); is the device server running?\n";
+      throw CLI::RuntimeError(kExitNoDevice);
+    }
+    // the device's own limits, known once its session has started, tighten the preset's
+    device::TightenDeviceParams(model.device, dev.limits());
+    Configure(model);
     lo.duration_s = f.duration_s;
     Data data = MakeData(model);
     r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get());
+    result = RenderJson(model, data);
     result["device"] = {{"kind", "udp"},
                         {"server", f.device},
+                        {"preset", f.preset},
                         {"link", ToJson(dev.counters())},
                         {"watchdog_tripped", dev.watchdog_tripped()}};
   }
   result["loop"] = loop::ToJson(r.timing);
   result["impulses"] = r.impulses;
   result["invalid_device_ticks"] = r.invalid_device_ticks;
+  result["stale_device_ticks"] = r.stale_device_ticks;
+  result["held_force_ticks"] = r.held_force_ticks;
   result["safe_fallback_ticks"] = r.safe_fallback_ticks;
+  result["non_finite_commands"] = r.non_finite_commands;
   result["clipped_ticks"] = r.clipped_ticks;
+  result["guard_clipped_ticks"] = r.guard_clipped_ticks;
+  result["force_limit_N"] = r.force_limit_N;
   result["max_force_N"] = r.max_force_N;
   result["finite"] = r.finite;
   if (traces) {
@@ -135,7 +212,9 @@ void Register(CLI::App& root) {
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
   app->add_option("--device", f->device, "sim (in-process simulated device) or udp://HOST:PORT")
       ->capture_default_str();
-  app->add_option("--preset", f->preset, "device preset (limits; the simulated device's)")
+  app->add_option("--preset", f->preset,
+                  "device preset: its force, stiffness and damping limits apply on every device "
+                  "(with the device's own, the stricter wins); the simulated device's model")
       ->capture_default_str();
   app->add_option("--rate", f->rate_hz, "loop rate [Hz], 1 to 20000")->capture_default_str();
   app->add_option("--duration", f->duration_s,
@@ -144,12 +223,27 @@ void Register(CLI::App& root) {
   app->add_option("--spin-us", f->spin_us, "busy-wait before each deadline [us]");
   app->add_option("--watchdog", f->watchdog_s, "no fresh device state for this long: zero force")
       ->capture_default_str();
+  app->add_option("--startup-timeout", f->startup_timeout_s,
+                  "udp: no first state from the device within this long [s]: exit with status 5")
+      ->capture_default_str();
+  app->add_option("--max-device-radius", f->max_device_radius_m,
+                  "a device state farther from the device's origin [m] is implausible: zero force")
+      ->capture_default_str();
+  app->add_option("--max-device-speed", f->max_device_speed_mps,
+                  "a device state faster than this [m/s] is implausible: zero force")
+      ->capture_default_str();
   app->add_option("--test-drop", f->test_drop, "TEST ONLY: drop this fraction of packets");
   app->add_option("--taps", f->taps, "taps of the simulated hand (sim)")->capture_default_str();
   app->add_option("--speed", f->speed_mps, "approach speed of the simulated hand [m/s] (sim)")
       ->capture_default_str();
   app->add_option("--trace", f->trace, "write the trace CSV here");
   app->add_flag("--json", f->json, "print one JSON object");
+  app->footer(
+      "Device limits: a --stiffness or --damping (or config value) above what the preset or the "
+      "device can display is refused with an error naming the parameter and the limit (exit "
+      "status 2); unset, they default to the preset's stiffness and to k h capped at its "
+      "damping. Every command is clipped to the stricter force limit. Exit status 4: the UDP "
+      "device sent no state within --startup-timeout.");
   app->callback([f] { Run(*f); });
 }
 

@@ -78,6 +78,8 @@ enum class Warning : int {
   kNonFiniteState,   ///< the simulation produced NaN/Inf; state reset to initial (ResetState)
   kForceClipped,     ///< the device force limit clipped the output
   kImpulseClipped,   ///< ... and the clipped output contained an impulsive force
+  kImplausibleDeviceState,  ///< device state outside DeviceParams' plausible reach or speed;
+                            ///< zero force output
   kCount
 };
 
@@ -138,11 +140,14 @@ struct Data {
   std::unique_ptr<Workspace, WorkspaceDeleter> workspace;
 
   /// Counts warning `w` for this tick: at most once per step, however often it happens in it.
-  void Warn(Warning w) {
+  void Warn(Warning w) { WarnAt(w, step); }
+  /// Counts warning `w` for step `at_step` (the haptic loop's guards, after Tick has advanced
+  /// `step`, count for the tick that made the command).
+  void WarnAt(Warning w, std::int64_t at_step) {
     WarningStat& s = warnings[static_cast<int>(w)];
-    if (s.last_step == step && s.count > 0) return;
+    if (s.last_step == at_step && s.count > 0) return;
     ++s.count;
-    s.last_step = step;
+    s.last_step = at_step;
   }
 };
 

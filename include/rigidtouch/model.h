@@ -91,13 +91,23 @@ struct Schedule {
   int impulses = 1;        // N = round(n / n_i); impulse k (0-based) at step k n_i after onset
 };
 
-/// Device-side settings used by Tick's render stage.
+/// Device-side settings used by Tick's coupling and render stages.
 struct DeviceParams {
   Coupling coupling = Coupling::kNone;
   double max_force_N = 0.0;                    // 0: no limit
   double coupling_stiffness_N_per_m = 1000.0;  // virtual coupling
   double coupling_damping_Ns_per_m = 5.0;
   Vec3 workspace_offset_m = Vec3::Zero();  // tool position = device position + offset
+  /// What the device can display (a preset's or the device's own limits; 0: unknown). Configure
+  /// refuses a rendered stiffness or damping above them: the contact law's under direct coupling,
+  /// the coupling's under virtual coupling (docs/decisions.md, "Device limits").
+  double max_stiffness_N_per_m = 0.0;
+  double max_damping_Ns_per_m = 0.0;
+  /// A device state farther than this from the device's origin, or faster, is implausible: the
+  /// tick outputs zero force and counts Warning::kImplausibleDeviceState.
+  double plausible_radius_m = 1.0;
+  double plausible_speed_mps = 10.0;
+  double plausible_angular_speed_radps = 100.0;
 };
 
 /// The state of one body: centre of mass and principal-frame orientation, world frame (W).

@@ -28,6 +28,8 @@ struct Wrench {
 
 /// What a haptic device reports each tick (world frame, SI units). `valid` is false when the
 /// reading is stale or missing (e.g. a network watchdog fired); the tick then outputs zero force.
+/// `fresh` is false when the reading repeats the previous tick's (same sequence): the tick then
+/// starts no collision window and applies no impulse (docs/device-protocol.md, Watchdogs).
 struct DeviceState {
   std::uint64_t sequence = 0;      // monotonically increasing per reading
   double time_s = 0.0;             // device clock
@@ -37,6 +39,7 @@ struct DeviceState {
   Vec3 angular_velocity_radps = Vec3::Zero();
   std::uint32_t buttons = 0;
   bool valid = true;
+  bool fresh = true;  // a new reading since the previous tick (the haptic loop sets it)
 };
 
 /// What the renderer commands the device to display for the next tick.

@@ -3,6 +3,7 @@
 #include <array>
 #include <string>
 
+#include "render/limits.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::device {
@@ -45,6 +46,14 @@ const DeviceLimits& FindPreset(std::string_view name) {
     valid += preset.name;
   }
   throw Error("unknown device preset '" + std::string(name) + "'; valid presets: " + valid);
+}
+
+void TightenDeviceParams(DeviceParams& params, const DeviceLimits& limits) {
+  params.max_force_N = render::StricterLimit(params.max_force_N, limits.max_force_N);
+  params.max_stiffness_N_per_m =
+      render::StricterLimit(params.max_stiffness_N_per_m, limits.max_stiffness_N_per_m);
+  params.max_damping_Ns_per_m =
+      render::StricterLimit(params.max_damping_Ns_per_m, limits.max_damping_Ns_per_m);
 }
 
 }  // namespace rigidtouch::device

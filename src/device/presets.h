@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "rigidtouch/device.h"
+#include "rigidtouch/model.h"
 
 namespace rigidtouch::device {
 
@@ -16,5 +17,10 @@ std::span<const DeviceLimits> Presets();
 /// The preset called `name` (exact, lowercase). Throws rigidtouch::Error naming the unknown
 /// preset and listing the valid ones.
 const DeviceLimits& FindPreset(std::string_view name);
+
+/// Tightens a model's device parameters to `limits`: each of max force, stiffness and damping
+/// becomes the stricter (smaller positive) of the two, 0 meaning unknown. Call Configure after
+/// it to check the rendered stiffness and damping against the result.
+void TightenDeviceParams(DeviceParams& params, const DeviceLimits& limits);
 
 }  // namespace rigidtouch::device

@@ -1,6 +1,7 @@
 // The real-time haptic loop: at each deadline Read the device, Tick, Write the command, end the
 // device's period, and hand a trace sample to the writer thread (read, compute, write, count the
-// rate). Every device, real or simulated, runs this same path.
+// rate). Every device, real or simulated, runs this same path, and every command passes the
+// loop's last guards before Write.
 #pragma once
 
 #include <atomic>
@@ -17,20 +18,38 @@ namespace rigidtouch::loop {
 struct HapticLoopResult {
   LoopStats timing;
   std::int64_t invalid_device_ticks = 0;  // ticks whose device state was invalid (zero force)
+  std::int64_t stale_device_ticks = 0;    // valid ticks whose state repeated the last sequence
+  std::int64_t held_force_ticks = 0;      // stale ticks whose force was held to the last fresh one
   std::int64_t safe_fallback_ticks = 0;   // ticks that output the safe zero force
+  std::int64_t non_finite_commands = 0;   // commands the loop's guard replaced by zero
   std::int64_t impulses = 0;              // impulses applied to the tool's group
-  std::int64_t clipped_ticks = 0;         // ticks the device force limit clipped
+  std::int64_t clipped_ticks = 0;         // ticks a force limit clipped (the model's or device's)
+  std::int64_t guard_clipped_ticks = 0;   // ... of which the loop's guard clipped, after Tick
   double max_force_N = 0.0;               // largest force commanded
+  double force_limit_N = 0.0;             // the last limit the guard applied (0: none known)
   bool finite = true;                     // every command was finite
 };
 
 /// Runs `model` against `device` at options.rate_hz (the model's time step should be its period).
-/// Each tick: Read, Tick, Write, AnnotateTrace (when tracing), EndPeriod(1 / rate_hz); a device
-/// that lives in loop time (the simulated one) advances in EndPeriod. `traces`, when given,
-/// receives one sample per tick (never blocks). Stops at the duration or on `*stop`; never
-/// throws inside the loop.
+/// Each tick: Read, Tick, guard, Write, AnnotateTrace (when tracing), EndPeriod(1 / rate_hz); a
+/// device that lives in loop time (the simulated one) advances in EndPeriod. `traces`, when
+/// given, receives one sample per tick (never blocks). Stops at the duration or on `*stop`;
+/// never throws inside the loop.
+///
+/// A valid state whose sequence equals the previous tick's is stale: the loop passes
+/// DeviceState::fresh = false to Tick (no window starts, no impulse) and holds the force's
+/// magnitude at most at the last fresh tick's. Before every Write the guard makes a non-finite
+/// command the safe zero wrench and clips the force to the stricter of DeviceParams::max_force_N
+/// and device.limits().max_force_N (read every tick: a bridge may announce its limits late),
+/// setting DeviceCommand::clipped and Warning::kForceClipped.
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
                                const LoopOptions& options, const std::atomic<bool>* stop,
                                TraceQueue* traces = nullptr);
+
+/// Polls `device` about every millisecond until it reports a valid state, writing a zero wrench
+/// flagged safe-fallback after each read (so a bridge learns where to stream), for at most
+/// `timeout_s`. Returns whether a valid state came; false also when `*stop` is set. For devices
+/// that may not be there (the UDP bridge); not real-time.
+bool AwaitFirstState(device::Device& device, double timeout_s, const std::atomic<bool>* stop);
 
 }  // namespace rigidtouch::loop

@@ -25,6 +25,18 @@ void RequireFinite(const std::string& name, double value, double lo, double hi,
 
 constexpr double kInf = INFINITY;
 
+// A device cannot display a stiffness or damping above its closed-loop maximum (it goes unstable
+// or saturates against the user's hand); such a value is refused, never clamped silently.
+void RequireDisplayable(const std::string& name, double value, const std::string& limit_name,
+                        double limit, const std::string& unit, const std::string& why) {
+  if (!(limit > 0.0) || value <= limit) return;
+  std::ostringstream msg;
+  msg << "parameter " << name << " = " << value << " " << unit
+      << " is above what the device can display: device " << limit_name << " = " << limit << " "
+      << unit << " (" << why << "); lower it or use a device that can display it";
+  throw Error(msg.str());
+}
+
 }  // namespace
 
 void Configure(Model& model) {
@@ -80,6 +92,29 @@ void Configure(Model& model) {
   RequireFinite("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m, 0.0, kInf, ">= 0 N s/m");
   Require(d.workspace_offset_m.allFinite(), "workspace_offset_m", d.workspace_offset_m.norm(),
           "finite");
+  RequireFinite("max_stiffness_N_per_m", d.max_stiffness_N_per_m, 0.0, kInf,
+                ">= 0 N/m (0: unknown)");
+  RequireFinite("max_damping_Ns_per_m", d.max_damping_Ns_per_m, 0.0, kInf,
+                ">= 0 N s/m (0: unknown)");
+  Require(std::isfinite(d.plausible_radius_m) && d.plausible_radius_m > 0.0, "plausible_radius_m",
+          d.plausible_radius_m, "> 0 m, finite");
+  Require(std::isfinite(d.plausible_speed_mps) && d.plausible_speed_mps > 0.0,
+          "plausible_speed_mps", d.plausible_speed_mps, "> 0 m/s, finite");
+  Require(std::isfinite(d.plausible_angular_speed_radps) && d.plausible_angular_speed_radps > 0.0,
+          "plausible_angular_speed_radps", d.plausible_angular_speed_radps, "> 0 rad/s, finite");
+  if (d.coupling == Coupling::kDirect) {
+    const std::string why = "direct coupling: the device renders the tool's contact law";
+    RequireDisplayable("stiffness_N_per_m", c.stiffness_N_per_m, "max_stiffness_N_per_m",
+                       d.max_stiffness_N_per_m, "N/m", why);
+    RequireDisplayable("damping_Ns_per_m", c.damping_Ns_per_m, "max_damping_Ns_per_m",
+                       d.max_damping_Ns_per_m, "N s/m", why);
+  } else if (d.coupling == Coupling::kVirtual) {
+    const std::string why = "virtual coupling: the device renders the coupling";
+    RequireDisplayable("coupling_stiffness_N_per_m", d.coupling_stiffness_N_per_m,
+                       "max_stiffness_N_per_m", d.max_stiffness_N_per_m, "N/m", why);
+    RequireDisplayable("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m,
+                       "max_damping_Ns_per_m", d.max_damping_Ns_per_m, "N s/m", why);
+  }
   Require(model.tool >= 0 && model.tool < static_cast<int>(model.bodies.size()), "tool", model.tool,
           "an index of a free body");
   for (auto& b : model.bodies) {

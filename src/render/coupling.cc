@@ -10,6 +10,14 @@ bool Finite(const DeviceState& s) {
          s.angular_velocity_radps.allFinite() && s.orientation.coeffs().allFinite();
 }
 
+// Within the reach and speeds a hand on a desktop device can produce (DeviceParams): a finite
+// but absurd state (a corrupted or misconfigured bridge) would otherwise become an absurd force.
+bool Plausible(const DeviceParams& d, const DeviceState& s) {
+  return s.position_m.norm() <= d.plausible_radius_m &&
+         s.velocity_mps.norm() <= d.plausible_speed_mps &&
+         s.angular_velocity_radps.norm() <= d.plausible_angular_speed_radps;
+}
+
 }  // namespace
 
 CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& input) {
@@ -23,6 +31,9 @@ CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& inp
     }
   } else if (!dev.valid || !Finite(dev)) {
     r.device_ok = false;
+  } else if (!Plausible(model.device, dev)) {
+    data.Warn(Warning::kImplausibleDeviceState);
+    return {Wrench{}, false};
   } else {
     const int tool = model.tool;
     BodyState& t = data.bodies[tool];

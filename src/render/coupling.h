@@ -14,7 +14,8 @@ struct CouplingResult {
 
 /// Stage 1: applies input to the tool (its pose and velocity under direct coupling, its rotation
 /// under both) and returns the user wrench. An invalid or non-finite input counts
-/// Warning::kBadDeviceState and leaves the tool as it was.
+/// Warning::kBadDeviceState, a finite one beyond DeviceParams' plausible reach or speeds
+/// Warning::kImplausibleDeviceState; both leave the tool as it was and make the output zero.
 CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& input);
 
 }  // namespace rigidtouch::render

@@ -27,6 +27,8 @@ const char* WarningName(Warning w) {
       return "force_clipped";
     case Warning::kImpulseClipped:
       return "impulse_clipped";
+    case Warning::kImplausibleDeviceState:
+      return "implausible_device_state";
     case Warning::kCount:
       break;
   }

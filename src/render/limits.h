@@ -1,6 +1,6 @@
 // The collision-rendering method's limits, in one place: Configure enforces them on a model and
 // the study protocol checks its walls against them, so a protocol cannot accept a wall the engine
-// would refuse (or the other way round).
+// would refuse (or the other way round). Also how two device limits combine.
 #pragma once
 
 namespace rigidtouch::render {
@@ -28,5 +28,13 @@ constexpr bool TrainFrequencyFitsWindow(double frequency_hz, double t_collision_
 /// Time step h in [kMinTimestep_s, kMaxTimestep_s].
 inline constexpr double kMinTimestep_s = 1e-6;
 inline constexpr double kMaxTimestep_s = 0.1;
+
+/// The stricter of two device limits where 0 (or less) means unknown or unlimited: the smaller
+/// positive one, 0 when neither is set.
+constexpr double StricterLimit(double a, double b) {
+  if (!(a > 0.0)) return b > 0.0 ? b : 0.0;
+  if (!(b > 0.0)) return a;
+  return a < b ? a : b;
+}
 
 }  // namespace rigidtouch::render

@@ -1,5 +1,9 @@
 #include "render/output.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "render/workspace.h"
 
 namespace rigidtouch::render {
@@ -15,7 +19,50 @@ bool StateFinite(const Data& data) {
   return true;
 }
 
+// Scales the wrench (m u, torque) so that |m u| <= max_force_N, measuring the force in units of
+// m so that no step overflows when |m u| is beyond the double range. u and m are finite, m > 0.
+// Returns whether it scaled; force_N is then the clipped force.
+bool ClampScaled(const Vec3& u, double m, double max_force_N, Vec3& force_N, Vec3& torque_Nm) {
+  const double n_u = u.norm();
+  if (n_u <= max_force_N / m) {
+    force_N = u * m;  // fits: |m u| <= max_force_N, finite
+    return false;
+  }
+  const double s = max_force_N / n_u;  // n_u > 0 here
+  force_N = u * s;
+  torque_Nm = (torque_Nm / m) * s;
+  return true;
+}
+
+// The limit is a hard bound: rounding may leave |f| a few ulps above it.
+void RoundDownToLimit(double max_force_N, Vec3& force_N, Vec3& torque_Nm) {
+  constexpr double kShrink = 1.0 - 4.0 * std::numeric_limits<double>::epsilon();
+  for (int k = 0; k < 4 && force_N.norm() > max_force_N; ++k) {
+    force_N *= kShrink;
+    torque_Nm *= kShrink;
+  }
+}
+
 }  // namespace
+
+bool LimitForce(double max_force_N, Vec3& force_N, Vec3& torque_Nm) {
+  if (!(max_force_N > 0.0) || !force_N.allFinite()) return false;
+  const double n = force_N.norm();
+  bool clipped = false;
+  if (std::isfinite(n)) {
+    if (n <= max_force_N) return false;
+    const double s = max_force_N / n;
+    force_N *= s;
+    torque_Nm *= s;
+    clipped = true;
+  } else {
+    // components above ~1e154: the squared norm overflows, the direction does not
+    const double m = force_N.cwiseAbs().maxCoeff();
+    clipped = ClampScaled(force_N / m, m, max_force_N, force_N, torque_Nm);
+  }
+  if (clipped) RoundDownToLimit(max_force_N, force_N, torque_Nm);
+  return clipped;
+}
 
 DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequence) {
   const int tool = model.tool;
@@ -46,11 +93,23 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequenc
   }
   out.impulsive_force_N = data.tool_impulse_W / model.timestep_s;  // Eq. 9
   out.force_N = out.penalty_force_N + out.impulsive_force_N;
-  if (model.device.max_force_N > 0.0 && out.force_N.norm() > model.device.max_force_N) {
-    out.force_N *= model.device.max_force_N / out.force_N.norm();
-    out.clipped = true;
+  const double max_force_N = model.device.max_force_N;
+  if (out.force_N.allFinite()) {
+    out.clipped = LimitForce(max_force_N, out.force_N, out.torque_Nm);
+  } else if (max_force_N > 0.0 && out.penalty_force_N.allFinite() &&
+             data.tool_impulse_W.allFinite()) {
+    // the impulse over h or the sum overflowed: add the parts in units of the larger, so the
+    // clipped force keeps the direction of the finite answer instead of becoming zero
+    const double m = std::max(out.penalty_force_N.cwiseAbs().maxCoeff(),
+                              data.tool_impulse_W.cwiseAbs().maxCoeff());
+    const Vec3 u = out.penalty_force_N / m + (data.tool_impulse_W / m) / model.timestep_s;
+    out.clipped = ClampScaled(u, m, max_force_N, out.force_N, out.torque_Nm);
+    if (out.clipped) RoundDownToLimit(max_force_N, out.force_N, out.torque_Nm);
+  }
+  // anything still non-finite (no limit to clip to) becomes the safe zero wrench in Safeguard
+  if (out.clipped) {
     data.Warn(Warning::kForceClipped);
-    if (out.impulsive_force_N.squaredNorm() > 0.0) data.Warn(Warning::kImpulseClipped);
+    if (data.tool_impulse_W.squaredNorm() > 0.0) data.Warn(Warning::kImpulseClipped);
   }
   return out;
 }

@@ -7,10 +7,16 @@
 
 namespace rigidtouch::render {
 
+/// Scales a finite force, and the torque with it, so that |force_N| <= max_force_N (0: no limit)
+/// exactly, keeping its direction; overflow-safe for components up to the largest double.
+/// Returns whether it scaled. Used by the render stage and by the haptic loop's last guard.
+bool LimitForce(double max_force_N, Vec3& force_N, Vec3& torque_Nm);
+
 /// Sums the tool's contact forces into data (tool_penalty_force_W, penetration, normal, count)
 /// and returns the command: penalty (or coupling) + Eq. 9 impulsive force, clipped to
 /// DeviceParams::max_force_N (Warning::kForceClipped, and kImpulseClipped when it held an
-/// impulsive part).
+/// impulsive part). Where the impulse over h or the sum overflows, the parts are added in units
+/// of the larger one, so a finite clipped answer is still found.
 DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequence);
 
 /// The safety guards: a non-finite body state counts Warning::kNonFiniteState and puts the state

@@ -21,11 +21,18 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
 
   // 1. coupling: the device's state sets the tool's pose (direct) or pulls it (virtual)
   const render::CouplingResult coupling = render::CoupleDevice(model, data, input);
+  // a repeated reading (the device stopped updating, or has not yet) carries no new motion: an
+  // impulse computed from it would push against a hand that may have moved or gone, and the
+  // train's later impulses grow (Eq. 8), so such a tick starts no window and applies no impulse
+  const bool stale = model.device.coupling != Coupling::kNone && !input.device.fresh;
   // kinematics: the bodies' rotations, read by every stage until 7 moves the bodies
   dynamics::ComputeKinematics(data);
 
   // 2. geometry: contact points, normals, depths, identities across ticks
   geometry::DetectContacts(model, data, ws.collision);
+  if (stale) {
+    for (int ci = 0; ci < data.ncontact; ++ci) data.contacts[ci].is_new = false;  // no onset
+  }
 
   // 3. groups and windows: contact groups, laws, stick or slip, collision windows and phases
   contact::ClassifyContacts(model, data, ws.contact);
@@ -40,7 +47,7 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
 
   // 6. impulses: Eq. 5 (single impulse) or Eq. 8 (train) where the window's schedule (Eq. 6-7)
   // says one is due, on the velocities after stage 5
-  contact::CollisionImpulses(model, data, ws.contact.groups, ws.impulse);
+  if (!stale) contact::CollisionImpulses(model, data, ws.contact.groups, ws.impulse);
 
   // 7. integrate positions with the new velocities
   dynamics::IntegratePositions(model, data);

@@ -56,10 +56,10 @@ TEST(BridgeCliTest, LossyLinkWatchdogAndRecovery) {
   const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
   const double watchdog_s = 0.05;
   // serve runs 4 s; device-sim 1 taps from 0 s, is killed at 2 s, device-sim 2 starts at 2.6 s
-  const pid_t serve =
-      Spawn("serve --device " + addr + " --rate 1000 --duration 4 --test-drop 0.05" +
-                " --watchdog " + std::to_string(watchdog_s) + " --json",
-            (dir / "serve.json").string());
+  const pid_t serve = Spawn("serve --device " + addr +
+                                " --rate 1000 --duration 4 --test-drop 0.05 --startup-timeout 5" +
+                                " --watchdog " + std::to_string(watchdog_s) + " --json",
+                            (dir / "serve.json").string());
   const std::string sim_args = "device-sim --listen " + addr +
                                " --rate 1000 --taps 20 --speed 0.2 --test-drop 0.05 --duration 10";
   std::this_thread::sleep_for(std::chrono::milliseconds(200));

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -121,6 +122,154 @@ TEST(HapticLoop, CallsReadWriteEndPeriodOncePerTickInOrder) {
   EXPECT_DOUBLE_EQ(dev.last_period_s, 1.0 / kRateHz);
   ASSERT_EQ(samples.size(), static_cast<std::size_t>(r.timing.ticks));
   for (const TraceSample& s : samples) EXPECT_EQ(s.tap, 7);
+}
+
+// approaches the shipped wall at 0.2 m/s with one new reading (sequence) per Read; after
+// `fresh_reads` it freezes: the last reading again, same sequence, for `stale_reads` (a bridge
+// that died: the link still hands out its newest state), then invalid (the watchdog)
+class FreezingDevice final : public device::Device {
+ public:
+  FreezingDevice(int fresh_reads, int stale_reads, double max_force_N, bool keep_moving = false)
+      : fresh_reads_(fresh_reads), stale_reads_(stale_reads), keep_moving_(keep_moving) {
+    limits_.max_force_N = max_force_N;
+    commands.reserve(4000);
+  }
+  DeviceState Read() override {
+    const int k = std::min(reads_, fresh_reads_ - 1);
+    const int moved = keep_moving_ ? reads_ : k;  // a faulty bridge: new pose, old sequence
+    DeviceState s;
+    s.sequence = static_cast<std::uint64_t>(k) + 1;
+    s.position_m = Vec3(0.0, 0.0, kStart_m - kSpeed_mps * moved / kRateHz);
+    s.velocity_mps = Vec3(0.0, 0.0, -kSpeed_mps);
+    s.valid = reads_ < fresh_reads_ + stale_reads_;
+    ++reads_;
+    return s;
+  }
+  void Write(const DeviceCommand& command) override {
+    if (commands.size() < commands.capacity()) commands.push_back(command);
+  }
+  const device::DeviceLimits& limits() const override { return limits_; }
+
+  static constexpr double kStart_m = 0.0058;  // the tool centre touches the wall at 0.005
+  static constexpr double kSpeed_mps = 0.2;
+  std::vector<DeviceCommand> commands;  // one per tick
+
+ private:
+  int fresh_reads_, stale_reads_;
+  bool keep_moving_;
+  int reads_ = 0;
+  device::DeviceLimits limits_;
+};
+
+Model DirectWall(double max_force_N) {
+  LoadOptions o;
+  o.render.renderer = RendererKind::kTrain;  // 250 Hz: an impulse every 4 ticks
+  o.device.coupling = Coupling::kDirect;
+  o.device.max_force_N = max_force_N;
+  o.timestep_s = 1.0 / kRateHz;
+  return LoadModel(std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml", o);
+}
+
+// the device stops updating during contact, in the middle of a train: from the last fresh
+// reading to the watchdog no impulse is applied and the force does not grow; then zero force
+TEST(HapticLoop, StaleStateDuringContactAppliesNoImpulseAndHoldsTheForce) {
+  const Model model = DirectWall(0.0);
+  Data data = MakeData(model);
+  const int fresh = 11, stale = 30;  // contact from read 5 (z = 4.8 mm): impulses at 5 and 9
+  FreezingDevice dev(fresh, stale, 0.0);
+  const HapticLoopResult r = RunHapticLoop(model, data, dev, Options(0.2), nullptr);
+  const auto& c = dev.commands;
+  ASSERT_GE(static_cast<int>(c.size()), fresh + stale + 5) << "too few ticks (loaded machine?)";
+
+  int fresh_impulses = 0;
+  for (int k = 0; k < fresh; ++k) fresh_impulses += c[k].impulsive_force_N.squaredNorm() > 0.0;
+  ASSERT_GE(fresh_impulses, 2);  // a train was running when the device froze
+  const double last_fresh_N = c[fresh - 1].force_N.norm();
+  ASSERT_GT(last_fresh_N, 0.0);  // in contact
+  for (int k = fresh; k < fresh + stale; ++k) {
+    EXPECT_EQ(c[k].impulsive_force_N, Vec3::Zero()) << "tick " << k;
+    EXPECT_LE(c[k].force_N.norm(), last_fresh_N) << "tick " << k;
+    EXPECT_LE(c[k].force_N.norm(), c[k - 1].force_N.norm()) << "tick " << k;
+    EXPECT_FALSE(c[k].safe_fallback) << "tick " << k;
+  }
+  for (std::size_t k = fresh + stale; k < c.size(); ++k) {
+    EXPECT_EQ(c[k].force_N, Vec3::Zero()) << "tick " << k;  // the watchdog: invalid state
+    EXPECT_TRUE(c[k].safe_fallback);
+  }
+  EXPECT_EQ(r.stale_device_ticks, stale);
+}
+
+// whatever a reading with an old sequence says (here: deeper and deeper into the wall), the
+// loop does not let it raise the force above the last fresh tick's
+TEST(HapticLoop, RepeatedSequenceCannotRaiseTheForce) {
+  const Model model = DirectWall(0.0);
+  Data data = MakeData(model);
+  const int fresh = 11, stale = 30;
+  FreezingDevice dev(fresh, stale, 0.0, /*keep_moving=*/true);
+  const HapticLoopResult r = RunHapticLoop(model, data, dev, Options(0.1), nullptr);
+  const auto& c = dev.commands;
+  ASSERT_GE(static_cast<int>(c.size()), fresh + stale) << "too few ticks (loaded machine?)";
+  const double last_fresh_N = c[fresh - 1].force_N.norm();
+  ASSERT_GT(last_fresh_N, 0.0);
+  for (int k = fresh; k < fresh + stale; ++k) {
+    // k d alone would grow by k v h = 0.4 N per tick
+    EXPECT_LE(c[k].force_N.norm(), last_fresh_N) << "tick " << k;
+    EXPECT_GT(c[k].penalty_force_N.norm(), last_fresh_N) << "tick " << k;
+  }
+  EXPECT_EQ(r.held_force_ticks, stale);
+}
+
+// the loop's last guard clips every command to the device's own limit when the model has none
+// (or a looser one), flags it and counts the warning; the model's stricter limit wins in Tick
+TEST(HapticLoop, EveryCommandIsClippedToTheStricterOfModelAndDeviceLimits) {
+  struct Case {
+    double model_N, device_N, limit_N;
+    bool guard_clips;
+  };
+  for (const Case& k :
+       {Case{0.0, 1.0, 1.0, true}, Case{5.0, 1.0, 1.0, true}, Case{0.5, 1.0, 0.5, false}}) {
+    const Model model = DirectWall(k.model_N);
+    Data data = MakeData(model);
+    FreezingDevice dev(1000, 0, k.device_N);  // keeps pressing into the wall, always fresh
+    const HapticLoopResult r = RunHapticLoop(model, data, dev, Options(0.06), nullptr);
+    ASSERT_GT(dev.commands.size(), 20u);
+    int clipped = 0;
+    for (const DeviceCommand& c : dev.commands) {
+      EXPECT_LE(c.force_N.norm(), k.limit_N);
+      clipped += c.clipped;
+      if (c.force_N.norm() < k.limit_N * (1.0 - 1e-12)) {
+        EXPECT_FALSE(c.clipped);
+      }
+    }
+    EXPECT_GT(clipped, 0);  // the impulses and the deepening contact exceed the limit
+    EXPECT_EQ(r.clipped_ticks, clipped);
+    EXPECT_EQ(data.warnings[static_cast<int>(Warning::kForceClipped)].count, clipped);
+    EXPECT_EQ(r.guard_clipped_ticks > 0, k.guard_clips);
+    EXPECT_LE(r.max_force_N, k.limit_N);
+    EXPECT_DOUBLE_EQ(r.force_limit_N, k.limit_N);
+    EXPECT_TRUE(r.finite);
+  }
+}
+
+// no answering device: AwaitFirstState gives up after its timeout, having written only zero
+// wrenches flagged safe-fallback; a device that answers is found at once
+TEST(HapticLoop, AwaitFirstStateTimesOutWithoutADevice) {
+  FreezingDevice silent(1, 0, 0.0);  // every reading invalid
+  silent.Read();
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(AwaitFirstState(silent, 0.05, nullptr));
+  const double waited_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GE(waited_s, 0.05);
+  EXPECT_LT(waited_s, 1.0);
+  ASSERT_FALSE(silent.commands.empty());
+  for (const DeviceCommand& c : silent.commands) {
+    EXPECT_EQ(c.force_N, Vec3::Zero());
+    EXPECT_TRUE(c.safe_fallback);
+  }
+  FreezingDevice present(10, 0, 0.0);
+  EXPECT_TRUE(AwaitFirstState(present, 0.05, nullptr));
+  EXPECT_TRUE(present.commands.empty());
 }
 
 }  // namespace

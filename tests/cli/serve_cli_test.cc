@@ -1,0 +1,133 @@
+// `serve` end to end against device limits: over the UDP bridge with `device-sim` (Touch preset,
+// 3.3 N) no command exceeds the preset's force and clipping is reported; a stiffness the device
+// cannot display is refused; no answering device is an error with its own exit status.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "cli/cli_util.h"
+
+namespace rigidtouch::test {
+namespace {
+
+// a UDP port that was free a moment ago on 127.0.0.1
+int FreePort() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t n = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+// starts `rigidtouch ARGS` with stdout to `out`; returns its pid
+pid_t Spawn(const std::string& args, const std::string& out) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = std::string("exec ") + RIGIDTOUCH_CLI + " " + args + " >" + out;
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+int Wait(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// the Touch (3.3 N, 400 N/m) on its stiffest wall: taps at 0.2 m/s stop with impulses of
+// m v / h, far above 3.3 N, so the limit must clip, and nothing sent may exceed it
+TEST(ServeCliTest, UdpPathKeepsEveryCommandWithinThePresetsForce) {
+  const auto dir = TempDir("serve_limits");
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  const pid_t serve = Spawn("serve --device " + addr +
+                                " --preset touch --stiffness 400 --rate 1000 --duration 2.5"
+                                " --startup-timeout 5 --json",
+                            (dir / "serve.json").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const pid_t sim = Spawn("device-sim --listen " + addr +
+                              " --preset touch --rate 1000 --taps 20 --speed 0.2 --duration 10",
+                          (dir / "sim.json").string());
+  ASSERT_EQ(Wait(serve), 0);
+  ::kill(sim, SIGTERM);
+  Wait(sim);
+
+  const auto j = nlohmann::json::parse(ReadAll(dir / "serve.json"));
+  ASSERT_TRUE(j["max_force_N"].is_number()) << j.dump();  // never null
+  EXPECT_LE(j["max_force_N"].get<double>(), 3.3);
+  EXPECT_GT(j["max_force_N"].get<double>(), 3.0);  // the wall was reached
+  EXPECT_GT(j["clipped_ticks"].get<long>(), 0);
+  EXPECT_GT(j["warnings"]["force_clipped"].get<long>(), 0);
+  EXPECT_GT(j["impulses"].get<long>(), 0);
+  EXPECT_TRUE(j["finite"].get<bool>());
+  EXPECT_EQ(j["limits"]["max_force_N"].get<double>(), 3.3);
+  EXPECT_EQ(j["force_limit_N"].get<double>(), 3.3);
+  EXPECT_EQ(j["contact"]["stiffness_N_per_m"].get<double>(), 400.0);
+  std::filesystem::remove_all(dir);
+}
+
+// stiffness by flag or config above the preset's, on either device path, is refused before
+// anything runs, naming the parameter and the limit (exit status 2)
+TEST(ServeCliTest, StiffnessAboveTheDevicesIsRefused) {
+  const std::string config = (TempDir("serve_config") / "stiff.json").string();
+  std::ofstream(config) << R"({"contact": {"stiffness_N_per_m": 1e308}})";
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  for (const std::string& args : {"serve --device " + addr + " --stiffness 1e300",
+                                  "serve --device " + addr + " --config " + config,
+                                  std::string("serve --device sim --stiffness 1e300"),
+                                  "serve --device " + addr + " --preset touch --damping 50"}) {
+    const CliResult r = RunCli(args + " --json");
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    const bool damping = args.find("--damping") != std::string::npos;
+    EXPECT_NE(r.err.find(damping ? "damping_Ns_per_m = 50" : "stiffness_N_per_m = 1e+30"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find(damping ? "max_damping_Ns_per_m = 4 " : "max_stiffness_N_per_m = 400"),
+              std::string::npos)
+        << r.err;
+  }
+}
+
+// no device server: a clear message after the startup timeout, exit status 5, not 0
+TEST(ServeCliTest, NoAnsweringDeviceFailsAfterTheStartupTimeout) {
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  const auto t0 = std::chrono::steady_clock::now();
+  const CliResult r = RunCli("serve --device " + addr + " --startup-timeout 0.3 --json");
+  const double took_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.exit_code, 5) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_NE(r.err.find("no state from the device at " + addr), std::string::npos) << r.err;
+  EXPECT_GE(took_s, 0.3);
+  EXPECT_LT(took_s, 5.0);
+}
+
+// an output path that cannot be written is refused before the session, not after it
+TEST(ServeCliTest, UnwritableTracePathIsRefusedBeforeTheSession) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const CliResult r =
+      RunCli("serve --device sim --duration 30 --trace /nonexistent-folder/t.csv --json");
+  const double took_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/nonexistent-folder/t.csv"), std::string::npos) << r.err;
+  EXPECT_LT(took_s, 5.0);  // the 30 s session never ran
+}
+
+}  // namespace
+}  // namespace rigidtouch::test
