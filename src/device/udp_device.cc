@@ -60,7 +60,7 @@ void UdpDevice::SendHello(std::int64_t now_ns, bool new_handshake) {
 
 DeviceState UdpDevice::Read() {
   const std::int64_t now_ns = MonotonicNowNs();
-  for (;;) {
+  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
     Datagram datagram;
     const int status = socket_.Receive(buffer_, &datagram);
     if (status == EAGAIN) break;

@@ -163,7 +163,7 @@ void UdpDeviceServer::Impl::SendReply() {
 }
 
 void UdpDeviceServer::Impl::DrainDatagrams(std::int64_t now_ns) {
-  for (;;) {
+  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
     Datagram datagram;
     const int status = socket.Receive(buffer, &datagram);
     if (status == EAGAIN) return;

@@ -475,6 +475,19 @@ TEST(UdpDeviceServer, OptionChecks) {
   EXPECT_THROW(UdpDeviceServer(device, options), Error);
 }
 
+TEST(UdpDeviceServer, AFloodIsTakenAtMostAFewDozenDatagramsPerStep) {
+  FakeDevice device;
+  UdpDeviceServer server(device, ServerOptions());
+  Client flooder(KeyOf(3));
+  for (int i = 0; i < kMaxDatagramsPerPeriod + 36; ++i) flooder.Hello(server, 1);
+  server.Step();
+  EXPECT_EQ(server.counters().received, static_cast<std::uint64_t>(kMaxDatagramsPerPeriod));
+  EXPECT_EQ(device.writes, 1u) << "the period still ends with its write";
+  server.Step();
+  EXPECT_EQ(server.counters().received, kMaxDatagramsPerPeriod + 36u);
+  EXPECT_EQ(server.counters().unauthenticated, kMaxDatagramsPerPeriod + 36u);
+}
+
 TEST(UdpDeviceServer, StepDoesNotAllocate) {
   if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
   FakeDevice device(3.0);

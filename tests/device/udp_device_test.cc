@@ -402,6 +402,16 @@ TEST(UdpDevice, WatchdogTripsStartsANewHandshakeAndRecovers) {
   EXPECT_EQ(f.device->counters().stale, 0u);
 }
 
+TEST(UdpDevice, AFloodIsTakenAtMostAFewDozenDatagramsPerRead) {
+  Fixture f;
+  const std::vector<std::uint8_t> forged(kStatePacketBytes, 0);
+  for (int i = 0; i < kMaxDatagramsPerPeriod + 36; ++i) f.SendRaw(forged);
+  f.device->Read();
+  EXPECT_EQ(f.device->counters().received, static_cast<std::uint64_t>(kMaxDatagramsPerPeriod));
+  f.device->Read();
+  EXPECT_EQ(f.device->counters().received, kMaxDatagramsPerPeriod + 36u);
+}
+
 TEST(UdpDevice, ReadAndWriteDoNotAllocate) {
   if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
   Fixture f;
