@@ -5,6 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config git clang-format clang libclang-rt-14-dev
   libeigen3-dev libmujoco-dev libqhull-dev libbullet-dev libcli11-dev nlohmann-json3-dev libfftw3-dev
+  libsodium-dev
   libboost-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   python3 python3-matplotlib python3-numpy
 )

@@ -24,6 +24,8 @@ struct DeviceSimFlags {
   double speed_mps = 0.2;
   double wall_height_m = 0.005;  // where the tool centre touches the shipped wall scene
   double watchdog_s = 0.05;
+  double session_timeout_s = 0.5;
+  std::string key_file;  // empty: the per-user default key, created on first use
   double test_drop = 0.0;
   bool realtime = false;
   bool json = false;
@@ -40,6 +42,8 @@ void Run(const DeviceSimFlags& f) {
   device::UdpDeviceServerOptions so;
   so.listen = f.listen;
   so.watchdog_s = f.watchdog_s;
+  so.session_timeout_s = f.session_timeout_s;
+  so.key_file = f.key_file;
   so.test_loss.incoming_fraction = f.test_drop;
   so.test_loss.outgoing_fraction = f.test_drop;
   device::UdpDeviceServer server(sim, so);
@@ -85,6 +89,12 @@ void Register(CLI::App& root) {
                   "height of the tool centre at contact [m] (the shipped wall: 0.005)");
   app->add_option("--watchdog", f->watchdog_s, "no fresh command for this long: zero force")
       ->capture_default_str();
+  app->add_option("--session-timeout", f->session_timeout_s,
+                  "no authenticated datagram from the renderer for this long ends its session [s]")
+      ->capture_default_str();
+  app->add_option("--key", f->key_file,
+                  "pre-shared key file (rigidtouch keygen); default: the per-user key, "
+                  "created on first use");
   app->add_option("--test-drop", f->test_drop, "TEST ONLY: drop this fraction of packets");
   app->add_flag("--realtime", f->realtime, "SCHED_FIFO and locked memory when allowed");
   app->add_flag("--json", f->json, "print one JSON object");

@@ -32,6 +32,7 @@ struct ServeFlags {
   double spin_us = 0.0;
   double watchdog_s = 0.05;
   double test_drop = 0.0;
+  std::string key_file;  // udp: empty means the per-user default key, created on first use
   int taps = 3;
   double speed_mps = 0.2;
   double startup_timeout_s = 1.0;
@@ -162,6 +163,7 @@ void Run(const ServeFlags& f) {
     o.server = f.device;
     o.watchdog_s = f.watchdog_s;
     o.limits = preset;
+    o.key_file = f.key_file;
     o.test_loss.incoming_fraction = f.test_drop;
     o.test_loss.outgoing_fraction = f.test_drop;
     device::UdpDevice dev(o);
@@ -233,6 +235,9 @@ void Register(CLI::App& root) {
                   "a device state faster than this [m/s] is implausible: zero force")
       ->capture_default_str();
   app->add_option("--test-drop", f->test_drop, "TEST ONLY: drop this fraction of packets");
+  app->add_option("--key", f->key_file,
+                  "udp: pre-shared key file (rigidtouch keygen); default: the per-user key, "
+                  "created on first use");
   app->add_option("--taps", f->taps, "taps of the simulated hand (sim)")->capture_default_str();
   app->add_option("--speed", f->speed_mps, "approach speed of the simulated hand [m/s] (sim)")
       ->capture_default_str();

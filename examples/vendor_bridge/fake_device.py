@@ -1,37 +1,87 @@
 #!/usr/bin/env python3
-"""A device server for the rigidtouch UDP device protocol, version 1, in plain Python.
+"""A device server for the rigidtouch UDP device protocol, version 2, in plain Python.
 
-It simulates a hand that taps downwards along -z and streams its state to the renderer that last
-sent it a command; the newest command's force pushes back on the simulated hand. Use it as a
-template for an SDK with Python bindings: replace read_device() and write_device().
-See docs/device-protocol.md. Python's sleep is not a real-time clock: expect jitter.
+It simulates a hand that taps downwards along -z and streams its state to the one renderer that
+holds the session; the newest command's force, clamped to this device's limit, pushes back on the
+simulated hand. Every datagram carries an HMAC-SHA-256 under the pre-shared key (the same key file
+`rigidtouch device-sim` and `rigidtouch serve` use). Use it as a template for an SDK with Python
+bindings: replace the simulated hand with the SDK's reads and writes. See docs/device-protocol.md.
+Python's sleep is not a real-time clock: expect jitter. Standard library only.
 
-    python3 fake_device.py --listen 127.0.0.1:47000 --rate 1000
+    python3 fake_device.py --listen 127.0.0.1:47000 --rate 1000 [--key FILE] [--max-force 3.3]
 """
-import argparse, math, socket, struct, time, zlib
+import argparse, hashlib, hmac, math, os, socket, stat, struct, time
 
-MAGIC, VERSION, STATE, COMMAND = 0x48435452, 1, 1, 2
+MAGIC, VERSION = 0x48435452, 2
+STATE, COMMAND, HELLO, HELLO_REPLY = 1, 2, 3, 4
+HEADER = struct.Struct("<IHHIIQQQ")  # magic, version, type, payload bytes, reserved,
+#                                      client nonce, server nonce, counter
 STATE_PAYLOAD = struct.Struct("<Q14dI")   # sequence, time, p(3), q(4 wxyz), v(3), w(3), buttons
 COMMAND_PAYLOAD = struct.Struct("<Q6dI")  # sequence, force(3), torque(3), flags
+REPLY_PAYLOAD = struct.Struct("<3d")      # max force N, max stiffness N/m, max damping N s/m
+MAC_BYTES = 32
+SIZES = {HELLO: 0, COMMAND: COMMAND_PAYLOAD.size}  # what a device server accepts
 
 
-def packet(kind, payload):
-    head = struct.pack("<IHHI", MAGIC, VERSION, kind, len(payload))
-    return head + struct.pack("<I", zlib.crc32(payload, zlib.crc32(head))) + payload
+def default_key_path():
+    xdg = os.environ.get("XDG_CONFIG_HOME", "")
+    if xdg.startswith("/"):
+        return os.path.join(xdg, "rigidtouch", "device.key")
+    return os.path.join(os.path.expanduser("~"), ".config", "rigidtouch", "device.key")
 
 
-def decode_command(data):
-    if len(data) != 16 + COMMAND_PAYLOAD.size:
+def load_key(path, create):
+    """The key file's 32 bytes; refuses a file group or others may access, as ssh does."""
+    if create and not os.path.exists(path):
+        os.makedirs(os.path.dirname(path), mode=0o700, exist_ok=True)
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        with os.fdopen(fd, "w") as f:
+            f.write(os.urandom(32).hex() + "\n")
+    info = os.lstat(path)
+    if not stat.S_ISREG(info.st_mode) or info.st_uid != os.geteuid():
+        raise SystemExit(f"{path}: not a regular file owned by this user")
+    if info.st_mode & 0o077:
+        raise SystemExit(f"{path}: permissions {info.st_mode & 0o777:04o} are too open; "
+                         f"run `chmod 600 {path}`")
+    with open(path) as f:
+        text = f.read().strip()
+    if len(text) != 64:
+        raise SystemExit(f"{path}: malformed, expected 64 hexadecimal digits")
+    return bytes.fromhex(text)
+
+
+def seal(key, kind, payload, client_nonce, server_nonce, counter):
+    body = HEADER.pack(MAGIC, VERSION, kind, len(payload), 0, client_nonce, server_nonce,
+                       counter) + payload
+    return body + hmac.new(key, body, hashlib.sha256).digest()
+
+
+def open_datagram(key, data):
+    """(type, client nonce, server nonce, counter, payload) of an authentic datagram, else None.
+    The checks follow the document's order: framing (version 1 is refused here), then the MAC."""
+    if len(data) < HEADER.size + MAC_BYTES:
         return None
-    magic, version, kind, size, crc = struct.unpack_from("<IHHII", data)
-    if (magic, version, kind, size) != (MAGIC, VERSION, COMMAND, COMMAND_PAYLOAD.size):
+    magic, version, kind, size, _, client_nonce, server_nonce, counter = HEADER.unpack_from(data)
+    if magic != MAGIC or version != VERSION or SIZES.get(kind) != size:
         return None
-    if crc != zlib.crc32(data[16:], zlib.crc32(data[:12])):
+    if len(data) != HEADER.size + size + MAC_BYTES:
         return None
-    sequence, fx, fy, fz, tx, ty, tz, flags = COMMAND_PAYLOAD.unpack_from(data, 16)
-    if not all(math.isfinite(v) for v in (fx, fy, fz, tx, ty, tz)):
+    mac = hmac.new(key, data[:-MAC_BYTES], hashlib.sha256).digest()
+    if not hmac.compare_digest(mac, data[-MAC_BYTES:]):
         return None
-    return sequence, (fx, fy, fz)
+    return kind, client_nonce, server_nonce, counter, data[HEADER.size:-MAC_BYTES]
+
+
+def random_nonce():
+    while True:
+        nonce = struct.unpack("<Q", os.urandom(8))[0]
+        if nonce:
+            return nonce
+
+
+def clamp(force, limit_N):
+    norm = math.sqrt(sum((f / 1e150) ** 2 for f in force)) * 1e150  # no overflow near 1e300
+    return force if limit_N <= 0 or norm <= limit_N else tuple(f * limit_N / norm for f in force)
 
 
 def main():
@@ -39,44 +89,75 @@ def main():
     parser.add_argument("--listen", default="127.0.0.1:47000")
     parser.add_argument("--rate", type=float, default=1000.0, help="Hz")
     parser.add_argument("--watchdog", type=float, default=0.05, help="s")
+    parser.add_argument("--session-timeout", type=float, default=0.5, help="s")
     parser.add_argument("--duration", type=float, default=0.0, help="s, 0 = until Ctrl-C")
+    parser.add_argument("--key", default="", help="key file; default: the per-user key")
+    parser.add_argument("--max-force", type=float, default=3.3, help="N, this device's limit")
     args = parser.parse_args()
+    key = load_key(args.key or default_key_path(), create=not args.key)
+    limits = REPLY_PAYLOAD.pack(args.max_force, 0.0, 0.0)
     host, port = args.listen.rsplit(":", 1)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind((host, int(port)))
     sock.setblocking(False)
 
     h, mass_kg, z_m, vz_mps = 1.0 / args.rate, 0.1, 0.05, 0.0
-    client, sequence, newest, force_N, fresh_at = None, 0, -1, (0.0, 0.0, 0.0), -1.0
+    # the session: peer address, both nonces, counters, newest command
+    peer, client_nonce, server_nonce, sent, received = None, 0, 0, 0, 0
+    last_heard, newest, force_N, fresh_at = -1.0, -1, (0.0, 0.0, 0.0), -1.0
+    dropped = 0
     start = time.monotonic()
     tick = 0
     while args.duration <= 0 or time.monotonic() - start < args.duration:
         now = time.monotonic()
-        if client is not None:  # 1. read the device (here: simulate it) and send its state
-            sequence += 1
-            state = (sequence, now - start, 0.0, 0.0, z_m, 1.0, 0.0, 0.0, 0.0,
+        if peer is not None and now - last_heard > args.session_timeout:
+            peer = None  # the renderer went silent: its session ends
+        if peer is not None:  # 1. read the device (here: simulate it) and send its state
+            sent += 1
+            state = (sent, now - start, 0.0, 0.0, z_m, 1.0, 0.0, 0.0, 0.0,
                      0.0, 0.0, vz_mps, 0.0, 0.0, 0.0, 0)
-            sock.sendto(packet(STATE, STATE_PAYLOAD.pack(*state)), client)
-        while True:  # 2. drain commands, newest sequence wins
+            sock.sendto(seal(key, STATE, STATE_PAYLOAD.pack(*state), client_nonce, server_nonce,
+                             sent), peer)
+        for _ in range(64):  # 2. take hellos and commands, at most 64 per period
             try:
                 data, source = sock.recvfrom(512)
             except BlockingIOError:
                 break
-            command = decode_command(data)
-            if command is None:
+            opened = open_datagram(key, data)
+            if opened is None:
+                dropped += 1
                 continue
-            if source != client:
-                client, newest = source, -1
-            if command[0] >= newest:
-                newest, force_N, fresh_at = command[0], command[1], now
-        # 3. display the force, or zero when the watchdog has tripped
-        shown = force_N if now - fresh_at <= args.watchdog else (0.0, 0.0, 0.0)
+            kind, cn, sn, counter, payload = opened
+            if kind == HELLO:
+                if peer is not None and source != peer:
+                    dropped += 1  # one renderer at a time: a live session is not taken over
+                    continue
+                if peer is None or cn != client_nonce:  # a new session
+                    peer, client_nonce, server_nonce = source, cn, random_nonce()
+                    sent, received, newest, fresh_at = 0, 0, -1, -1.0
+                last_heard = now
+                sock.sendto(seal(key, HELLO_REPLY, limits, client_nonce, server_nonce, 0), peer)
+                continue
+            if source != peer or (cn, sn) != (client_nonce, server_nonce) or counter <= received:
+                dropped += 1  # outside the session, or replayed
+                continue
+            sequence, fx, fy, fz, tx, ty, tz, flags = COMMAND_PAYLOAD.unpack(payload)
+            if not all(math.isfinite(v) for v in (fx, fy, fz, tx, ty, tz)):
+                dropped += 1
+                continue
+            received, last_heard = counter, now
+            if sequence >= newest:
+                newest, force_N, fresh_at = sequence, clamp((fx, fy, fz), args.max_force), now
+        # 3. display the force, or zero when the watchdog has tripped or there is no session
+        fresh = peer is not None and fresh_at >= 0 and now - fresh_at <= args.watchdog
+        shown = force_N if fresh else (0.0, 0.0, 0.0)
         hand_N = -0.5 if math.sin(2.0 * math.pi * 1.0 * (now - start)) > 0 else 0.3
         vz_mps += h * (hand_N + shown[2]) / mass_kg - h * 5.0 * vz_mps  # damped hand
         z_m += h * vz_mps
         tick += 1
         if tick % int(args.rate) == 0:
-            print(f"z = {z_m:+.4f} m, force z = {shown[2]:+.3f} N, client = {client}")
+            print(f"z = {z_m:+.4f} m, force z = {shown[2]:+.3f} N, client = {peer}, "
+                  f"dropped = {dropped}", flush=True)
         time.sleep(max(0.0, start + tick * h - time.monotonic()))
 
 

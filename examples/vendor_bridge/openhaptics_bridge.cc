@@ -4,8 +4,15 @@
 // declarations it uses.
 //
 // Bridges a 3D Systems Touch / Phantom (OpenHaptics HD API) to the rigidtouch UDP device
-// protocol: the HD servo scheduler calls UdpDeviceServer::Step once per servo tick (1 kHz), which
-// reads the device, streams its state, and displays the renderer's newest force.
+// protocol, version 2: the HD servo scheduler calls UdpDeviceServer::Step once per servo tick
+// (1 kHz), which reads the device, streams its state to the one authenticated renderer, and
+// displays that renderer's newest force, clamped to the device's limit.
+//
+//   openhaptics_bridge [KEY_FILE]
+//
+// KEY_FILE is the key shared with the renderer (`rigidtouch keygen --out KEY_FILE`, then
+// `rigidtouch serve --key KEY_FILE` on the other end); without it, the per-user default key
+// (docs/device-protocol.md, "Key files").
 #include <HD/hd.h>
 #include <rigidtouch/bridge.h>
 #include <rigidtouch/device.h>
@@ -73,12 +80,15 @@ HDCallbackCode HDCALLBACK ServoTick(void* server) {
 
 }  // namespace
 
-int main() try {
+int main(int argc, char** argv) try {
   const HHD handle = hdInitDevice(HD_DEFAULT_DEVICE);
   if (HD_DEVICE_ERROR(hdGetError())) return std::fprintf(stderr, "no HD device\n"), 1;
   hdEnable(HD_FORCE_OUTPUT);
   HdDevice device;
-  rigidtouch::device::UdpDeviceServer server(device, {});  // udp://127.0.0.1:47000
+  rigidtouch::device::UdpDeviceServerOptions options;  // udp://127.0.0.1:47000
+  if (argc > 1) options.key_file = argv[1];
+  // limits() announces the hardware's force limit to the renderer and the server clamps to it
+  rigidtouch::device::UdpDeviceServer server(device, options);
   std::signal(SIGINT, OnStopSignal);
   std::signal(SIGTERM, OnStopSignal);
   const HDSchedulerHandle tick =

@@ -1,13 +1,15 @@
-// The device side of the UDP device link (docs/device-protocol.md): streams a local Device's
-// state to a renderer and applies the renderer's newest command to it. Used by
-// `rigidtouch device-sim` and by vendor bridges (examples/vendor_bridge/), which link the installed
-// rigidtouch::rigidtouch and implement rigidtouch/device.h.
+// The device side of the UDP device link (docs/device-protocol.md, version 2): streams a local
+// Device's state to one authenticated renderer and applies that renderer's newest command to it,
+// clamped to the device's own force limit. Used by `rigidtouch device-sim` and by vendor bridges
+// (examples/vendor_bridge/), which link the installed rigidtouch::rigidtouch and implement
+// rigidtouch/device.h. Also the pre-shared key both ends authenticate every datagram with.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "rigidtouch/device.h"
@@ -29,17 +31,52 @@ struct UdpEndpoint {
   bool operator==(const UdpEndpoint&) const = default;
 };
 
-/// Outcome of decoding one datagram. Every value except kOk means the datagram was dropped.
+/// Bytes of the pre-shared key (HMAC-SHA-256 key).
+inline constexpr std::size_t kDeviceKeyBytes = 32;
+
+/// The pre-shared key both ends of the link authenticate every datagram with.
+struct DeviceKey {
+  /// The key bytes; keep them secret.
+  std::array<std::uint8_t, kDeviceKeyBytes> bytes{};
+  /// Returns true when the bytes are equal.
+  bool operator==(const DeviceKey&) const = default;
+};
+
+/// Returns a fresh random key (libsodium's randombytes). Throws Error if libsodium cannot start.
+DeviceKey GenerateDeviceKey();
+
+/// Returns the per-user default key file: $XDG_CONFIG_HOME/rigidtouch/device.key when
+/// XDG_CONFIG_HOME is an absolute path, else $HOME/.config/rigidtouch/device.key. Throws Error
+/// when neither variable is usable.
+std::string DefaultDeviceKeyPath();
+
+/// Reads a key file: 64 hexadecimal digits, optionally followed by white space. Throws Error
+/// naming the file when it is missing, not a regular file, not owned by this user, readable or
+/// writable by group or others (as ssh refuses private keys; the message says to chmod 600), or
+/// malformed.
+DeviceKey LoadDeviceKey(const std::string& path);
+
+/// Writes `key` to `path` with mode 0600, creating its directory (mode 0700) if needed. Throws
+/// Error when the file exists and `overwrite` is false, or when it cannot be written.
+void WriteDeviceKey(const std::string& path, const DeviceKey& key, bool overwrite);
+
+/// Returns `key` if set; else the key in `key_file` if that is not empty (the file must exist);
+/// else the per-user default key file's, created with a fresh key on first use.
+DeviceKey ResolveDeviceKey(const std::optional<DeviceKey>& key, const std::string& key_file);
+
+/// Outcome of decoding one datagram's framing or payload. Every value except kOk means the
+/// datagram was dropped. A datagram whose MAC does not verify is counted apart
+/// (UdpCounters::unauthenticated), not here.
 enum class DecodeResult : std::uint8_t {
-  kOk = 0,         ///< A valid packet of the expected type.
+  kOk = 0,         ///< A valid packet of an expected type.
   kTooShort,       ///< Fewer bytes than the header or than the payload the header announces.
   kBadMagic,       ///< The first four bytes are not the protocol magic.
-  kWrongVersion,   ///< A protocol version this build does not speak.
-  kWrongType,      ///< A known header, but not the packet type the receiver expects.
+  kWrongVersion,   ///< A protocol version this build does not speak (version 1 included).
+  kWrongType,      ///< A known header, but not a packet type the receiver expects.
   kOversized,      ///< More bytes than the header announces or than the type allows.
-  kBadChecksum,    ///< The CRC-32 does not match the bytes.
   kNonFinite,      ///< A NaN or infinite value in the payload.
   kBadQuaternion,  ///< An orientation quaternion whose norm differs from 1 by more than 1e-3.
+  kBadLimits,      ///< A hello-reply announcing a negative device limit.
 };
 
 /// Number of DecodeResult values, the size of per-reason counter arrays.
@@ -69,6 +106,25 @@ struct UdpCounters {
   std::uint64_t duplicate = 0;
   /// Datagrams from an address other than the peer, dropped.
   std::uint64_t wrong_source = 0;
+  /// Well-framed datagrams whose MAC does not verify under our key (forged, corrupted, or
+  /// another key), dropped.
+  std::uint64_t unauthenticated = 0;
+  /// Authenticated datagrams of the session whose counter is not above the newest one accepted
+  /// (a replay, a duplicate, or one overtaken in flight), dropped.
+  std::uint64_t replayed = 0;
+  /// Authenticated states or commands outside the established session (no session yet, an old
+  /// session's, or a hello-reply to a hello we no longer wait for), dropped.
+  std::uint64_t no_session = 0;
+  /// Sessions established (client: hello-replies accepted; server: hellos answered with a new
+  /// session).
+  std::uint64_t handshakes = 0;
+  /// Server side: authenticated hellos refused because another address holds a live session.
+  std::uint64_t hellos_refused = 0;
+  /// Server side: sessions ended because the peer sent nothing authenticated for
+  /// session_timeout_s.
+  std::uint64_t session_timeouts = 0;
+  /// Server side: commands whose force was clamped to the device's max_force_N before Write.
+  std::uint64_t clamped_commands = 0;
   /// Malformed datagrams, dropped, indexed by DecodeResult.
   std::array<std::uint64_t, kDecodeResultCount> malformed{};
   /// Transitions from fresh to stale (the watchdog tripped).
@@ -89,7 +145,7 @@ struct UdpCounters {
   std::uint64_t fallback_writes = 0;
   /// Server side: Device::Read calls that returned valid = false.
   std::uint64_t invalid_device_states = 0;
-  /// Server side: times the client address changed.
+  /// Server side: times a session started with a different client address.
   std::uint64_t peer_changes = 0;
   /// The errno value of the last send or receive failure, 0 if none.
   int last_errno = 0;
@@ -106,10 +162,17 @@ struct UdpCounters {
 struct UdpDeviceServerOptions {
   /// Address to bind as "udp://HOST:PORT"; port 0 picks a free port.
   std::string listen = "udp://127.0.0.1:47000";
-  /// Fixed renderer address; empty means the last client that sent a valid command.
+  /// Fixed renderer address; empty means any client holding the key (one session at a time).
   std::string peer;
   /// Time without a fresh command after which the device gets zero force [s], in (0, 10].
   double watchdog_s = 0.05;
+  /// Time without an authenticated datagram from the peer after which its session ends and
+  /// another client may start one [s], in [watchdog_s, 60].
+  double session_timeout_s = 0.5;
+  /// The pre-shared key; when unset, `key_file` is read (see ResolveDeviceKey).
+  std::optional<DeviceKey> key;
+  /// Key file; empty means the per-user default, created on first use (DefaultDeviceKeyPath).
+  std::string key_file;
   /// Must be true for any address outside 127.0.0.0/8.
   bool allow_non_loopback = false;
   /// Test-only simulated packet loss; keep it zero in real use.
@@ -117,15 +180,18 @@ struct UdpDeviceServerOptions {
 };
 
 /// Serves one Device over UDP. Call Step once per device period (from the vendor's servo
-/// callback or a rate loop): it reads the device, sends its state to the peer, drains commands
-/// (newest sequence wins) and writes the newest command to the device, or zero force flagged
-/// safe-fallback when there is none yet or the watchdog has tripped. Step never blocks,
-/// allocates or throws. Not thread-safe: call every member from the thread that drives it.
+/// callback or a rate loop): it reads the device, sends its state to the session's peer, drains
+/// hellos and commands (only authenticated ones of the session; newest wins) and writes the
+/// newest command to the device with its force clamped to device.limits().max_force_N, or zero
+/// force flagged safe-fallback when there is none yet or the watchdog has tripped. A session
+/// starts with an authenticated hello; while it is live, hellos from other addresses are
+/// refused. Step never blocks, allocates or throws. Not thread-safe: call every member from the
+/// thread that drives it.
 class UdpDeviceServer {
  public:
-  /// Validates the options and binds. Throws Error naming the option when an address is
-  /// malformed, not loopback without allow_non_loopback, or cannot be bound (e.g. in use).
-  /// `device` must outlive the server.
+  /// Validates the options, resolves the key and binds. Throws Error naming the option when an
+  /// address is malformed, not loopback without allow_non_loopback, or cannot be bound (e.g. in
+  /// use), or naming the key file when it cannot be used. `device` must outlive the server.
   UdpDeviceServer(Device& device, const UdpDeviceServerOptions& options);
   /// Closes the socket.
   ~UdpDeviceServer();
@@ -145,9 +211,9 @@ class UdpDeviceServer {
   bool watchdog_tripped() const;
   /// Returns the bound address (with the chosen port when bound to port 0).
   const UdpEndpoint& local_endpoint() const;
-  /// Returns true once states have somewhere to go (a fixed peer, or a client has spoken).
+  /// Returns true while a session is established (states have somewhere to go).
   bool has_peer() const;
-  /// Returns where states are sent; meaningful when has_peer().
+  /// Returns the session's client address; meaningful when has_peer().
   const UdpEndpoint& peer() const;
   /// Returns the sequence number of the last state sent (0 before the first).
   std::uint64_t last_sequence() const;

@@ -25,24 +25,42 @@ UdpEndpoint ParseLocal(const UdpDeviceOptions& options) {
   return local;
 }
 
+std::int64_t HelloIntervalNs(double interval_s) {
+  if (!(std::isfinite(interval_s) && interval_s > 0.0 && interval_s <= 10.0)) {
+    throw Error("udp device: hello_interval_s = " + std::to_string(interval_s) +
+                " is outside (0, 10] s");
+  }
+  return std::llround(interval_s * 1e9);
+}
+
 }  // namespace
 
 UdpDevice::UdpDevice(const UdpDeviceOptions& options)
-    : limits_(options.limits),
+    : own_limits_(options.limits),
+      limits_(options.limits),
       server_(ParseServer(options)),
       watchdog_ns_(WatchdogNs(options.watchdog_s, kWhat)),
+      hello_interval_ns_(HelloIntervalNs(options.hello_interval_s)),
+      key_(ResolveDeviceKey(options.key, options.key_file)),
       socket_(ParseLocal(options), "udp device: local"),
       loss_(options.test_loss) {
   state_.valid = false;
-  // announce ourselves: a server streams states to the last client that sent a command
-  DeviceCommand hello;
-  hello.safe_fallback = true;
-  Write(hello);
+  SendHello(MonotonicNowNs(), /*new_handshake=*/true);
+}
+
+void UdpDevice::SendHello(std::int64_t now_ns, bool new_handshake) {
+  // a fresh nonce per handshake, so a reply recorded from an earlier one cannot be replayed;
+  // resends keep it, so a reply slower than the resend period is still taken
+  session_ = false;
+  if (new_handshake) client_nonce_ = RandomNonce();
+  last_hello_ns_ = now_ns;
+  const HelloPacket packet = EncodeHello(client_nonce_, key_);
+  SendCounted(socket_, loss_, counters_, packet, server_);
 }
 
 DeviceState UdpDevice::Read() {
   const std::int64_t now_ns = MonotonicNowNs();
-  for (;;) {
+  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
     Datagram datagram;
     const int status = socket_.Receive(buffer_, &datagram);
     if (status == EAGAIN) break;
@@ -61,46 +79,123 @@ DeviceState UdpDevice::Read() {
       ++counters_.test_dropped_incoming;
       continue;
     }
-    DecodeResult result = DecodeResult::kOversized;
-    DeviceState decoded;
-    if (datagram.full_bytes == datagram.bytes) {
-      result = DecodeState(std::span<const std::uint8_t>(buffer_.data(), datagram.bytes), &decoded);
-    }
-    if (result != DecodeResult::kOk) {
-      ++counters_.malformed[static_cast<std::size_t>(result)];
+    if (datagram.full_bytes != datagram.bytes) {
+      ++counters_.malformed[static_cast<std::size_t>(DecodeResult::kOversized)];
       continue;
     }
-    // newest sequence wins; after a watchdog trip any sequence resynchronises (server restart)
-    if (has_state_ && !tripped_) {
-      if (decoded.sequence == state_.sequence) {
-        ++counters_.duplicate;
-        continue;
-      }
-      if (decoded.sequence < state_.sequence) {
-        ++counters_.stale;
-        continue;
-      }
+    const std::span<const std::uint8_t> bytes(buffer_.data(), datagram.bytes);
+    PacketHeader header;
+    const DecodeResult framing =
+        CheckFraming(bytes, PacketType::kHelloReply, PacketType::kState, &header);
+    if (framing != DecodeResult::kOk) {
+      ++counters_.malformed[static_cast<std::size_t>(framing)];
+      continue;
     }
-    state_ = decoded;
-    ++counters_.accepted;
-    last_fresh_ns_ = now_ns;
-    has_state_ = true;
-    if (tripped_) {
-      tripped_ = false;
-      ++counters_.recoveries;
+    if (!VerifyMac(bytes, key_)) {
+      ++counters_.unauthenticated;
+      continue;
+    }
+    if (header.type == PacketType::kHelloReply) {
+      HandleReply(header, bytes, now_ns);
+    } else {
+      HandleState(header, bytes, now_ns);
     }
   }
-  if (has_state_ && !tripped_ && now_ns - last_fresh_ns_ > watchdog_ns_) {
-    tripped_ = true;
-    ++counters_.watchdog_trips;
+  if (session_ && now_ns - last_fresh_ns_ > watchdog_ns_) {
+    if (has_state_ && !tripped_) {
+      tripped_ = true;
+      ++counters_.watchdog_trips;
+    }
+    // the server stalled, restarted or lost us: ask for a new session at once
+    SendHello(now_ns, /*new_handshake=*/true);
+  } else if (!session_ && now_ns - last_hello_ns_ >= hello_interval_ns_) {
+    SendHello(now_ns, /*new_handshake=*/false);
   }
   DeviceState out = state_;
   out.valid = has_state_ && !tripped_;
   return out;
 }
 
+void UdpDevice::HandleReply(const PacketHeader& header, std::span<const std::uint8_t> datagram,
+                            std::int64_t now_ns) {
+  if (session_) {
+    // the server answered a resent hello of this handshake twice; anything else is foreign
+    if (header.client_nonce == client_nonce_ && header.server_nonce == server_nonce_) {
+      ++counters_.replayed;
+    } else {
+      ++counters_.no_session;
+    }
+    return;
+  }
+  if (header.client_nonce != client_nonce_ || header.server_nonce == 0) {
+    ++counters_.no_session;  // an answer to another (older) hello
+    return;
+  }
+  AnnouncedLimits announced;
+  const DecodeResult result = DecodeHelloReplyPayload(datagram, &announced);
+  if (result != DecodeResult::kOk) {
+    ++counters_.malformed[static_cast<std::size_t>(result)];
+    return;
+  }
+  session_ = true;
+  server_nonce_ = header.server_nonce;
+  sent_counter_ = 0;
+  received_counter_ = 0;
+  has_session_state_ = false;
+  last_fresh_ns_ = now_ns;  // the watchdog also covers a server that never streams
+  ++counters_.handshakes;
+  announced_ = announced;
+  // in place: the name string is untouched, so nothing allocates
+  limits_.max_force_N = StricterLimit(own_limits_.max_force_N, announced.max_force_N);
+  limits_.max_stiffness_N_per_m =
+      StricterLimit(own_limits_.max_stiffness_N_per_m, announced.max_stiffness_N_per_m);
+  limits_.max_damping_Ns_per_m =
+      StricterLimit(own_limits_.max_damping_Ns_per_m, announced.max_damping_Ns_per_m);
+}
+
+void UdpDevice::HandleState(const PacketHeader& header, std::span<const std::uint8_t> datagram,
+                            std::int64_t now_ns) {
+  if (!session_ || header.client_nonce != client_nonce_ || header.server_nonce != server_nonce_) {
+    ++counters_.no_session;
+    return;
+  }
+  if (header.counter <= received_counter_) {
+    ++counters_.replayed;
+    return;
+  }
+  DeviceState decoded;
+  const DecodeResult result = DecodeStatePayload(datagram, &decoded);
+  if (result != DecodeResult::kOk) {
+    ++counters_.malformed[static_cast<std::size_t>(result)];
+    return;
+  }
+  received_counter_ = header.counter;
+  // newest sequence wins within the session; a new session numbers from 1 again
+  if (has_session_state_) {
+    if (decoded.sequence == state_.sequence) {
+      ++counters_.duplicate;
+      return;
+    }
+    if (decoded.sequence < state_.sequence) {
+      ++counters_.stale;
+      return;
+    }
+  }
+  state_ = decoded;
+  ++counters_.accepted;
+  last_fresh_ns_ = now_ns;
+  has_state_ = true;
+  has_session_state_ = true;
+  if (tripped_) {
+    tripped_ = false;
+    ++counters_.recoveries;
+  }
+}
+
 void UdpDevice::Write(const DeviceCommand& command) {
-  const CommandPacket packet = EncodeCommand(command);
+  if (!session_) return;  // the server would drop it; the hello is what it needs
+  const PacketHeader header{PacketType::kCommand, client_nonce_, server_nonce_, ++sent_counter_};
+  const CommandPacket packet = EncodeCommand(command, header, key_);
   SendCounted(socket_, loss_, counters_, packet, server_);
 }
 

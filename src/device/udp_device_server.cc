@@ -33,30 +33,54 @@ UdpEndpoint ParsePeer(const UdpDeviceServerOptions& options) {
 
 }  // namespace
 
+std::int64_t SessionTimeoutNs(const UdpDeviceServerOptions& options) {
+  const double timeout_s = options.session_timeout_s;
+  if (!(std::isfinite(timeout_s) && timeout_s >= options.watchdog_s && timeout_s <= 60.0)) {
+    throw Error("udp device server: session_timeout_s = " + std::to_string(timeout_s) +
+                " is outside [watchdog_s, 60] s");
+  }
+  return std::llround(timeout_s * 1e9);
+}
+
 struct UdpDeviceServer::Impl {
   Impl(Device& served, const UdpDeviceServerOptions& options)
       : device(served),
         watchdog_ns(WatchdogNs(options.watchdog_s, kWhat)),
+        session_timeout_ns(SessionTimeoutNs(options)),
         fixed_peer(!options.peer.empty()),
-        has_peer(fixed_peer),
-        peer(ParsePeer(options)),
+        allowed_peer(ParsePeer(options)),
+        key(ResolveDeviceKey(options.key, options.key_file)),
         socket(ParseListen(options), "udp device server: listen"),
         loss(options.test_loss) {}
 
   void Step();
   void SendState();
-  void DrainCommands(std::int64_t now_ns);
+  void DrainDatagrams(std::int64_t now_ns);
+  void HandleHello(const PacketHeader& header, const UdpEndpoint& source, std::int64_t now_ns);
+  void HandleCommand(const PacketHeader& header, const UdpEndpoint& source,
+                     std::span<const std::uint8_t> datagram, std::int64_t now_ns);
+  void SendReply();
 
   Device& device;
   std::int64_t watchdog_ns = 0;
+  std::int64_t session_timeout_ns = 0;
   bool fixed_peer = false;
-  bool has_peer = false;
-  UdpEndpoint peer;
+  UdpEndpoint allowed_peer;  // the only client address when fixed_peer
+  DeviceKey key;
   UdpSocket socket;
   LossSimulator loss;
   UdpCounters counters;
-  std::uint64_t sequence = 0;  // the server numbers states itself: strictly increasing on the wire
-  DeviceCommand command;       // newest accepted command
+  // the session: pinned to the client's address and both nonces
+  bool session = false;
+  bool had_peer = false;
+  UdpEndpoint peer;
+  std::uint64_t client_nonce = 0;
+  std::uint64_t server_nonce = 0;
+  std::uint64_t sent_counter = 0;
+  std::uint64_t received_counter = 0;
+  std::int64_t last_peer_ns = 0;  // newest authenticated hello or command from the peer
+  std::uint64_t sequence = 0;     // the server numbers states itself: strictly increasing
+  DeviceCommand command;          // newest accepted command, already clamped
   bool has_command = false;
   bool tripped = false;
   std::int64_t last_fresh_ns = 0;
@@ -82,7 +106,7 @@ const UdpEndpoint& UdpDeviceServer::local_endpoint() const {
   return impl_->socket.local();
 }
 bool UdpDeviceServer::has_peer() const {
-  return impl_->has_peer;
+  return impl_->session;
 }
 const UdpEndpoint& UdpDeviceServer::peer() const {
   return impl_->peer;
@@ -93,14 +117,19 @@ std::uint64_t UdpDeviceServer::last_sequence() const {
 
 void UdpDeviceServer::Impl::Step() {
   const std::int64_t now_ns = MonotonicNowNs();
+  if (session && now_ns - last_peer_ns > session_timeout_ns) {
+    // the peer is gone; another client holding the key may now start a session
+    session = false;
+    ++counters.session_timeouts;
+  }
   // Device order: Read, (renderer computes), Write
   SendState();
-  DrainCommands(now_ns);
+  DrainDatagrams(now_ns);
   if (has_command && !tripped && now_ns - last_fresh_ns > watchdog_ns) {
     tripped = true;
     ++counters.watchdog_trips;
   }
-  if (has_command && !tripped) {
+  if (session && has_command && !tripped) {
     device.Write(command);
     return;
   }
@@ -118,14 +147,23 @@ void UdpDeviceServer::Impl::SendState() {
     ++counters.invalid_device_states;
     return;
   }
-  if (!has_peer) return;
+  if (!session) return;
   state.sequence = ++sequence;
-  const StatePacket packet = EncodeState(state);
+  const PacketHeader header{PacketType::kState, client_nonce, server_nonce, ++sent_counter};
+  const StatePacket packet = EncodeState(state, header, key);
   SendCounted(socket, loss, counters, packet, peer);
 }
 
-void UdpDeviceServer::Impl::DrainCommands(std::int64_t now_ns) {
-  for (;;) {
+void UdpDeviceServer::Impl::SendReply() {
+  const DeviceLimits& limits = device.limits();
+  const AnnouncedLimits announced{limits.max_force_N, limits.max_stiffness_N_per_m,
+                                  limits.max_damping_Ns_per_m};
+  const HelloReplyPacket packet = EncodeHelloReply(announced, client_nonce, server_nonce, key);
+  SendCounted(socket, loss, counters, packet, peer);
+}
+
+void UdpDeviceServer::Impl::DrainDatagrams(std::int64_t now_ns) {
+  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
     Datagram datagram;
     const int status = socket.Receive(buffer, &datagram);
     if (status == EAGAIN) return;
@@ -135,7 +173,7 @@ void UdpDeviceServer::Impl::DrainCommands(std::int64_t now_ns) {
       return;
     }
     ++counters.received;
-    if (fixed_peer && datagram.source != peer) {
+    if (fixed_peer && datagram.source != allowed_peer) {
       ++counters.wrong_source;
       continue;
     }
@@ -143,35 +181,110 @@ void UdpDeviceServer::Impl::DrainCommands(std::int64_t now_ns) {
       ++counters.test_dropped_incoming;
       continue;
     }
-    DecodeResult result = DecodeResult::kOversized;
-    DeviceCommand decoded;
-    if (datagram.full_bytes == datagram.bytes) {
-      result =
-          DecodeCommand(std::span<const std::uint8_t>(buffer.data(), datagram.bytes), &decoded);
-    }
-    if (result != DecodeResult::kOk) {
-      ++counters.malformed[static_cast<std::size_t>(result)];
+    if (datagram.full_bytes != datagram.bytes) {
+      ++counters.malformed[static_cast<std::size_t>(DecodeResult::kOversized)];
       continue;
     }
-    if (!has_peer || datagram.source != peer) {
-      // a new client takes over; its sequence numbers are unrelated to the old one's
-      peer = datagram.source;
-      has_peer = true;
-      ++counters.peer_changes;
-    } else if (has_command && !tripped && decoded.sequence < command.sequence) {
-      ++counters.stale;
+    const std::span<const std::uint8_t> bytes(buffer.data(), datagram.bytes);
+    PacketHeader header;
+    const DecodeResult framing =
+        CheckFraming(bytes, PacketType::kHello, PacketType::kCommand, &header);
+    if (framing != DecodeResult::kOk) {
+      ++counters.malformed[static_cast<std::size_t>(framing)];
       continue;
     }
-    // an equal sequence replaces the command: a renderer ticking faster than the device answers
-    // one state several times, and the later answer is the newer one
-    command = decoded;
-    has_command = true;
-    ++counters.accepted;
-    last_fresh_ns = now_ns;
-    if (tripped) {
-      tripped = false;
-      ++counters.recoveries;
+    if (!VerifyMac(bytes, key)) {
+      ++counters.unauthenticated;
+      continue;
     }
+    if (header.type == PacketType::kHello) {
+      HandleHello(header, datagram.source, now_ns);
+    } else {
+      HandleCommand(header, datagram.source, bytes, now_ns);
+    }
+  }
+}
+
+void UdpDeviceServer::Impl::HandleHello(const PacketHeader& header, const UdpEndpoint& source,
+                                        std::int64_t now_ns) {
+  if (header.client_nonce == 0) {
+    ++counters.no_session;
+    return;
+  }
+  if (session && source != peer) {
+    // one renderer at a time: a live session is never taken over
+    ++counters.hellos_refused;
+    return;
+  }
+  if (session && header.client_nonce == client_nonce) {
+    // the same hello again: our reply was lost; answer it the same way
+    last_peer_ns = now_ns;
+    SendReply();
+    return;
+  }
+  if (!had_peer || source != peer) ++counters.peer_changes;
+  // a new session: fresh nonce, counters and sequencing from scratch, zero force until its
+  // first command
+  session = true;
+  had_peer = true;
+  peer = source;
+  client_nonce = header.client_nonce;
+  server_nonce = RandomNonce();
+  sent_counter = 0;
+  received_counter = 0;
+  sequence = 0;
+  has_command = false;
+  tripped = false;
+  last_peer_ns = now_ns;
+  ++counters.handshakes;
+  SendReply();
+}
+
+void UdpDeviceServer::Impl::HandleCommand(const PacketHeader& header, const UdpEndpoint& source,
+                                          std::span<const std::uint8_t> datagram,
+                                          std::int64_t now_ns) {
+  if (!session || header.client_nonce != client_nonce || header.server_nonce != server_nonce) {
+    ++counters.no_session;
+    return;
+  }
+  if (source != peer) {
+    ++counters.wrong_source;
+    return;
+  }
+  if (header.counter <= received_counter) {
+    ++counters.replayed;
+    return;
+  }
+  DeviceCommand decoded;
+  const DecodeResult result = DecodeCommandPayload(datagram, &decoded);
+  if (result != DecodeResult::kOk) {
+    ++counters.malformed[static_cast<std::size_t>(result)];
+    return;
+  }
+  received_counter = header.counter;
+  last_peer_ns = now_ns;
+  if (has_command && !tripped && decoded.sequence < command.sequence) {
+    ++counters.stale;
+    return;
+  }
+  // the bridge knows the hardware's limit; the renderer's own clipping is not relied on.
+  // stableNorm: a finite force near 1e300 must not overflow to an infinite norm
+  const double max_force_N = device.limits().max_force_N;
+  const double norm_N = decoded.force_N.stableNorm();
+  if (max_force_N > 0.0 && norm_N > max_force_N) {
+    decoded.force_N *= max_force_N / norm_N;
+    decoded.clipped = true;
+    ++counters.clamped_commands;
+  }
+  // an equal sequence replaces the command: a renderer ticking faster than the device answers
+  // one state several times, and the later answer is the newer one
+  command = decoded;
+  has_command = true;
+  ++counters.accepted;
+  last_fresh_ns = now_ns;
+  if (tripped) {
+    tripped = false;
+    ++counters.recoveries;
   }
 }
 

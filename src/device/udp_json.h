@@ -8,7 +8,7 @@
 namespace rigidtouch::device {
 
 /// All fields of UdpCounters; "malformed" is an object keyed by DecodeResult name
-/// ("too_short", "bad_checksum", ...) plus "total".
+/// ("too_short", "wrong_version", ...) plus "total".
 nlohmann::json ToJson(const UdpCounters& counters);
 
 }  // namespace rigidtouch::device

@@ -18,6 +18,11 @@ namespace rigidtouch::device {
 // UdpCounters and PacketLoss are in rigidtouch/bridge.h: the server's options and counters
 // use them.
 
+/// Most datagrams one Read (client) or Step (server) takes off its socket; the rest wait for the
+/// next period. Bounds the time a flood can take from a period (each costs an HMAC), so the loop
+/// keeps its rate and its watchdog; 64 per period is far above the one datagram a peer sends.
+inline constexpr int kMaxDatagramsPerPeriod = 64;
+
 /// Throws Error naming `what` and the field when a fraction is outside [0, 1].
 void ValidatePacketLoss(const PacketLoss& loss, std::string_view what);
 

@@ -1,7 +1,9 @@
 #include "device/udp_protocol.h"
 
+#include <sodium.h>
+
+#include <algorithm>
 #include <bit>
-#include <boost/crc.hpp>
 #include <cmath>
 #include <limits>
 
@@ -62,56 +64,68 @@ constexpr std::size_t kMagicOffset = 0;
 constexpr std::size_t kVersionOffset = 4;
 constexpr std::size_t kTypeOffset = 6;
 constexpr std::size_t kPayloadSizeOffset = 8;
-constexpr std::size_t kChecksumOffset = 12;
+constexpr std::size_t kReservedOffset = 12;
+constexpr std::size_t kClientNonceOffset = 16;
+constexpr std::size_t kServerNonceOffset = 24;
+constexpr std::size_t kCounterOffset = 32;
+static_assert(kCounterOffset + 8 == kHeaderBytes);
 
 // state payload offsets from the start of the datagram
-constexpr std::size_t kStateSequence = 16;
-constexpr std::size_t kStateTime = 24;
-constexpr std::size_t kStatePosition = 32;
-constexpr std::size_t kStateOrientation = 56;
-constexpr std::size_t kStateVelocity = 88;
-constexpr std::size_t kStateAngularVelocity = 112;
-constexpr std::size_t kStateButtons = 136;
-static_assert(kStateButtons + 4 == kStatePacketBytes);
+constexpr std::size_t kStateSequence = 40;
+constexpr std::size_t kStateTime = 48;
+constexpr std::size_t kStatePosition = 56;
+constexpr std::size_t kStateOrientation = 80;
+constexpr std::size_t kStateVelocity = 112;
+constexpr std::size_t kStateAngularVelocity = 136;
+constexpr std::size_t kStateButtons = 160;
+static_assert(kStateButtons + 4 + kMacBytes == kStatePacketBytes);
 
 // command payload offsets from the start of the datagram
-constexpr std::size_t kCommandSequence = 16;
-constexpr std::size_t kCommandForce = 24;
-constexpr std::size_t kCommandTorque = 48;
-constexpr std::size_t kCommandFlags = 72;
-static_assert(kCommandFlags + 4 == kCommandPacketBytes);
+constexpr std::size_t kCommandSequence = 40;
+constexpr std::size_t kCommandForce = 48;
+constexpr std::size_t kCommandTorque = 72;
+constexpr std::size_t kCommandFlags = 96;
+static_assert(kCommandFlags + 4 + kMacBytes == kCommandPacketBytes);
 
-void PutHeader(std::uint8_t* out, PacketType type, std::size_t payload_bytes) {
+// hello-reply payload offsets
+constexpr std::size_t kReplyMaxForce = 40;
+constexpr std::size_t kReplyMaxStiffness = 48;
+constexpr std::size_t kReplyMaxDamping = 56;
+static_assert(kReplyMaxDamping + 8 + kMacBytes == kHelloReplyPacketBytes);
+
+static_assert(crypto_auth_hmacsha256_BYTES == kMacBytes);
+static_assert(crypto_auth_hmacsha256_KEYBYTES == kDeviceKeyBytes);
+
+void PutHeader(std::uint8_t* out, PacketType type, std::size_t payload_bytes,
+               const PacketHeader& header) {
   PutU32(out + kMagicOffset, kProtocolMagic);
   PutU16(out + kVersionOffset, kProtocolVersion);
   PutU16(out + kTypeOffset, static_cast<std::uint16_t>(type));
   PutU32(out + kPayloadSizeOffset, static_cast<std::uint32_t>(payload_bytes));
-  PutU32(out + kChecksumOffset, 0);
+  PutU32(out + kReservedOffset, 0);
+  PutU64(out + kClientNonceOffset, header.client_nonce);
+  PutU64(out + kServerNonceOffset, header.server_nonce);
+  PutU64(out + kCounterOffset, header.counter);
 }
 
-void Seal(std::span<std::uint8_t> datagram) {
-  PutU32(datagram.data() + kChecksumOffset, PacketChecksum(datagram));
+// writes the MAC over every byte before it into the last kMacBytes
+void Seal(std::span<std::uint8_t> datagram, const DeviceKey& key) {
+  const std::size_t covered = datagram.size() - kMacBytes;
+  crypto_auth_hmacsha256(datagram.data() + covered, datagram.data(), covered, key.bytes.data());
 }
 
-// checks shared by both packet types, in the order the protocol document lists them
-DecodeResult CheckFraming(std::span<const std::uint8_t> datagram, PacketType expected_type,
-                          std::size_t expected_payload_bytes) {
-  if (datagram.size() < kHeaderBytes) return DecodeResult::kTooShort;
-  const std::uint8_t* bytes = datagram.data();
-  if (GetU32(bytes + kMagicOffset) != kProtocolMagic) return DecodeResult::kBadMagic;
-  if (GetU16(bytes + kVersionOffset) != kProtocolVersion) return DecodeResult::kWrongVersion;
-  if (GetU16(bytes + kTypeOffset) != static_cast<std::uint16_t>(expected_type)) {
-    return DecodeResult::kWrongType;
+std::size_t PayloadBytes(PacketType type) {
+  switch (type) {
+    case PacketType::kState:
+      return kStatePayloadBytes;
+    case PacketType::kCommand:
+      return kCommandPayloadBytes;
+    case PacketType::kHello:
+      return kHelloPayloadBytes;
+    case PacketType::kHelloReply:
+      return kHelloReplyPayloadBytes;
   }
-  const std::size_t declared = GetU32(bytes + kPayloadSizeOffset);
-  if (declared > expected_payload_bytes) return DecodeResult::kOversized;
-  if (declared < expected_payload_bytes) return DecodeResult::kTooShort;
-  if (datagram.size() < kHeaderBytes + declared) return DecodeResult::kTooShort;
-  if (datagram.size() > kHeaderBytes + declared) return DecodeResult::kOversized;
-  if (GetU32(bytes + kChecksumOffset) != PacketChecksum(datagram)) {
-    return DecodeResult::kBadChecksum;
-  }
-  return DecodeResult::kOk;
+  return 0;
 }
 
 bool AllFinite(const std::uint8_t* first_f64, std::size_t count) {
@@ -137,27 +151,53 @@ std::string_view ToString(DecodeResult result) {
       return "wrong_type";
     case DecodeResult::kOversized:
       return "oversized";
-    case DecodeResult::kBadChecksum:
-      return "bad_checksum";
     case DecodeResult::kNonFinite:
       return "non_finite";
     case DecodeResult::kBadQuaternion:
       return "bad_quaternion";
+    case DecodeResult::kBadLimits:
+      return "bad_limits";
   }
   return "unknown";
 }
 
-std::uint32_t PacketChecksum(std::span<const std::uint8_t> datagram) {
-  boost::crc_32_type crc;
-  crc.process_bytes(datagram.data(), kChecksumOffset);
-  crc.process_bytes(datagram.data() + kHeaderBytes, datagram.size() - kHeaderBytes);
-  return crc.checksum();
+// checks 1 to 6 of docs/device-protocol.md, in its order; the MAC (7) is checked by the caller
+DecodeResult CheckFraming(std::span<const std::uint8_t> datagram, PacketType first,
+                          PacketType second, PacketHeader* header) {
+  if (datagram.size() < kHeaderBytes) return DecodeResult::kTooShort;
+  const std::uint8_t* bytes = datagram.data();
+  if (GetU32(bytes + kMagicOffset) != kProtocolMagic) return DecodeResult::kBadMagic;
+  if (GetU16(bytes + kVersionOffset) != kProtocolVersion) return DecodeResult::kWrongVersion;
+  const std::uint16_t type = GetU16(bytes + kTypeOffset);
+  if (type != static_cast<std::uint16_t>(first) && type != static_cast<std::uint16_t>(second)) {
+    return DecodeResult::kWrongType;
+  }
+  const std::size_t expected = PayloadBytes(static_cast<PacketType>(type));
+  const std::size_t declared = GetU32(bytes + kPayloadSizeOffset);
+  if (declared > expected) return DecodeResult::kOversized;
+  if (declared < expected) return DecodeResult::kTooShort;
+  if (datagram.size() < kHeaderBytes + declared + kMacBytes) return DecodeResult::kTooShort;
+  if (datagram.size() > kHeaderBytes + declared + kMacBytes) return DecodeResult::kOversized;
+  header->type = static_cast<PacketType>(type);
+  header->client_nonce = GetU64(bytes + kClientNonceOffset);
+  header->server_nonce = GetU64(bytes + kServerNonceOffset);
+  header->counter = GetU64(bytes + kCounterOffset);
+  return DecodeResult::kOk;
 }
 
-StatePacket EncodeState(const DeviceState& state) {
+bool VerifyMac(std::span<const std::uint8_t> datagram, const DeviceKey& key) {
+  if (datagram.size() < kHeaderBytes + kMacBytes) return false;
+  const std::size_t covered = datagram.size() - kMacBytes;
+  // libsodium compares in constant time, so timing reveals nothing about the right MAC
+  return crypto_auth_hmacsha256_verify(datagram.data() + covered, datagram.data(), covered,
+                                       key.bytes.data()) == 0;
+}
+
+StatePacket EncodeState(const DeviceState& state, const PacketHeader& header,
+                        const DeviceKey& key) {
   StatePacket packet{};
   std::uint8_t* out = packet.data();
-  PutHeader(out, PacketType::kState, kStatePayloadBytes);
+  PutHeader(out, PacketType::kState, kStatePayloadBytes, header);
   PutU64(out + kStateSequence, state.sequence);
   PutF64(out + kStateTime, state.time_s);
   PutVec3(out + kStatePosition, state.position_m);
@@ -168,14 +208,15 @@ StatePacket EncodeState(const DeviceState& state) {
   PutVec3(out + kStateVelocity, state.velocity_mps);
   PutVec3(out + kStateAngularVelocity, state.angular_velocity_radps);
   PutU32(out + kStateButtons, state.buttons);
-  Seal(packet);
+  Seal(packet, key);
   return packet;
 }
 
-CommandPacket EncodeCommand(const DeviceCommand& command) {
+CommandPacket EncodeCommand(const DeviceCommand& command, const PacketHeader& header,
+                            const DeviceKey& key) {
   CommandPacket packet{};
   std::uint8_t* out = packet.data();
-  PutHeader(out, PacketType::kCommand, kCommandPayloadBytes);
+  PutHeader(out, PacketType::kCommand, kCommandPayloadBytes, header);
   PutU64(out + kCommandSequence, command.sequence);
   PutVec3(out + kCommandForce, command.force_N);
   PutVec3(out + kCommandTorque, command.torque_Nm);
@@ -183,13 +224,33 @@ CommandPacket EncodeCommand(const DeviceCommand& command) {
   if (command.safe_fallback) flags |= kCommandFlagSafeFallback;
   if (command.clipped) flags |= kCommandFlagClipped;
   PutU32(out + kCommandFlags, flags);
-  Seal(packet);
+  Seal(packet, key);
   return packet;
 }
 
-DecodeResult DecodeState(std::span<const std::uint8_t> datagram, DeviceState* state) {
-  const DecodeResult framing = CheckFraming(datagram, PacketType::kState, kStatePayloadBytes);
-  if (framing != DecodeResult::kOk) return framing;
+HelloPacket EncodeHello(std::uint64_t client_nonce, const DeviceKey& key) {
+  HelloPacket packet{};
+  PutHeader(packet.data(), PacketType::kHello, kHelloPayloadBytes,
+            PacketHeader{PacketType::kHello, client_nonce, 0, 0});
+  Seal(packet, key);
+  return packet;
+}
+
+HelloReplyPacket EncodeHelloReply(const AnnouncedLimits& limits, std::uint64_t client_nonce,
+                                  std::uint64_t server_nonce, const DeviceKey& key) {
+  HelloReplyPacket packet{};
+  std::uint8_t* out = packet.data();
+  PutHeader(out, PacketType::kHelloReply, kHelloReplyPayloadBytes,
+            PacketHeader{PacketType::kHelloReply, client_nonce, server_nonce, 0});
+  PutF64(out + kReplyMaxForce, limits.max_force_N);
+  PutF64(out + kReplyMaxStiffness, limits.max_stiffness_N_per_m);
+  PutF64(out + kReplyMaxDamping, limits.max_damping_Ns_per_m);
+  Seal(packet, key);
+  return packet;
+}
+
+DecodeResult DecodeStatePayload(std::span<const std::uint8_t> datagram, DeviceState* state) {
+  if (datagram.size() != kStatePacketBytes) return DecodeResult::kTooShort;
   const std::uint8_t* in = datagram.data();
   // time, position, quaternion, velocity, angular velocity: 14 contiguous f64
   if (!AllFinite(in + kStateTime, 14)) return DecodeResult::kNonFinite;
@@ -209,9 +270,8 @@ DecodeResult DecodeState(std::span<const std::uint8_t> datagram, DeviceState* st
   return DecodeResult::kOk;
 }
 
-DecodeResult DecodeCommand(std::span<const std::uint8_t> datagram, DeviceCommand* command) {
-  const DecodeResult framing = CheckFraming(datagram, PacketType::kCommand, kCommandPayloadBytes);
-  if (framing != DecodeResult::kOk) return framing;
+DecodeResult DecodeCommandPayload(std::span<const std::uint8_t> datagram, DeviceCommand* command) {
+  if (datagram.size() != kCommandPacketBytes) return DecodeResult::kTooShort;
   const std::uint8_t* in = datagram.data();
   // force and torque: 6 contiguous f64
   if (!AllFinite(in + kCommandForce, 6)) return DecodeResult::kNonFinite;
@@ -224,6 +284,37 @@ DecodeResult DecodeCommand(std::span<const std::uint8_t> datagram, DeviceCommand
   command->safe_fallback = (flags & kCommandFlagSafeFallback) != 0;
   command->clipped = (flags & kCommandFlagClipped) != 0;
   return DecodeResult::kOk;
+}
+
+DecodeResult DecodeHelloReplyPayload(std::span<const std::uint8_t> datagram,
+                                     AnnouncedLimits* limits) {
+  if (datagram.size() != kHelloReplyPacketBytes) return DecodeResult::kTooShort;
+  const std::uint8_t* in = datagram.data();
+  if (!AllFinite(in + kReplyMaxForce, 3)) return DecodeResult::kNonFinite;
+  const AnnouncedLimits decoded{GetF64(in + kReplyMaxForce), GetF64(in + kReplyMaxStiffness),
+                                GetF64(in + kReplyMaxDamping)};
+  if (decoded.max_force_N < 0.0 || decoded.max_stiffness_N_per_m < 0.0 ||
+      decoded.max_damping_Ns_per_m < 0.0) {
+    return DecodeResult::kBadLimits;
+  }
+  *limits = decoded;
+  return DecodeResult::kOk;
+}
+
+void InitSodium() {
+  if (sodium_init() < 0) throw Error("libsodium could not be initialised");
+}
+
+std::uint64_t RandomNonce() noexcept {
+  std::uint64_t nonce = 0;
+  while (nonce == 0) randombytes_buf(&nonce, sizeof nonce);
+  return nonce;
+}
+
+double StricterLimit(double a, double b) {
+  if (a <= 0.0) return b;
+  if (b <= 0.0) return a;
+  return std::min(a, b);
 }
 
 }  // namespace rigidtouch::device

@@ -68,8 +68,9 @@ void RequireLoopbackUnlessAllowed(const UdpEndpoint& endpoint, std::string_view 
                                   bool allow_non_loopback) {
   if (endpoint.IsLoopback() || allow_non_loopback) return;
   throw Error(std::string(what) + ": " + endpoint.ToString() +
-              " is not a loopback address (127.0.0.0/8); the device protocol has no "
-              "authentication, so other addresses need the explicit allow_non_loopback option");
+              " is not a loopback address (127.0.0.0/8); other addresses need the explicit "
+              "allow_non_loopback option (and a key shared by both ends, --key: "
+              "docs/device-protocol.md, Security)");
 }
 
 UdpSocket::UdpSocket(const UdpEndpoint& local, std::string_view what) : local_(local) {

@@ -1,24 +1,50 @@
 // End to end over loopback: `device-sim` and `serve` talk through the UDP bridge with 5% of the
 // packets dropped; device-sim is killed mid-run, the watchdog zeroes the force, and a new
-// device-sim brings the loop back (issue: real-time loop and network bridge). Also serve's text
-// summary of an in-process run.
+// device-sim brings the loop back (issue: real-time loop and network bridge). A third-party
+// process without the key floods both ends, also from the device's stolen port, and nothing it
+// sends reaches the device or the renderer. `rigidtouch keygen`. Also serve's text summary of an
+// in-process run. Every test points XDG_CONFIG_HOME and HOME at its own folder, so the real home
+// directory's key is never read or created.
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <bit>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
 #include <thread>
+#include <vector>
 
 #include "cli/cli_util.h"
+#include "device/udp_protocol.h"
+#include "device/udp_socket.h"
+#include "loop/test_poll.h"
 
 namespace rigidtouch::test {
 namespace {
+
+using testing::PollUntil;
+
+// points the per-user key lookup of this process and its children into `dir`
+void IsolateHome(const std::filesystem::path& dir) {
+  ::setenv("XDG_CONFIG_HOME", (dir / "xdg").c_str(), 1);
+  ::setenv("HOME", (dir / "home").c_str(), 1);
+}
 
 // a UDP port that was free a moment ago on 127.0.0.1
 int FreePort() {
@@ -51,8 +77,184 @@ int Wait(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// the UDP ports process `pid` has bound: its socket inodes (/proc/PID/fd), then /proc/net/udp
+std::set<int> UdpPortsOf(pid_t pid) {
+  std::set<std::string> inodes;
+  std::error_code error;
+  for (const auto& entry :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/fd", error)) {
+    const std::string target = std::filesystem::read_symlink(entry.path(), error).string();
+    if (target.rfind("socket:[", 0) == 0) inodes.insert(target.substr(8, target.size() - 9));
+  }
+  std::set<int> ports;
+  std::ifstream table("/proc/net/udp");
+  std::string line;
+  std::getline(table, line);  // column names
+  while (std::getline(table, line)) {
+    std::istringstream fields(line);
+    std::string slot, local, remote, state, queues, timer, retransmits, uid, timeout, inode;
+    fields >> slot >> local >> remote >> state >> queues >> timer >> retransmits >> uid >>
+        timeout >> inode;
+    if (inodes.count(inode) != 0)
+      ports.insert(std::stoi(local.substr(local.find(':') + 1), nullptr, 16));
+  }
+  return ports;
+}
+
+// the largest |tool position| component in a trace CSV (direct coupling: the device's position)
+double LargestToolCoordinate(const std::filesystem::path& trace) {
+  std::ifstream in(trace);
+  std::string line;
+  std::getline(in, line);
+  std::vector<int> columns;
+  {
+    std::istringstream names(line);
+    std::string name;
+    for (int c = 0; std::getline(names, name, ','); ++c) {
+      if (name == "tool_x_m" || name == "tool_y_m" || name == "tool_z_m") columns.push_back(c);
+    }
+  }
+  EXPECT_EQ(columns.size(), 3u) << line;
+  double largest = 0.0;
+  while (std::getline(in, line)) {
+    std::istringstream cells(line);
+    std::string cell;
+    for (int c = 0; std::getline(cells, cell, ','); ++c) {
+      if (std::find(columns.begin(), columns.end(), c) == columns.end()) continue;
+      const double value = std::strtod(cell.c_str(), nullptr);
+      largest = std::isfinite(value) ? std::max(largest, std::abs(value)) : HUGE_VAL;
+    }
+  }
+  return largest;
+}
+
+// A process on the host that does not hold the key: it floods its targets with what it can
+// make (commands of 1000 N and states 5 m away under its own key, version 1 packets with a
+// valid CRC and 1e300 values, hellos and hello-replies), and, when it holds the device's port,
+// answers the renderer's hellos with forged replies and states and echoes its hellos back.
+class Intruder {
+ public:
+  static constexpr double kMarker_m = 5.0;  // a position no honest device here reports
+
+  explicit Intruder(int port = 0)
+      : socket_(device::UdpEndpoint{0x7f000001u, static_cast<std::uint16_t>(port)}, "intruder") {
+    key_.bytes.fill(0x42);  // not the shared key
+  }
+  ~Intruder() { Stop(); }
+
+  void Start() {
+    thread_ = std::thread([this] { Run(); });
+  }
+  void Stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  void AddTarget(int port) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    targets_.push_back(device::UdpEndpoint{0x7f000001u, static_cast<std::uint16_t>(port)});
+  }
+  std::uint64_t sent() const { return sent_; }
+  int port() const { return socket_.local().port; }
+  std::uint64_t hellos_heard() const { return hellos_heard_; }
+
+ private:
+  void Send(std::span<const std::uint8_t> bytes, const device::UdpEndpoint& to) {
+    if (socket_.SendTo(bytes, to) == 0) ++sent_;
+  }
+
+  // what a version 1 sender puts on the wire: 16-byte header, zeroed CRC field, payload
+  static std::vector<std::uint8_t> Version1(std::uint16_t type, std::size_t payload_bytes,
+                                            double value) {
+    std::vector<std::uint8_t> bytes = {0x52,
+                                       0x54,
+                                       0x43,
+                                       0x48,
+                                       1,
+                                       0,
+                                       static_cast<std::uint8_t>(type),
+                                       0,
+                                       static_cast<std::uint8_t>(payload_bytes),
+                                       0,
+                                       0,
+                                       0};
+    bytes.resize(16 + payload_bytes, 0);
+    const auto bits = std::bit_cast<std::uint64_t>(value);
+    for (std::size_t at = 24; at + 8 <= bytes.size(); at += 8) {
+      for (int i = 0; i < 8; ++i) bytes[at + i] = static_cast<std::uint8_t>(bits >> (8 * i));
+    }
+    return bytes;
+  }
+
+  void Flood(const device::UdpEndpoint& to, std::uint64_t client_nonce, std::uint64_t round) {
+    using namespace device;
+    DeviceCommand command;
+    command.sequence = round;
+    command.force_N = Vec3(1000.0, 0.0, 0.0);
+    DeviceState state;
+    state.sequence = round;
+    state.position_m = Vec3(kMarker_m, kMarker_m, kMarker_m);
+    const PacketHeader header{PacketType::kCommand, client_nonce, round, round};
+    Send(EncodeCommand(command, header, key_), to);
+    Send(EncodeState(state, header, key_), to);
+    Send(EncodeHello(round, key_), to);
+    Send(EncodeHelloReply(AnnouncedLimits{1000.0, 0.0, 0.0}, client_nonce, round, key_), to);
+    Send(Version1(2, 60, 1000.0), to);
+    Send(Version1(1, 124, 1e300), to);
+  }
+
+  void Run() {
+    std::array<std::uint8_t, device::kMaxDatagramBytes> buffer{};
+    for (std::uint64_t round = 1; !stop_; ++round) {
+      // as the stolen port: answer whoever says hello, with its own nonce
+      device::Datagram datagram;
+      // bounded, so a stop request is seen whatever arrives
+      for (int taken = 0; taken < 64 && socket_.Receive(buffer, &datagram) == 0; ++taken) {
+        if (datagram.source == socket_.local()) continue;
+        device::PacketHeader header;
+        const std::span<const std::uint8_t> bytes(buffer.data(), datagram.bytes);
+        if (device::CheckFraming(bytes, device::PacketType::kHello, device::PacketType::kCommand,
+                                 &header) == device::DecodeResult::kOk &&
+            header.type == device::PacketType::kHello) {
+          ++hellos_heard_;
+          Send(bytes, datagram.source);  // the renderer's own hello, reflected
+          Flood(datagram.source, header.client_nonce, round);
+        }
+      }
+      std::vector<device::UdpEndpoint> targets;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        targets = targets_;
+      }
+      for (const auto& target : targets) Flood(target, round, round);
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  }
+
+  device::UdpSocket socket_;
+  device::DeviceKey key_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> sent_{0};
+  std::atomic<std::uint64_t> hellos_heard_{0};
+  std::mutex mutex_;
+  std::vector<device::UdpEndpoint> targets_;
+  std::thread thread_;
+};
+
+// writes a fresh key with `rigidtouch keygen` and returns its path
+std::string Keygen(const std::filesystem::path& dir) {
+  const std::string key = (dir / "shared.key").string();
+  const CliResult r = RunCli("keygen --out " + key);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return key;
+}
+
+long Count(const nlohmann::json& link, const char* name) {
+  return link.at(name).get<long>();
+}
+
 TEST(BridgeCliTest, LossyLinkWatchdogAndRecovery) {
   const auto dir = TempDir("bridge");
+  IsolateHome(dir);  // zero configuration: both ends create or read the same per-user key
   const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
   const double watchdog_s = 0.05;
   // serve runs 4 s; device-sim 1 taps from 0 s, is killed at 2 s, device-sim 2 starts at 2.6 s
@@ -80,6 +282,12 @@ TEST(BridgeCliTest, LossyLinkWatchdogAndRecovery) {
   EXPECT_GT(link["test_dropped_incoming"].get<long>(), 0);  // the 5% loss was active
   EXPECT_GE(link["watchdog_trips"].get<long>(), 1);         // device-sim killed: watchdog fired
   EXPECT_GE(link["recoveries"].get<long>(), 1);             // and the new device-sim recovered
+  EXPECT_GE(link["handshakes"].get<long>(), 2);             // one session with each device-sim
+  EXPECT_EQ(link["unauthenticated"].get<long>(), 0);
+  // the key was created on first use, private to the user
+  struct stat info {};
+  ASSERT_EQ(::stat((dir / "xdg" / "rigidtouch" / "device.key").c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0600u);
   // while the device was gone (0.6 s) the loop output the safe zero force; the watchdog took
   // at most its configured time to notice, so at least 0.6 s - 0.05 s of zero-force ticks
   EXPECT_GE(j["safe_fallback_ticks"].get<long>(),
@@ -90,6 +298,8 @@ TEST(BridgeCliTest, LossyLinkWatchdogAndRecovery) {
 }
 
 TEST(BridgeCliTest, AddressInUseGivesAClearError) {
+  const auto dir = TempDir("in_use");
+  IsolateHome(dir);
   const int port = FreePort();
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in a{};
@@ -102,6 +312,170 @@ TEST(BridgeCliTest, AddressInUseGivesAClearError) {
   ::close(fd);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find(std::to_string(port)), std::string::npos) << r.err;
+  std::filesystem::remove_all(dir);
+}
+
+// the review's attack on the device side: a process floods device-sim while no renderer is
+// connected; every write to the device stays the zero force
+TEST(BridgeCliTest, IntruderWithoutTheKeyNeverMovesTheDevice) {
+  const auto dir = TempDir("intruder_device");
+  IsolateHome(dir);
+  const std::string key = Keygen(dir);
+  const int port = FreePort();
+  Intruder intruder;
+  intruder.AddTarget(port);
+  const pid_t sim = Spawn("device-sim --listen udp://127.0.0.1:" + std::to_string(port) +
+                              " --key " + key + " --rate 1000 --duration 1.5 --json",
+                          (dir / "sim.json").string());
+  intruder.Start();
+  ASSERT_EQ(Wait(sim), 0);
+  intruder.Stop();
+  const auto j = nlohmann::json::parse(ReadAll(dir / "sim.json"));
+  const auto& link = j["link"];
+  EXPECT_GT(intruder.sent(), 1000u);
+  EXPECT_EQ(Count(link, "accepted"), 0);
+  EXPECT_EQ(Count(link, "handshakes"), 0);
+  EXPECT_EQ(Count(link, "sent"), 0) << "no state of the hand went anywhere";
+  // every period wrote the zero force; the simulated hand received no energy
+  EXPECT_EQ(Count(link, "fallback_writes"), j["loop"]["ticks"].get<long>());
+  EXPECT_EQ(j["energy_to_user_J"].get<double>(), 0.0);
+  // and each datagram is accounted for as a drop
+  EXPECT_GT(Count(link, "unauthenticated"), 0);
+  EXPECT_GT(link["malformed"]["wrong_version"].get<long>(), 0);
+  EXPECT_GT(link["malformed"]["wrong_type"].get<long>(), 0);
+  EXPECT_EQ(Count(link, "unauthenticated") + link["malformed"]["total"].get<long>(),
+            Count(link, "received"));
+  std::filesystem::remove_all(dir);
+}
+
+// both ends run and render taps while the intruder floods both of them (the renderer's port is
+// found from /proc, as any local process could): the session survives, the renderer never
+// takes the intruder's states, the device never takes its commands
+TEST(BridgeCliTest, IntruderWithoutTheKeyReachesNeitherEndOfALiveSession) {
+  const auto dir = TempDir("intruder_both");
+  IsolateHome(dir);
+  const std::string key = Keygen(dir);
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  Intruder intruder;
+  intruder.AddTarget(std::stoi(addr.substr(addr.rfind(':') + 1)));
+  const pid_t sim = Spawn("device-sim --listen " + addr + " --key " + key +
+                              " --rate 1000 --taps 20 --speed 0.2 --duration 3.5 --json",
+                          (dir / "sim.json").string());
+  intruder.Start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const pid_t serve =
+      Spawn("serve --device " + addr + " --key " + key +
+                " --rate 1000 --duration 2.5 --json --trace " + (dir / "trace.csv").string(),
+            (dir / "serve.json").string());
+  std::set<int> serve_ports;
+  // between fork and exec the child still holds this process's sockets, the intruder's too
+  ASSERT_TRUE(PollUntil([&] {
+    serve_ports = UdpPortsOf(serve);
+    serve_ports.erase(intruder.port());
+    return !serve_ports.empty();
+  }));
+  for (const int port : serve_ports) intruder.AddTarget(port);
+  ASSERT_EQ(Wait(serve), 0);
+  intruder.Stop();
+  ::kill(sim, SIGTERM);
+  Wait(sim);
+
+  const auto served = nlohmann::json::parse(ReadAll(dir / "serve.json"));
+  const auto& renderer = served["device"]["link"];
+  EXPECT_GT(served["impulses"].get<long>(), 0) << "the taps were still rendered";
+  EXPECT_GT(Count(renderer, "accepted"), 1000);
+  EXPECT_GE(Count(renderer, "handshakes"), 1);  // more only if a slow (sanitizer) run tripped
+  // the intruder reached the renderer's socket, but not from the device's address, to which the
+  // renderer is pinned (the stolen-port test below covers datagrams from that address)
+  EXPECT_GT(Count(renderer, "wrong_source"), 1000);
+  EXPECT_TRUE(served["finite"].get<bool>());
+  // no state of the intruder's (5 m, 1e300) was ever the tool's position
+  EXPECT_LT(LargestToolCoordinate(dir / "trace.csv"), 1.0);
+
+  const auto sim_json = nlohmann::json::parse(ReadAll(dir / "sim.json"));
+  const auto& device_link = sim_json["link"];
+  EXPECT_EQ(Count(device_link, "handshakes"), Count(renderer, "handshakes"));
+  EXPECT_EQ(Count(device_link, "peer_changes"), 1) << "the session never left the renderer";
+  EXPECT_GT(Count(device_link, "unauthenticated"), 1000);
+  // every command the device took was one the renderer sent
+  EXPECT_LE(Count(device_link, "accepted"), Count(renderer, "sent"));
+  std::filesystem::remove_all(dir);
+}
+
+// the review's second attack: the intruder binds the device's port before the device starts.
+// The renderer talks to it (its hellos reach the intruder) but accepts nothing it sends, and
+// device-sim refuses to start with a clear message
+TEST(BridgeCliTest, StolenDevicePortYieldsNothingToTheRenderer) {
+  const auto dir = TempDir("stolen_port");
+  IsolateHome(dir);
+  const std::string key = Keygen(dir);
+  const int port = FreePort();
+  Intruder intruder(port);
+  intruder.Start();
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(port);
+  const pid_t serve =
+      Spawn("serve --device " + addr + " --key " + key +
+                " --rate 1000 --duration 1.5 --json --trace " + (dir / "trace.csv").string(),
+            (dir / "serve.json").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const CliResult sim = RunCli("device-sim --listen " + addr + " --key " + key + " --duration 1");
+  EXPECT_NE(sim.exit_code, 0);
+  EXPECT_NE(sim.err.find(std::to_string(port)), std::string::npos) << sim.err;
+  EXPECT_NE(sim.err.find("in use"), std::string::npos) << sim.err;
+  ASSERT_EQ(Wait(serve), 0);
+  intruder.Stop();
+
+  EXPECT_GT(intruder.hellos_heard(), 10u) << "the renderer kept asking the stolen port";
+  const auto j = nlohmann::json::parse(ReadAll(dir / "serve.json"));
+  const auto& link = j["device"]["link"];
+  EXPECT_EQ(Count(link, "accepted"), 0);
+  EXPECT_EQ(Count(link, "handshakes"), 0);
+  EXPECT_GT(Count(link, "unauthenticated"), 0);
+  EXPECT_GT(link["malformed"]["wrong_version"].get<long>(), 0);
+  EXPECT_GT(link["malformed"]["wrong_type"].get<long>(), 0);  // its own hellos, reflected
+  EXPECT_EQ(Count(link, "unauthenticated") + link["malformed"]["total"].get<long>(),
+            Count(link, "received"));
+  // the renderer never had a valid device state, so it never output a force
+  EXPECT_EQ(j["invalid_device_ticks"].get<long>(), j["loop"]["ticks"].get<long>());
+  EXPECT_EQ(j["max_force_N"].get<double>(), 0.0);
+  EXPECT_TRUE(j["finite"].get<bool>());
+  EXPECT_LT(LargestToolCoordinate(dir / "trace.csv"), 1.0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(KeygenCliTest, WritesAPrivateKeyAndNeverOverwritesUnlessForced) {
+  const auto dir = TempDir("keygen");
+  IsolateHome(dir);
+  const std::filesystem::path key = dir / "keys" / "device.key";
+  CliResult r = RunCli("keygen --out " + key.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  struct stat info {};
+  ASSERT_EQ(::stat(key.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0600u);
+  const std::string first = ReadAll(key);
+  EXPECT_EQ(first.size(), 65u);
+  EXPECT_EQ(r.out.find(first.substr(0, 64)), std::string::npos) << "the key is never printed";
+
+  r = RunCli("keygen --out " + key.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("already exists"), std::string::npos) << r.err;
+  EXPECT_EQ(ReadAll(key), first);
+  r = RunCli("keygen --out " + key.string() + " --force");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(ReadAll(key), first);
+
+  // a key others may read is refused, naming the fix
+  ::chmod(key.c_str(), 0644);
+  r = RunCli("device-sim --listen udp://127.0.0.1:0 --key " + key.string() + " --duration 0.1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("chmod 600"), std::string::npos) << r.err;
+
+  // without --out: the per-user default, here under the test's XDG_CONFIG_HOME
+  r = RunCli("keygen --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["key_file"].get<std::string>(),
+            (dir / "xdg" / "rigidtouch" / "device.key").string());
+  std::filesystem::remove_all(dir);
 }
 
 // the text summary of a short in-process run: every deadline is a tick or a skipped period

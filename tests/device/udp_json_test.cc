@@ -23,5 +23,25 @@ TEST(UdpJson, CountersWithMalformedByReason) {
   EXPECT_EQ(json.at("malformed").size(), kDecodeResultCount);  // 8 reasons + total
 }
 
+TEST(UdpJson, SessionAndAuthenticationCounters) {
+  UdpCounters counters;
+  counters.unauthenticated = 5;
+  counters.replayed = 4;
+  counters.no_session = 3;
+  counters.handshakes = 2;
+  counters.hellos_refused = 6;
+  counters.session_timeouts = 1;
+  counters.clamped_commands = 7;
+  const nlohmann::json json = ToJson(counters);
+  EXPECT_EQ(json.at("unauthenticated").get<std::uint64_t>(), 5u);
+  EXPECT_EQ(json.at("replayed").get<std::uint64_t>(), 4u);
+  EXPECT_EQ(json.at("no_session").get<std::uint64_t>(), 3u);
+  EXPECT_EQ(json.at("handshakes").get<std::uint64_t>(), 2u);
+  EXPECT_EQ(json.at("hellos_refused").get<std::uint64_t>(), 6u);
+  EXPECT_EQ(json.at("session_timeouts").get<std::uint64_t>(), 1u);
+  EXPECT_EQ(json.at("clamped_commands").get<std::uint64_t>(), 7u);
+  EXPECT_EQ(json.at("malformed").at("total").get<std::uint64_t>(), 0u);
+}
+
 }  // namespace
 }  // namespace rigidtouch::device

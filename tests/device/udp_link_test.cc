@@ -57,9 +57,9 @@ TEST(UdpLink, ValidationNamesTheField) {
 TEST(UdpLink, MalformedTotalSumsEveryReason) {
   UdpCounters counters;
   counters.malformed[static_cast<std::size_t>(DecodeResult::kTooShort)] = 3;
-  counters.malformed[static_cast<std::size_t>(DecodeResult::kBadChecksum)] = 4;
+  counters.malformed[static_cast<std::size_t>(DecodeResult::kWrongVersion)] = 4;
   EXPECT_EQ(counters.MalformedTotal(), 7u);
-  EXPECT_EQ(counters.Malformed(DecodeResult::kBadChecksum), 4u);
+  EXPECT_EQ(counters.Malformed(DecodeResult::kWrongVersion), 4u);
 }
 
 }  // namespace
