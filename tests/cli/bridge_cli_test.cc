@@ -403,7 +403,8 @@ TEST(BridgeCliTest, IntruderWithoutTheKeyReachesNeitherEndOfALiveSession) {
 }
 
 // the review's second attack: the intruder binds the device's port before the device starts.
-// The renderer talks to it (its hellos reach the intruder) but accepts nothing it sends, and
+// The renderer talks to it (its hellos reach the intruder) but accepts nothing it sends: it never
+// gets a session, so it gives up after its startup timeout with status 5 and no force rendered;
 // device-sim refuses to start with a clear message
 TEST(BridgeCliTest, StolenDevicePortYieldsNothingToTheRenderer) {
   const auto dir = TempDir("stolen_port");
@@ -415,31 +416,21 @@ TEST(BridgeCliTest, StolenDevicePortYieldsNothingToTheRenderer) {
   const std::string addr = "udp://127.0.0.1:" + std::to_string(port);
   const pid_t serve =
       Spawn("serve --device " + addr + " --key " + key +
-                " --rate 1000 --duration 1.5 --json --trace " + (dir / "trace.csv").string(),
+                " --rate 1000 --duration 1.5 --startup-timeout 1.2 --json --trace " +
+                (dir / "trace.csv").string(),
             (dir / "serve.json").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   const CliResult sim = RunCli("device-sim --listen " + addr + " --key " + key + " --duration 1");
   EXPECT_NE(sim.exit_code, 0);
   EXPECT_NE(sim.err.find(std::to_string(port)), std::string::npos) << sim.err;
   EXPECT_NE(sim.err.find("in use"), std::string::npos) << sim.err;
-  ASSERT_EQ(Wait(serve), 0);
+  // no session with the intruder, however much it sent: no first state, so no run at all
+  EXPECT_EQ(Wait(serve), 5);
   intruder.Stop();
 
   EXPECT_GT(intruder.hellos_heard(), 10u) << "the renderer kept asking the stolen port";
-  const auto j = nlohmann::json::parse(ReadAll(dir / "serve.json"));
-  const auto& link = j["device"]["link"];
-  EXPECT_EQ(Count(link, "accepted"), 0);
-  EXPECT_EQ(Count(link, "handshakes"), 0);
-  EXPECT_GT(Count(link, "unauthenticated"), 0);
-  EXPECT_GT(link["malformed"]["wrong_version"].get<long>(), 0);
-  EXPECT_GT(link["malformed"]["wrong_type"].get<long>(), 0);  // its own hellos, reflected
-  EXPECT_EQ(Count(link, "unauthenticated") + link["malformed"]["total"].get<long>(),
-            Count(link, "received"));
-  // the renderer never had a valid device state, so it never output a force
-  EXPECT_EQ(j["invalid_device_ticks"].get<long>(), j["loop"]["ticks"].get<long>());
-  EXPECT_EQ(j["max_force_N"].get<double>(), 0.0);
-  EXPECT_TRUE(j["finite"].get<bool>());
-  EXPECT_LT(LargestToolCoordinate(dir / "trace.csv"), 1.0);
+  EXPECT_TRUE(ReadAll(dir / "serve.json").empty()) << "serve rendered a session";
+  EXPECT_FALSE(std::filesystem::exists(dir / "trace.csv"));
   std::filesystem::remove_all(dir);
 }
 
