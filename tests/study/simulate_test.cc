@@ -185,10 +185,10 @@ TEST(SimulateTest, KilledAndResumedCohortEqualsAnUninterruptedOne) {
   config.resume = true;
   Rng rng(2718);
   std::set<int> answers_at_kill;  // where the kills landed
-  int target = 0;
-  for (int attempt = 0; attempt < 10; ++attempt) {
-    // the next kill point: a random number of answers further, then a random delay
-    target += static_cast<int>(rng.Below(9));
+  // kill again and again until the cohort completes: each kill waits for 1 to 6 more answers and
+  // a random delay, so the kills land at many points however fast the machine runs the cohort
+  for (int attempt = 0; attempt < 60 && CountAnswers(crash_dir, 4) < total; ++attempt) {
+    const int target = CountAnswers(crash_dir, 4) + 1 + static_cast<int>(rng.Below(6));
     std::fflush(nullptr);
     const pid_t child = fork();
     ASSERT_GE(child, 0);
@@ -211,7 +211,7 @@ TEST(SimulateTest, KilledAndResumedCohortEqualsAnUninterruptedOne) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
     if (!exited) {
-      std::this_thread::sleep_for(std::chrono::microseconds(rng.Below(3000)));
+      std::this_thread::sleep_for(std::chrono::microseconds(rng.Below(1000)));
       kill(child, SIGKILL);
       waitpid(child, &status, 0);
     }
