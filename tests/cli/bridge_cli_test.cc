@@ -46,37 +46,6 @@ void IsolateHome(const std::filesystem::path& dir) {
   ::setenv("HOME", (dir / "home").c_str(), 1);
 }
 
-// a UDP port that was free a moment ago on 127.0.0.1
-int FreePort() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = 0;
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t n = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
-
-// starts `rigidtouch ARGS` with stdout to `out`; returns its pid
-pid_t Spawn(const std::string& args, const std::string& out) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const std::string cmd = std::string("exec ") + RIGIDTOUCH_CLI + " " + args + " >" + out;
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  return pid;
-}
-
-int Wait(pid_t pid) {
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 // the UDP ports process `pid` has bound: its socket inodes (/proc/PID/fd), then /proc/net/udp
 std::set<int> UdpPortsOf(pid_t pid) {
   std::set<std::string> inodes;

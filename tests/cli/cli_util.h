@@ -1,6 +1,9 @@
 // Runs the rigidtouch binary from a test and captures its exit code and output.
 #pragma once
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -47,6 +50,38 @@ inline CliResult RunCli(const std::string& args, const std::string& env = "") {
   r.err = ReadAll(err);
   std::filesystem::remove_all(dir);
   return r;
+}
+
+/// A UDP port that was free a moment ago on 127.0.0.1.
+inline int FreePort() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t n = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+/// Starts `rigidtouch ARGS` in the background with stdout to `out`; returns its pid.
+inline pid_t Spawn(const std::string& args, const std::string& out) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = std::string("exec ") + RIGIDTOUCH_CLI + " " + args + " >" + out;
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+/// Waits for `pid`; its exit status, or -1 if it did not exit normally.
+inline int Wait(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace rigidtouch::test
