@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include <algorithm>
+#include <limits>
 
 #include "io/output_file.h"
 #include "io/text.h"
@@ -25,16 +26,24 @@ std::string SystemError(const std::string& path, const std::string& what) {
   return path + ": " + what + " (" + std::strerror(errno) + ")";
 }
 
+// a string field of a record, or "" when it is absent or not a string (json::value throws on
+// a present field of another type, and these records come from files a user may have edited)
+std::string TextField(const json& record, const char* key) {
+  if (!record.is_object()) return "";
+  const auto it = record.find(key);
+  return it != record.end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
 void CheckFirstRecord(const json& record, std::string_view source) {
-  const bool ok = record.value("type", "") == "session_start" &&
-                  record.value("format", "") == kLogFormat && record.contains("format_version") &&
+  const bool ok = TextField(record, "type") == "session_start" &&
+                  TextField(record, "format") == kLogFormat && record.contains("format_version") &&
                   record["format_version"].is_number_integer();
   if (!ok) {
     throw Error(std::string(source) +
                 ": line 1 is not the session_start record of a rigidtouch study log; the file "
                 "was not modified");
   }
-  if (record["format_version"].get<int>() != kLogFormatVersion) {
+  if (record["format_version"] != kLogFormatVersion) {
     throw Error(std::string(source) + ": log format version " + record["format_version"].dump() +
                 " is not supported (this build reads version " + std::to_string(kLogFormatVersion) +
                 "); the file was not modified");
@@ -59,9 +68,14 @@ std::string ReadAll(int fd, const std::string& path) {
 }
 
 int GetInt(const json& record, const char* key, const std::string& source, std::size_t i) {
-  if (!record.contains(key) || !record[key].is_number_integer()) {
-    throw Error(source + ": record " + std::to_string(i + 1) + " (" + record.value("type", "") +
-                ") has no integer \"" + key + "\"");
+  const bool in_range = record.contains(key) && record[key].is_number_integer() &&
+                        record[key] >= std::numeric_limits<int>::min() &&
+                        record[key] <= std::numeric_limits<int>::max();
+  if (!in_range) {
+    throw Error(source + ": record " + std::to_string(i + 1) + " (" + TextField(record, "type") +
+                ") has no integer \"" + key + "\" (a number from " +
+                std::to_string(std::numeric_limits<int>::min()) + " to " +
+                std::to_string(std::numeric_limits<int>::max()) + ")");
   }
   return record[key].get<int>();
 }
@@ -69,7 +83,7 @@ int GetInt(const json& record, const char* key, const std::string& source, std::
 ValidLog Validate(const std::vector<json>& records, const std::string& src) {
   if (records.empty()) throw Error(src + ": empty log (no session)");
   const json& start = records[0];
-  if (!start.is_object() || start.value("type", "") != "session_start") {
+  if (!start.is_object() || TextField(start, "type") != "session_start") {
     throw Error(src + ": does not start with a session_start record");
   }
   CheckFirstRecord(start, src);
@@ -79,18 +93,18 @@ ValidLog Validate(const std::vector<json>& records, const std::string& src) {
   }
   log.protocol = ParseProtocol(start["protocol"], src + " (embedded protocol)");
   log.protocol_hash = ProtocolHash(log.protocol);
-  const std::string recorded_hash = start.value("protocol_hash", "");
+  const std::string recorded_hash = TextField(start, "protocol_hash");
   if (recorded_hash != log.protocol_hash) {
     throw Error(src + ": the embedded protocol does not match its hash " +
                 io::Quote(recorded_hash));
   }
-  log.participant = start.value("participant", "");
+  log.participant = TextField(start, "participant");
   try {
     CheckParticipantId(log.participant);
   } catch (const Error& e) {
     throw Error(src + ": the session_start record's " + e.what());
   }
-  log.mode = start.value("mode", "");
+  log.mode = TextField(start, "mode");
   if (log.mode != "person" && log.mode != "simulated") {
     throw Error(src + ": the session_start record's mode " + io::Quote(log.mode) +
                 " is neither \"person\" nor \"simulated\"");
@@ -104,7 +118,7 @@ ValidLog Validate(const std::vector<json>& records, const std::string& src) {
   std::vector<bool> done(log.plan.size(), false);
   for (std::size_t i = 1; i < records.size(); ++i) {
     const json& r = records[i];
-    const std::string type = r.value("type", "");
+    const std::string type = TextField(r, "type");
     if (type == "session_start") {
       throw Error(src + ": record " + std::to_string(i + 1) + " starts a second session");
     }

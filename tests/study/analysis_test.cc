@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,24 @@ std::vector<std::pair<int, int>> Series(int n, int correct) {
     out.emplace_back(c, i < correct ? c : 1 - c);
   }
   return out;
+}
+
+// a step number beyond int read as an int wraps onto a step of the plan (2^32 + k reads as k); the
+// validator must refuse it, not count the answer for step k
+TEST(AnalysisTest, ValidateLogRefusesAStepBeyondInt) {
+  const LogInput log = MakeLog(TwoTests("p"), "p01", {{{0, 0}}});
+  ASSERT_NO_THROW(ValidateLog(log.records, log.source));
+  std::vector<json> records = log.records;
+  json& answer = records.back();
+  ASSERT_EQ(answer["type"], "answer");
+  answer["step"] = answer["step"].get<std::int64_t>() + (std::int64_t{1} << 32);
+  try {
+    ValidateLog(records, log.source);
+    ADD_FAILURE() << "a step of 2^32 + k was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("p01.jsonl: record"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no integer \"step\""), std::string::npos) << e.what();
+  }
 }
 
 TEST(AnalysisTest, PercentCorrectGroupStatisticsAndFlags) {

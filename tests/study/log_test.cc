@@ -69,6 +69,21 @@ TEST(LogTest, RefusesWhatIsNotAStudyLog) {
   EXPECT_NE(ErrorOf(Lines({Start()}) + "\n").find("line 2 is not JSON"), std::string::npos);
 }
 
+// a field of the wrong type in the first record (found by the study_log fuzzer: a "format" that is
+// an object threw nlohmann's type_error out of ParseLog) is a rigidtouch::Error like any other
+TEST(LogTest, FirstRecordFieldsOfTheWrongTypeAreRefused) {
+  for (const char* key : {"format", "type"}) {
+    json odd = Start();
+    odd[key] = json{{"a", 1}};
+    const std::string bytes = Lines({odd});
+    EXPECT_THROW(ParseLog(bytes, "log.jsonl"), Error) << key;
+    EXPECT_NE(ErrorOf(bytes).find("log.jsonl: line 1 is not"), std::string::npos) << key;
+  }
+  json huge = Start();
+  huge["format_version"] = 4294967297LL;  // truncates to 1 as an int
+  EXPECT_NE(ErrorOf(Lines({huge})).find("version 4294967297 is not supported"), std::string::npos);
+}
+
 TEST(LogTest, AppendedRecordsReadBackInOrder) {
   ScratchDir dir;
   const std::string path = dir.File("a.jsonl");
