@@ -247,7 +247,7 @@ void Register(CLI::App& root) {
       "Device limits: a --stiffness or --damping (or config value) above what the preset or the "
       "device can display is refused with an error naming the parameter and the limit (exit "
       "status 2); unset, they default to the preset's stiffness and to k h capped at its "
-      "damping. Every command is clipped to the stricter force limit. Exit status 4: the UDP "
+      "damping. Every command is clipped to the stricter force limit. Exit status 5: the UDP "
       "device sent no state within --startup-timeout.");
   app->callback([f] { Run(*f); });
 }

@@ -18,6 +18,21 @@ bool Plausible(const DeviceParams& d, const DeviceState& s) {
          s.angular_velocity_radps.norm() <= d.plausible_angular_speed_radps;
 }
 
+// Without a usable device state a directly coupled tool has no pose to follow: it stays where
+// the last good state put it, at rest, until a good state arrives. Left to the dynamics it would
+// keep its last velocity, bounce off the wall and drift away, and the trace would show contacts
+// and impulses of a hand that is not there while the device displays zero.
+CouplingResult StartHold(const Model& model, Data& data, CouplingResult r) {
+  r.user = Wrench{};
+  if (model.device.coupling != Coupling::kDirect) return r;
+  BodyState& t = data.bodies[model.tool];
+  t.v_W.setZero();
+  t.w_W.setZero();
+  r.hold_tool = true;
+  r.held_tool = t;
+  return r;
+}
+
 }  // namespace
 
 CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& input) {
@@ -33,7 +48,8 @@ CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& inp
     r.device_ok = false;
   } else if (!Plausible(model.device, dev)) {
     data.Warn(Warning::kImplausibleDeviceState);
-    return {Wrench{}, false};
+    r.device_ok = false;
+    return StartHold(model, data, r);
   } else {
     const int tool = model.tool;
     BodyState& t = data.bodies[tool];
@@ -53,8 +69,15 @@ CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& inp
       data.tool_coupling_force_W = r.user.force_N;
     }
   }
-  if (!r.device_ok) data.Warn(Warning::kBadDeviceState);
+  if (!r.device_ok) {
+    data.Warn(Warning::kBadDeviceState);
+    return StartHold(model, data, r);
+  }
   return r;
+}
+
+void HoldTool(const Model& model, Data& data, const CouplingResult& coupling) {
+  if (coupling.hold_tool) data.bodies[model.tool] = coupling.held_tool;
 }
 
 }  // namespace rigidtouch::render

@@ -24,7 +24,9 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   // a repeated reading (the device stopped updating, or has not yet) carries no new motion: an
   // impulse computed from it would push against a hand that may have moved or gone, and the
   // train's later impulses grow (Eq. 8), so such a tick starts no window and applies no impulse
-  const bool stale = model.device.coupling != Coupling::kNone && !input.device.fresh;
+  // no usable reading at all (the watchdog tripped, or non-finite or implausible) is no motion too
+  const bool stale =
+      (model.device.coupling != Coupling::kNone && !input.device.fresh) || coupling.hold_tool;
   // kinematics: the bodies' rotations, read by every stage until 7 moves the bodies
   dynamics::ComputeKinematics(data);
 
@@ -51,6 +53,7 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
 
   // 7. integrate positions with the new velocities
   dynamics::IntegratePositions(model, data);
+  render::HoldTool(model, data, coupling);
 
   // 8. render: penalty (or coupling) + Eq. 9, the device's force limit, the safety guards
   DeviceCommand out = render::DeviceWrench(model, data, input.device.sequence);

@@ -193,6 +193,10 @@ LogContents ParseLog(std::string_view bytes, std::string_view source) {
       throw Error(std::string(source) + ": line " + std::to_string(line_number) +
                   " is not JSON (error at byte " + std::to_string(e.byte) +
                   " of the line); this is not a study log (JSON lines), so it was not modified");
+    } catch (const json::exception& e) {
+      // e.g. 406, a number beyond a double's range (found by the study_log fuzzer)
+      throw Error(std::string(source) + ": line " + std::to_string(line_number) +
+                  " is not a study record (" + e.what() + "); the file was not modified");
     }
     if (!record.is_object() || !record.contains("type") || !record["type"].is_string()) {
       throw Error(std::string(source) + ": line " + std::to_string(line_number) +

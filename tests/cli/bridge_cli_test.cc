@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -34,6 +35,8 @@
 #include "device/udp_protocol.h"
 #include "device/udp_socket.h"
 #include "loop/test_poll.h"
+#include "rigidtouch/bridge.h"
+#include "rigidtouch/device.h"
 
 namespace rigidtouch::test {
 namespace {
@@ -400,6 +403,155 @@ TEST(BridgeCliTest, StolenDevicePortYieldsNothingToTheRenderer) {
   EXPECT_GT(intruder.hellos_heard(), 10u) << "the renderer kept asking the stolen port";
   EXPECT_TRUE(ReadAll(dir / "serve.json").empty()) << "serve rendered a session";
   EXPECT_FALSE(std::filesystem::exists(dir / "trace.csv"));
+  std::filesystem::remove_all(dir);
+}
+
+// A handle that ignores the force it is given (an infinitely stiff hand): it rests at
+// kStart_m until `Approach`, then moves down at kSpeed_mps, one new reading per Read.
+class StiffHandle final : public device::Device {
+ public:
+  static constexpr double kStart_m = 0.008;  // the tool centre touches the wall at 0.005
+  static constexpr double kSpeed_mps = 0.2;
+  static constexpr double kRateHz = 1000.0;
+
+  DeviceState Read() override {
+    DeviceState s;
+    s.sequence = ++sequence_;
+    s.time_s = static_cast<double>(sequence_) / kRateHz;
+    s.position_m = Vec3(0.0, 0.0, kStart_m - kSpeed_mps * moving_reads_ / kRateHz);
+    s.velocity_mps = Vec3(0.0, 0.0, approaching_ ? -kSpeed_mps : 0.0);
+    if (approaching_) ++moving_reads_;
+    return s;
+  }
+  void Write(const DeviceCommand&) override {}
+  const device::DeviceLimits& limits() const override { return limits_; }
+
+  void Approach() { approaching_ = true; }
+  double z() const { return kStart_m - kSpeed_mps * moving_reads_ / kRateHz; }
+
+ private:
+  std::uint64_t sequence_ = 0;
+  long moving_reads_ = 0;
+  bool approaching_ = false;
+  device::DeviceLimits limits_;  // no limit of its own: serve's preset decides
+};
+
+// Forks a device process: a UdpDeviceServer at 1 kHz over StiffHandle. Once serve holds a
+// session the handle approaches the wall; `contact_reads` readings after it touched, the process
+// kills itself with SIGKILL (the state stream stops mid-contact, as when a bridge crashes).
+pid_t SpawnDeviceKilledInContact(const std::string& listen, const std::string& key,
+                                 int contact_reads) {
+  const pid_t pid = ::fork();
+  if (pid != 0) return pid;
+  StiffHandle handle;
+  device::UdpDeviceServerOptions options;
+  options.listen = listen;
+  options.key_file = key;
+  device::UdpDeviceServer server(handle, options);
+  auto next = std::chrono::steady_clock::now();
+  int touching = 0;
+  for (int k = 0; k < 20000; ++k) {  // at most 20 s
+    server.Step();
+    if (server.has_peer()) handle.Approach();
+    if (handle.z() < 0.005 && ++touching > contact_reads) ::raise(SIGKILL);
+    next += std::chrono::milliseconds(1);
+    std::this_thread::sleep_until(next);
+  }
+  ::_exit(1);  // serve never connected
+}
+
+// the columns of a trace CSV by name
+std::map<std::string, std::vector<double>> ReadTraceColumns(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  {
+    std::istringstream header(line);
+    for (std::string name; std::getline(header, name, ',');) names.push_back(name);
+  }
+  std::map<std::string, std::vector<double>> columns;
+  while (std::getline(in, line)) {
+    std::istringstream cells(line);
+    std::string cell;
+    for (std::size_t c = 0; c < names.size() && std::getline(cells, cell, ','); ++c) {
+      columns[names[c]].push_back(std::strtod(cell.c_str(), nullptr));
+    }
+  }
+  return columns;
+}
+
+// The review's third finding, end to end: the device process dies (SIGKILL) in the middle of an
+// impulse train. From the last fresh state to the watchdog, serve sends no impulse and no force
+// larger than the one it sent for the last fresh state; then the zero force. (Before the stale
+// policy the train kept firing on the frozen approach velocity: 9.7 N grew to 16.9 N.)
+TEST(BridgeCliTest, DeviceKilledDuringContactGetsNoNewImpulseAndNoGrowingForce) {
+  const auto dir = TempDir("killed_in_contact");
+  IsolateHome(dir);
+  const std::string key = Keygen(dir);
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  const pid_t device = SpawnDeviceKilledInContact(addr, key, /*contact_reads=*/14);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  // omega.3 (12 N): a stiffness of 1000 N/m keeps the penalty (2.8 mm deep at most) unclipped;
+  // 250 Hz train: an impulse every 4 ticks of the 100 ms window
+  const pid_t serve = Spawn("serve --device " + addr + " --key " + key +
+                                " --preset omega3 --stiffness 1000 --renderer train"
+                                " --frequency 250 --t-collision 0.1 --rate 1000 --duration 1"
+                                " --watchdog 0.05 --startup-timeout 5 --json --trace " +
+                                (dir / "trace.csv").string(),
+                            (dir / "serve.json").string());
+  const int serve_status = Wait(serve);
+  int device_status = 0;
+  ::waitpid(device, &device_status, 0);
+  ASSERT_EQ(serve_status, 0);
+  ASSERT_TRUE(WIFSIGNALED(device_status) && WTERMSIG(device_status) == SIGKILL)
+      << "the device process did not reach the wall";
+
+  const auto j = nlohmann::json::parse(ReadAll(dir / "serve.json"));
+  EXPECT_GE(j["device"]["link"]["watchdog_trips"].get<long>(), 1);
+  EXPECT_TRUE(j["finite"].get<bool>());
+  auto t = ReadTraceColumns(dir / "trace.csv");
+  const std::vector<double>& z = t["tool_z_m"];
+  const std::vector<double>& impulses = t["impulses"];
+  ASSERT_GT(z.size(), 100u);
+  std::vector<double> force(z.size());
+  for (std::size_t k = 0; k < z.size(); ++k) {
+    force[k] = std::hypot(t["device_fx_N"][k], t["device_fy_N"][k], t["device_fz_N"][k]);
+  }
+  // the trace holds the tool after the tick's integration, so the handle's position that tick
+  // (direct coupling) is z - v h; the handle moves 0.2 mm every reading, so the last fresh state
+  // is the last tick at which that position changed before the watchdog's zero force (from
+  // then on the tool is held at rest where it was)
+  const std::vector<double>& vz = t["tool_vz_mps"];
+  const std::vector<double>& depth = t["penetration_m"];
+  const auto touched = std::find_if(depth.begin(), depth.end(), [](double d) { return d > 0.0; });
+  ASSERT_NE(touched, depth.end()) << "never touched the wall";
+  std::size_t watchdog = static_cast<std::size_t>(touched - depth.begin());
+  while (watchdog < z.size() && force[watchdog] > 0.0) ++watchdog;
+  ASSERT_LT(watchdog, z.size()) << "the force never went to zero";
+  std::size_t last_fresh = 0;
+  for (std::size_t k = 1; k < watchdog; ++k) {
+    const double handle = z[k] - vz[k] * 1e-3, before = z[k - 1] - vz[k - 1] * 1e-3;
+    if (std::abs(handle - before) > 1e-7) last_fresh = k;
+  }
+  ASSERT_LT(z[last_fresh] - vz[last_fresh] * 1e-3, 0.005) << "killed in contact";
+  double train_impulses = 0.0;
+  for (std::size_t k = 0; k <= last_fresh; ++k) train_impulses += impulses[k];
+  ASSERT_GE(train_impulses, 3.0) << "a train was running when the device died";
+  ASSERT_GT(force[last_fresh], 0.5);
+  ASSERT_LT(force[last_fresh], 12.0) << "unclipped, so a growing force would show";
+  long stale_ticks = 0, zero_ticks = 0;
+  for (std::size_t k = last_fresh + 1; k < z.size(); ++k) {
+    EXPECT_EQ(impulses[k], 0.0) << "tick " << k << " after the last fresh state " << last_fresh;
+    EXPECT_LE(force[k], force[last_fresh]) << "tick " << k;
+    if (force[k] > 0.0) ++stale_ticks;
+    if (force[k] == 0.0) ++zero_ticks;
+  }
+  // the force is held, not dropped, until the watchdog (50 ms) ends it with the zero force
+  EXPECT_GE(stale_ticks, 30);
+  EXPECT_LE(stale_ticks, 200);  // a loaded machine may run late ticks back to back
+  EXPECT_GT(zero_ticks, 500);
+  EXPECT_GE(j["held_force_ticks"].get<long>() + j["stale_device_ticks"].get<long>(), 30);
   std::filesystem::remove_all(dir);
 }
 

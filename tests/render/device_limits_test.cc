@@ -269,5 +269,38 @@ TEST(DeviceLimitsTest, StaleReadingAppliesNoImpulseOfARunningTrain) {
   }
 }
 
+// the device goes invalid (the watchdog) or implausible while the tool is in a train's window:
+// the directly coupled tool stays where the last good state put it, at rest, with no impulse; a
+// good state moves it again
+TEST(DeviceLimitsTest, WithoutAUsableStateTheToolIsHeldAtRest) {
+  const Model m = DirectModel(RendererKind::kTrain, 2000.0);
+  for (const bool implausible : {false, true}) {
+    Data d = MakeData(m);
+    std::uint64_t seq = 1;
+    Tick(m, d, DeviceAt(kRadius_m + 5e-4, -0.2, seq++));
+    Tick(m, d, DeviceAt(kRadius_m - 2e-4, -0.2, seq++));
+    ASSERT_EQ(d.nimpulse, 1);  // onset: the train's window is open
+    const Vec3 held = d.bodies[m.tool].x_W;
+    for (int k = 0; k < 40; ++k) {  // ten of the train's impulses would fall in here
+      TickInput in = DeviceAt(kRadius_m - 2e-4, -0.2, seq++);
+      if (implausible) {
+        in.device.velocity_mps.z() = -50.0;
+      } else {
+        in.device.valid = false;
+      }
+      const DeviceCommand out = Tick(m, d, in);
+      EXPECT_EQ(out.force_N, Vec3::Zero()) << k;
+      EXPECT_EQ(d.nimpulse, 0) << k;
+      EXPECT_EQ(d.bodies[m.tool].x_W, held) << k;  // exactly: the penalty does not move it
+      EXPECT_EQ(d.bodies[m.tool].v_W, Vec3::Zero()) << k;
+    }
+    const DeviceCommand back = Tick(m, d, DeviceAt(kRadius_m - 1e-4, 0.0, seq++));
+    EXPECT_FALSE(back.safe_fallback);
+    // at the handle, then one step of the tick's own dynamics (k d h^2 / m = 2 um)
+    EXPECT_NEAR(d.bodies[m.tool].x_W.z(), kRadius_m - 1e-4, 5e-6);
+    EXPECT_NEAR(back.force_N.z(), 2000.0 * 1e-4, 1e-9);
+  }
+}
+
 }  // namespace
 }  // namespace rigidtouch

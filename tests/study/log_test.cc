@@ -79,6 +79,10 @@ TEST(LogTest, FirstRecordFieldsOfTheWrongTypeAreRefused) {
     EXPECT_THROW(ParseLog(bytes, "log.jsonl"), Error) << key;
     EXPECT_NE(ErrorOf(bytes).find("log.jsonl: line 1 is not"), std::string::npos) << key;
   }
+  // a number beyond a double's range threw nlohmann's out_of_range out of ParseLog
+  EXPECT_NE(ErrorOf(Lines({Start()}) + R"({"type":"answer","step":1e999})" + "\n")
+                .find("log.jsonl: line 2 is not a study record"),
+            std::string::npos);
   json huge = Start();
   huge["format_version"] = 4294967297LL;  // truncates to 1 as an int
   EXPECT_NE(ErrorOf(Lines({huge})).find("version 4294967297 is not supported"), std::string::npos);
