@@ -9,8 +9,12 @@ bindings: replace the simulated hand with the SDK's reads and writes. See docs/d
 Python's sleep is not a real-time clock: expect jitter. Standard library only.
 
     python3 fake_device.py --listen 127.0.0.1:47000 --rate 1000 [--key FILE] [--max-force 3.3]
+                           [--duration S] [--json]
+
+With --json it prints one JSON object when it ends (--duration, SIGINT or SIGTERM): the largest
+force it displayed, the sessions it accepted, and the datagrams it took and dropped.
 """
-import argparse, hashlib, hmac, math, os, socket, stat, struct, time
+import argparse, hashlib, hmac, json, math, os, signal, socket, stat, struct, time
 
 MAGIC, VERSION = 0x48435452, 2
 STATE, COMMAND, HELLO, HELLO_REPLY = 1, 2, 3, 4
@@ -84,6 +88,10 @@ def clamp(force, limit_N):
     return force if limit_N <= 0 or norm <= limit_N else tuple(f * limit_N / norm for f in force)
 
 
+def stop_on_signal(signum, frame):
+    raise KeyboardInterrupt  # SIGTERM ends the loop as Ctrl-C does, and the summary is printed
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--listen", default="127.0.0.1:47000")
@@ -93,7 +101,11 @@ def main():
     parser.add_argument("--duration", type=float, default=0.0, help="s, 0 = until Ctrl-C")
     parser.add_argument("--key", default="", help="key file; default: the per-user key")
     parser.add_argument("--max-force", type=float, default=3.3, help="N, this device's limit")
+    parser.add_argument("--json", action="store_true", help="print a JSON summary at the end")
     args = parser.parse_args()
+    if not (math.isfinite(args.max_force) and args.max_force > 0):
+        raise SystemExit(f"--max-force {args.max_force}: must be a positive number of newtons")
+    signal.signal(signal.SIGTERM, stop_on_signal)
     key = load_key(args.key or default_key_path(), create=not args.key)
     limits = REPLY_PAYLOAD.pack(args.max_force, 0.0, 0.0)
     host, port = args.listen.rsplit(":", 1)
@@ -105,60 +117,71 @@ def main():
     # the session: peer address, both nonces, counters, newest command
     peer, client_nonce, server_nonce, sent, received = None, 0, 0, 0, 0
     last_heard, newest, force_N, fresh_at = -1.0, -1, (0.0, 0.0, 0.0), -1.0
-    dropped = 0
+    summary = {"max_displayed_force_N": 0.0, "sessions": 0, "commands": 0, "dropped": 0}
     start = time.monotonic()
     tick = 0
-    while args.duration <= 0 or time.monotonic() - start < args.duration:
-        now = time.monotonic()
-        if peer is not None and now - last_heard > args.session_timeout:
-            peer = None  # the renderer went silent: its session ends
-        if peer is not None:  # 1. read the device (here: simulate it) and send its state
-            sent += 1
-            state = (sent, now - start, 0.0, 0.0, z_m, 1.0, 0.0, 0.0, 0.0,
-                     0.0, 0.0, vz_mps, 0.0, 0.0, 0.0, 0)
-            sock.sendto(seal(key, STATE, STATE_PAYLOAD.pack(*state), client_nonce, server_nonce,
-                             sent), peer)
-        for _ in range(64):  # 2. take hellos and commands, at most 64 per period
-            try:
-                data, source = sock.recvfrom(512)
-            except BlockingIOError:
-                break
-            opened = open_datagram(key, data)
-            if opened is None:
-                dropped += 1
-                continue
-            kind, cn, sn, counter, payload = opened
-            if kind == HELLO:
-                if peer is not None and source != peer:
-                    dropped += 1  # one renderer at a time: a live session is not taken over
+    try:
+        while args.duration <= 0 or time.monotonic() - start < args.duration:
+            now = time.monotonic()
+            if peer is not None and now - last_heard > args.session_timeout:
+                peer = None  # the renderer went silent: its session ends
+            if peer is not None:  # 1. read the device (here: simulate it) and send its state
+                sent += 1
+                state = (sent, now - start, 0.0, 0.0, z_m, 1.0, 0.0, 0.0, 0.0,
+                         0.0, 0.0, vz_mps, 0.0, 0.0, 0.0, 0)
+                sock.sendto(seal(key, STATE, STATE_PAYLOAD.pack(*state), client_nonce,
+                                 server_nonce, sent), peer)
+            for _ in range(64):  # 2. take hellos and commands, at most 64 per period
+                try:
+                    data, source = sock.recvfrom(512)
+                except BlockingIOError:
+                    break
+                opened = open_datagram(key, data)
+                if opened is None:
+                    summary["dropped"] += 1
                     continue
-                if peer is None or cn != client_nonce:  # a new session
-                    peer, client_nonce, server_nonce = source, cn, random_nonce()
-                    sent, received, newest, fresh_at = 0, 0, -1, -1.0
-                last_heard = now
-                sock.sendto(seal(key, HELLO_REPLY, limits, client_nonce, server_nonce, 0), peer)
-                continue
-            if source != peer or (cn, sn) != (client_nonce, server_nonce) or counter <= received:
-                dropped += 1  # outside the session, or replayed
-                continue
-            sequence, fx, fy, fz, tx, ty, tz, flags = COMMAND_PAYLOAD.unpack(payload)
-            if not all(math.isfinite(v) for v in (fx, fy, fz, tx, ty, tz)):
-                dropped += 1
-                continue
-            received, last_heard = counter, now
-            if sequence >= newest:
-                newest, force_N, fresh_at = sequence, clamp((fx, fy, fz), args.max_force), now
-        # 3. display the force, or zero when the watchdog has tripped or there is no session
-        fresh = peer is not None and fresh_at >= 0 and now - fresh_at <= args.watchdog
-        shown = force_N if fresh else (0.0, 0.0, 0.0)
-        hand_N = -0.5 if math.sin(2.0 * math.pi * 1.0 * (now - start)) > 0 else 0.3
-        vz_mps += h * (hand_N + shown[2]) / mass_kg - h * 5.0 * vz_mps  # damped hand
-        z_m += h * vz_mps
-        tick += 1
-        if tick % int(args.rate) == 0:
-            print(f"z = {z_m:+.4f} m, force z = {shown[2]:+.3f} N, client = {peer}, "
-                  f"dropped = {dropped}", flush=True)
-        time.sleep(max(0.0, start + tick * h - time.monotonic()))
+                kind, cn, sn, counter, payload = opened
+                if kind == HELLO:
+                    if peer is not None and source != peer:
+                        summary["dropped"] += 1  # one renderer at a time: no takeover
+                        continue
+                    if peer is None or cn != client_nonce:  # a new session
+                        peer, client_nonce, server_nonce = source, cn, random_nonce()
+                        sent, received, newest, fresh_at = 0, 0, -1, -1.0
+                        summary["sessions"] += 1
+                    last_heard = now
+                    sock.sendto(seal(key, HELLO_REPLY, limits, client_nonce, server_nonce, 0),
+                                peer)
+                    continue
+                if (source != peer or (cn, sn) != (client_nonce, server_nonce)
+                        or counter <= received):
+                    summary["dropped"] += 1  # outside the session, or replayed
+                    continue
+                sequence, fx, fy, fz, tx, ty, tz, flags = COMMAND_PAYLOAD.unpack(payload)
+                if not all(math.isfinite(v) for v in (fx, fy, fz, tx, ty, tz)):
+                    summary["dropped"] += 1
+                    continue
+                received, last_heard = counter, now
+                summary["commands"] += 1
+                if sequence >= newest:
+                    newest, force_N, fresh_at = sequence, clamp((fx, fy, fz), args.max_force), now
+            # 3. display the force, or zero when the watchdog has tripped or there is no session
+            fresh = peer is not None and fresh_at >= 0 and now - fresh_at <= args.watchdog
+            shown = force_N if fresh else (0.0, 0.0, 0.0)
+            shown_N = math.sqrt(sum(f * f for f in shown))
+            summary["max_displayed_force_N"] = max(summary["max_displayed_force_N"], shown_N)
+            hand_N = -0.5 if math.sin(2.0 * math.pi * 1.0 * (now - start)) > 0 else 0.3
+            vz_mps += h * (hand_N + shown[2]) / mass_kg - h * 5.0 * vz_mps  # damped hand
+            z_m += h * vz_mps
+            tick += 1
+            if tick % int(args.rate) == 0 and not args.json:
+                print(f"z = {z_m:+.4f} m, force z = {shown[2]:+.3f} N, client = {peer}, "
+                      f"dropped = {summary['dropped']}", flush=True)
+            time.sleep(max(0.0, start + tick * h - time.monotonic()))
+    except KeyboardInterrupt:
+        pass
+    if args.json:
+        print(json.dumps(summary), flush=True)
 
 
 if __name__ == "__main__":

@@ -66,15 +66,20 @@ inline int FreePort() {
   return ntohs(a.sin_port);
 }
 
-/// Starts `rigidtouch ARGS` in the background with stdout to `out`; returns its pid.
-inline pid_t Spawn(const std::string& args, const std::string& out) {
+/// Starts the shell command `command` in the background with stdout to `out`; returns its pid.
+inline pid_t SpawnCommand(const std::string& command, const std::string& out) {
   const pid_t pid = ::fork();
   if (pid == 0) {
-    const std::string cmd = std::string("exec ") + RIGIDTOUCH_CLI + " " + args + " >" + out;
+    const std::string cmd = "exec " + command + " >" + out;
     ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
   return pid;
+}
+
+/// Starts `rigidtouch ARGS` in the background with stdout to `out`; returns its pid.
+inline pid_t Spawn(const std::string& args, const std::string& out) {
+  return SpawnCommand(std::string(RIGIDTOUCH_CLI) + " " + args, out);
 }
 
 /// Waits for `pid`; its exit status, or -1 if it did not exit normally.

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "cli/cli_util.h"
 
@@ -109,6 +111,101 @@ TEST(OutputCliTest, StudyLogPastTheFileSizeLimitIsRemovedNotLeftTorn) {
   EXPECT_EQ(l.exit_code, 2) << l.err;
   EXPECT_NE(l.err.find("is a symbolic link"), std::string::npos) << l.err;
   EXPECT_EQ(ReadAll(dir / "other.jsonl"), "keep\n");
+  fs::remove_all(dir);
+}
+
+// Runs `script` (sh) with a fresh tmpfs of `kib` KiB mounted at `disk`, in a private mount
+// namespace (unshare -rm: no root needed where user namespaces are allowed; nothing is mounted
+// outside the child). False when the machine does not allow it.
+bool RunOnSmallDisk(const fs::path& disk, int kib, const std::string& script) {
+  fs::create_directories(disk);
+  const std::string command = "unshare -rm sh -c 'mount -t tmpfs -o size=" + std::to_string(kib) +
+                              "k rigidtouch-full " + disk.string() + " && " + script + "'";
+  return std::system(command.c_str()) == 0;
+}
+
+bool SmallDisksAvailable(const fs::path& dir) {
+  return RunOnSmallDisk(dir / "probe", 16, "true");
+}
+
+// ENOSPC (the disk is full), not a file size limit: `tap --trace` onto a 16 KiB tmpfs ends with
+// exit 4, a message naming the file and the full disk, and nothing left on the disk
+TEST(OutputCliTest, FullDiskEndsWithExitFourAndNoLeftovers) {
+  const fs::path dir = TempDir("enospc");
+  if (!SmallDisksAvailable(dir)) GTEST_SKIP() << "no private tmpfs here (unshare -rm refused)";
+  const fs::path disk = dir / "disk";
+  const std::string trace = (disk / "t.csv").string();
+  ASSERT_TRUE(RunOnSmallDisk(disk, 16,
+                             std::string(RIGIDTOUCH_CLI) + " tap --taps 1 --trace " + trace + " >" +
+                                 (dir / "out").string() + " 2>" + (dir / "err").string() +
+                                 "; echo $? >" + (dir / "status").string() + "; ls -A " +
+                                 disk.string() + " >" + (dir / "left").string()));
+  const std::string err = ReadAll(dir / "err");
+  EXPECT_EQ(ReadAll(dir / "status"), "4\n") << err;
+  EXPECT_NE(err.find("rigidtouch: error: cannot write trace file '" + trace + "'"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("disk is full"), std::string::npos) << err;
+  EXPECT_EQ(ReadAll(dir / "left"), "") << "a partial or temporary file was left";
+  fs::remove_all(dir);
+}
+
+// a study log fills the disk in the middle of a session: exit 4 naming the full disk; every
+// answer written before is intact (the log reads back, at most with a torn last line), and the
+// session resumes on a disk with room and completes with every answer once
+TEST(OutputCliTest, StudyLogOnAFullDiskKeepsEveryWrittenAnswerAndResumes) {
+  const fs::path dir = TempDir("study_enospc");
+  if (!SmallDisksAvailable(dir)) GTEST_SKIP() << "no private tmpfs here (unshare -rm refused)";
+  const int series = 60;  // about 60 x 300 bytes of answers: more than the disk holds
+  const nlohmann::json protocol = {
+      {"name", "full"},
+      {"series", series},
+      {"conditions",
+       {{"soft", {{"renderer", "penalty"}, {"stiffness_N_per_m", 400}}},
+        {"click", {{"renderer", "impulse"}, {"restitution", 0}}}}},
+      {"tests", {{{"name", "only"}, {"conditions", {"soft", "click"}}}}}};
+  std::ofstream(dir / "p.json") << protocol.dump();
+  std::string answers;
+  for (int k = 0; k < series; ++k) answers += k % 3 == 0 ? "2\n" : "1\n";
+  std::ofstream(dir / "answers") << answers;
+  const fs::path disk = dir / "disk";
+  const std::string run = std::string(RIGIDTOUCH_CLI) + " study run --protocol " +
+                          (dir / "p.json").string() +
+                          " --participant P01 --presenter text --seed 3 --log ";
+  ASSERT_TRUE(RunOnSmallDisk(
+      disk, 8,
+      run + (disk / "p01.jsonl").string() + " <" + (dir / "answers").string() + " >/dev/null 2>" +
+          (dir / "err").string() + "; echo $? >" + (dir / "status").string() + "; cp " +
+          (disk / "p01.jsonl").string() + " " + dir.string()));
+  const std::string err = ReadAll(dir / "err");
+  EXPECT_EQ(ReadAll(dir / "status"), "4\n") << err;
+  EXPECT_NE(err.find("disk is full"), std::string::npos) << err;
+  const std::string torn = ReadAll(dir / "p01.jsonl");
+  const auto written = static_cast<long>(std::count(torn.begin(), torn.end(), '\n'));
+  ASSERT_GT(written, 5) << "the disk filled before the session got going";
+
+  // resume on the normal disk: the answers already given are not asked again
+  std::string rest;
+  for (int k = 0; k < series; ++k) rest += k % 3 == 0 ? "2\n" : "1\n";
+  std::ofstream(dir / "rest") << rest;
+  const CliResult resumed = RunCli("study run --protocol " + (dir / "p.json").string() +
+                                   " --participant P01 --presenter text --seed 3 --resume --log " +
+                                   (dir / "p01.jsonl").string() + " <" + (dir / "rest").string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  const CliResult analyzed = RunCli("study analyze --json " + (dir / "p01.jsonl").string());
+  ASSERT_EQ(analyzed.exit_code, 0) << analyzed.err;
+  std::ifstream log(dir / "p01.jsonl");
+  long answer_records = 0;
+  std::set<long> steps;
+  for (std::string line; std::getline(log, line);) {
+    const auto record = nlohmann::json::parse(line);
+    if (record["type"] == "answer") {
+      ++answer_records;
+      steps.insert(record["step"].get<long>());
+    }
+  }
+  EXPECT_EQ(answer_records, series) << "each series answered exactly once";
+  EXPECT_EQ(static_cast<long>(steps.size()), series);
   fs::remove_all(dir);
 }
 
