@@ -70,11 +70,14 @@ if [ "${1:-}" != "--quick" ]; then
   for target in $fuzz_targets; do
     name=${target%_fuzz}
     # new inputs go to a scratch folder, the committed seeds stay as they are; a crash leaves
-    # its input in build-fuzz/artifacts/ and fails the pass
+    # its input in build-fuzz/artifacts/ and fails the pass. A fixed mutation seed makes a run
+    # repeatable (a crash here reproduces with the same seed); RIGIDTOUCH_FUZZ_SEED=0 (libFuzzer:
+    # a random seed) and a larger RIGIDTOUCH_FUZZ_SECONDS explore further
     scratch="build-fuzz/corpus/$name"
     mkdir -p "$scratch" build-fuzz/artifacts
     ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       "build-fuzz/tests/fuzz/$target" -max_total_time="${RIGIDTOUCH_FUZZ_SECONDS:-20}" \
+      -seed="${RIGIDTOUCH_FUZZ_SEED:-1}" \
       -runs=2000000 -max_len=4096 -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
       -artifact_prefix=build-fuzz/artifacts/"$name"- \
       "$scratch" "tests/fuzz/corpus/$name" 2>&1 | tail -n 12
