@@ -77,7 +77,8 @@ void Register(CLI::App& root) {
   app->add_option("--warmup", f->warmup, "warm-up steps")->capture_default_str();
   app->add_option("--tool-force", f->tool_force, "constant tool force FX FY FZ [N]")->expected(3);
   app->add_flag("--json", f->json, "print one JSON object");
-  app->callback([f] { Run(*f); });
+  // an error about a parameter the user wrote says where it was written
+  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
 }
 
 const CommandRegistrar registrar(&Register);

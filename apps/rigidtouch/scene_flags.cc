@@ -1,18 +1,53 @@
 #include "scene_flags.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "io/config.h"
 #include "io/resources.h"
+#include "io/text.h"
 
 namespace rigidtouch::cli {
+
+const char kPrecedence[] =
+    "Settings: a flag overrides the config file (--config), which overrides the device preset "
+    "(force limit, tool stiffness and damping), which overrides the built-in default. A value "
+    "you wrote that cannot be used is refused with the reason, never ignored.";
+
+namespace {
+
+// the flag that sets each field (the field paths are the config file's)
+const std::map<std::string, std::string>& FlagOf() {
+  static const std::map<std::string, std::string> flags = {
+      {"tool", "--tool"},
+      {"timestep_s", "--timestep"},
+      {"render.renderer", "--renderer"},
+      {"render.restitution", "--restitution"},
+      {"render.t_collision_s", "--t-collision"},
+      {"render.frequency_hz", "--frequency"},
+      {"render.reference_solver", "--reference-solver"},
+      {"contact.stiffness_N_per_m", "--stiffness"},
+      {"contact.damping_Ns_per_m", "--damping"}};
+  return flags;
+}
+
+std::string Where(const Settings& s, const std::string& field) {
+  const auto it = s.origin.find(field);
+  if (it == s.origin.end()) return "";
+  return it->second.rfind("--", 0) == 0 ? "set by " + it->second
+                                        : "set in " + it->second + " as " + field;
+}
+
+}  // namespace
 
 void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   auto* scene = app->add_option("--scene", f.scene, "MJCF scene file");
   if (scene_required) scene->required();
-  app->add_option("--config", f.config, "JSON file with rigidtouch parameters (contact, render)");
-  app->add_option("--tool", f.tool, "name of the free body that is the tool")
-      ->capture_default_str();
+  app->add_option("--config", f.config,
+                  "JSON file with rigidtouch parameters (tool, timestep_s, contact, render, "
+                  "device; docs/cli.md)");
+  app->add_option("--tool", f.tool,
+                  "name of the free body that is the tool (default: the config's, else tool)");
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");
   app->add_option("--renderer", f.renderer, "penalty | impulse | train")
       ->check(CLI::IsMember({"penalty", "impulse", "train"}));
@@ -23,39 +58,98 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--damping", f.damping_Ns_per_m, "tool contact damping b [N s/m]");
   app->add_flag("--reference-solver", f.reference_solver,
                 "use the exact pseudo-inverse of Eq. 5/8 (may pull; allocates)");
+  const std::string footer = app->get_footer();
+  app->footer(footer.empty() ? kPrecedence : std::string(kPrecedence) + "\n\n" + footer);
+}
+
+Settings ResolveSettings(const SceneFlags& f) {
+  Settings s;
+  LoadOptions& o = s.load;
+  if (!f.config.empty()) {
+    for (const std::string& field : io::ApplyConfigFile(f.config, o)) s.origin[field] = f.config;
+  }
+  auto flag = [&s](const std::string& field, auto& out, const auto& value) {
+    if (!value) return;
+    out = *value;
+    s.origin[field] = FlagOf().at(field);
+  };
+  flag("tool", o.tool_name, f.tool);
+  flag("timestep_s", o.timestep_s, f.timestep_s);
+  if (f.renderer) {
+    o.render.renderer = io::ParseRenderer(*f.renderer);
+    s.origin["render.renderer"] = "--renderer";
+  }
+  flag("render.restitution", o.render.restitution, f.restitution);
+  flag("render.t_collision_s", o.render.t_collision_s, f.t_collision_s);
+  flag("render.frequency_hz", o.render.frequency_hz, f.frequency_hz);
+  flag("contact.stiffness_N_per_m", o.contact.stiffness_N_per_m, f.stiffness_N_per_m);
+  flag("contact.damping_Ns_per_m", o.contact.damping_Ns_per_m, f.damping_Ns_per_m);
+  if (f.reference_solver) {
+    o.render.reference_solver = true;
+    s.origin["render.reference_solver"] = "--reference-solver";
+  }
+  return s;
 }
 
 LoadOptions ToLoadOptions(const SceneFlags& f) {
-  LoadOptions o;
-  if (!f.config.empty()) io::ApplyConfigFile(f.config, o);
-  o.tool_name = f.tool;
-  if (f.timestep_s) o.timestep_s = *f.timestep_s;
-  if (f.renderer) o.render.renderer = io::ParseRenderer(*f.renderer);
-  if (f.restitution) o.render.restitution = *f.restitution;
-  if (f.t_collision_s) o.render.t_collision_s = *f.t_collision_s;
-  if (f.frequency_hz) o.render.frequency_hz = *f.frequency_hz;
-  if (f.stiffness_N_per_m) o.contact.stiffness_N_per_m = *f.stiffness_N_per_m;
-  if (f.damping_Ns_per_m) o.contact.damping_Ns_per_m = *f.damping_Ns_per_m;
-  if (f.reference_solver) o.render.reference_solver = true;
-  return o;
+  return ResolveSettings(f).load;
 }
 
-ContactOverrides ExplicitContact(const SceneFlags& f) {
-  ContactOverrides o{f.stiffness_N_per_m, f.damping_Ns_per_m};
-  if (!f.config.empty() && (!o.stiffness_N_per_m || !o.damping_Ns_per_m)) {
-    // the config reader leaves absent fields as they are, so NaN marks "not in the file"
-    LoadOptions probe;
-    probe.contact.stiffness_N_per_m = NAN;
-    probe.contact.damping_Ns_per_m = NAN;
-    io::ApplyConfigFile(f.config, probe);
-    if (!o.stiffness_N_per_m && !std::isnan(probe.contact.stiffness_N_per_m)) {
-      o.stiffness_N_per_m = probe.contact.stiffness_N_per_m;
+void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double rate_hz) {
+  LoadOptions& o = s.load;
+  const double h = 1.0 / rate_hz;
+  if (s.Given("timestep_s") && o.timestep_s && *o.timestep_s != h) {
+    throw Error(
+        "timestep_s = " + io::FormatNumber(*o.timestep_s) + " s (" + Where(s, "timestep_s") +
+        ") differs from the haptic period 1 / rate = " + io::FormatNumber(h) +
+        " s: here the time step is the device's period; drop it " + "or set the rate instead");
+  }
+  o.timestep_s = h;
+  if (!s.Given("contact.stiffness_N_per_m") && preset.max_stiffness_N_per_m > 0.0) {
+    o.contact.stiffness_N_per_m = preset.max_stiffness_N_per_m;
+  }
+  if (!s.Given("contact.damping_Ns_per_m")) {
+    const double kh = o.contact.stiffness_N_per_m * h;
+    o.contact.damping_Ns_per_m =
+        preset.max_damping_Ns_per_m > 0.0 ? std::min(kh, preset.max_damping_Ns_per_m) : kh;
+  }
+  if (s.Given("device.max_force_N")) {
+    const double mine = o.device.max_force_N;  // 0: no limit of the user's own
+    if (preset.max_force_N > 0.0 && (mine == 0.0 || mine > preset.max_force_N)) {
+      throw Error("device.max_force_N = " + io::FormatNumber(mine) + " N (" +
+                  Where(s, "device.max_force_N") + ") is above the " + preset.name +
+                  " preset's force limit, " + io::FormatNumber(preset.max_force_N) +
+                  " N: the device cannot display it; give at most that, or choose another "
+                  "device preset");
     }
-    if (!o.damping_Ns_per_m && !std::isnan(probe.contact.damping_Ns_per_m)) {
-      o.damping_Ns_per_m = probe.contact.damping_Ns_per_m;
+  } else {
+    o.device.max_force_N = preset.max_force_N;
+  }
+}
+
+void RefuseUnused(const Settings& s, const std::vector<std::string>& fields,
+                  const std::string& why) {
+  for (const std::string& field : fields) {
+    if (s.Given(field)) {
+      throw Error(field + " (" + Where(s, field) + ") has no effect here: " + why + "; remove it");
     }
   }
-  return o;
+}
+
+std::string OriginNote(const Settings& s, const std::string& message) {
+  // Configure's messages read "parameter NAME = ..."
+  const std::string tag = "parameter ";
+  const std::size_t at = message.find(tag);
+  if (at == std::string::npos) return "";
+  const std::size_t begin = at + tag.size();
+  const std::string name = message.substr(begin, message.find(' ', begin) - begin);
+  for (const auto& [field, unused] : s.origin) {
+    const bool match = field == name || (field.size() > name.size() &&
+                                         field.compare(field.size() - name.size() - 1,
+                                                       std::string::npos, "." + name) == 0);
+    if (match) return " (" + Where(s, field) + ")";
+  }
+  return "";
 }
 
 nlohmann::json WarningsJson(const std::array<WarningStat, static_cast<int>(Warning::kCount)>& w) {
@@ -74,13 +168,22 @@ void PrintWarnings(const nlohmann::json& warnings, std::ostream& out) {
 
 analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& device_preset,
                                         double rate_hz, double speed_mps, int taps) {
+  Settings s = ResolveSettings(f);
+  ApplyDevicePreset(s, device::FindPreset(device_preset), rate_hz);
   analysis::TapExperimentConfig c;
   c.scene_path = f.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene;
-  c.load = ToLoadOptions(f);
+  c.load = s.load;
   c.device_preset = device_preset;
   c.rate_hz = rate_hz;
-  c.stiffness_N_per_m = f.stiffness_N_per_m;
-  c.damping_Ns_per_m = f.damping_Ns_per_m;
+  c.stiffness_N_per_m = s.load.contact.stiffness_N_per_m;
+  c.damping_Ns_per_m = s.load.contact.damping_Ns_per_m;
+  c.max_force_N = s.load.device.max_force_N;
+  if (s.Given("device.coupling_stiffness_N_per_m")) {
+    c.coupling_stiffness_N_per_m = s.load.device.coupling_stiffness_N_per_m;
+  }
+  if (s.Given("device.coupling_damping_Ns_per_m")) {
+    c.coupling_damping_Ns_per_m = s.load.device.coupling_damping_Ns_per_m;
+  }
   c.script.approach_speed_mps = speed_mps;
   c.script.taps = taps;
   return c;

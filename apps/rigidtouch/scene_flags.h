@@ -3,12 +3,15 @@
 
 #include <CLI/CLI.hpp>
 #include <array>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "analysis/tap_experiment.h"
+#include "device/presets.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::cli {
@@ -17,7 +20,7 @@ namespace rigidtouch::cli {
 struct SceneFlags {
   std::string scene;
   std::string config;
-  std::string tool = "tool";
+  std::optional<std::string> tool;
   std::optional<double> timestep_s;
   std::optional<std::string> renderer;
   std::optional<double> restitution;
@@ -28,21 +31,46 @@ struct SceneFlags {
   bool reference_solver = false;
 };
 
+/// How a setting is resolved, stated in every subcommand's --help and in docs/cli.md.
+extern const char kPrecedence[];
+
 /// Adds --scene (required unless `scene_required` is false), --config, --tool, --timestep,
 /// --renderer, --restitution, --t-collision, --frequency, --stiffness, --damping,
 /// --reference-solver.
 void AddSceneFlags(CLI::App* app, SceneFlags& flags, bool scene_required = true);
 
-/// Load options from the config file (if any) overridden by the flags.
+/// The load options a user asked for: the defaults, then the config file's fields, then the
+/// flags (flag > config > default; a device preset, where one applies, comes between the config
+/// and the default: ApplyDevicePreset). `origin` names where each value the user wrote came from,
+/// by field path ("contact.stiffness_N_per_m" -> "--stiffness" or "k.json").
+struct Settings {
+  LoadOptions load;
+  std::map<std::string, std::string> origin;
+  bool Given(const std::string& field) const { return origin.count(field) != 0; }
+};
+Settings ResolveSettings(const SceneFlags& flags);
+
+/// ResolveSettings(flags).load.
 LoadOptions ToLoadOptions(const SceneFlags& flags);
 
-/// The tool contact's stiffness and damping the user set, by flag or else in the config file;
-/// unset where neither gives one (a caller may then default them to what a device can display).
-struct ContactOverrides {
-  std::optional<double> stiffness_N_per_m;
-  std::optional<double> damping_Ns_per_m;
-};
-ContactOverrides ExplicitContact(const SceneFlags& flags);
+/// Where the user did not write them, the tool contact's stiffness and damping and the force
+/// limit come from the device preset: the preset's maximum stiffness, damping k h capped at the
+/// preset's, the preset's force. A force limit the user wrote above the preset's is refused (the
+/// device cannot display it), naming where it was written; a lower one is used. In tap and serve
+/// the time step is the haptic period: a timestep_s the user wrote that differs from 1 / rate is
+/// refused.
+void ApplyDevicePreset(Settings& settings, const device::DeviceLimits& preset, double rate_hz);
+
+/// Refuses any of `fields` the user wrote: they have no effect here, for the reason `why`.
+void RefuseUnused(const Settings& settings, const std::vector<std::string>& fields,
+                  const std::string& why);
+
+/// Runs `load` (which loads or configures a model); an Error about a parameter the user wrote
+/// gets where it was written appended ("(set by --stiffness)", "(set in k.json as
+/// contact.stiffness_N_per_m)").
+template <typename F>
+auto WithOrigins(const Settings& settings, F load) -> decltype(load());
+std::string OriginNote(const Settings& settings, const std::string& message);
 
 /// The warnings of a run as a JSON object {name: count}, only those that occurred.
 nlohmann::json WarningsJson(const std::array<WarningStat, static_cast<int>(Warning::kCount)>& w);
@@ -53,14 +81,26 @@ inline nlohmann::json WarningsJson(const Data& data) {
 /// Prints a WarningsJson object as "warning: NAME xCOUNT" lines.
 void PrintWarnings(const nlohmann::json& warnings, std::ostream& out);
 
-/// The tap experiment on the scene flags' scene (the shipped wall when none is given), load
-/// options and contact overrides, with the device preset, haptic rate, approach speed and taps.
+/// The tap experiment on the scene flags' scene (the shipped wall when none is given) with the
+/// resolved settings (ApplyDevicePreset for `device_preset` at `rate_hz`), approach speed and
+/// taps.
 analysis::TapExperimentConfig TapConfig(const SceneFlags& flags, const std::string& device_preset,
                                         double rate_hz, double speed_mps, int taps);
 
 /// JSON array of a Vec3.
 inline nlohmann::json Json(const Vec3& v) {
   return nlohmann::json::array({v.x(), v.y(), v.z()});
+}
+
+template <typename F>
+auto WithOrigins(const Settings& settings, F load) -> decltype(load()) {
+  try {
+    return load();
+  } catch (const Error& e) {
+    const std::string note = OriginNote(settings, e.what());
+    if (note.empty()) throw;
+    throw Error(std::string(e.what()) + note);
+  }
 }
 
 }  // namespace rigidtouch::cli

@@ -111,25 +111,24 @@ void Run(const ServeFlags& f) {
   nlohmann::json result;
   loop::HapticLoopResult r;
   const device::DeviceLimits& preset = device::FindPreset(f.preset);
-  // a force limit in the config file still applies where it is stricter than the preset's
-  const double config_max_force_N = ToLoadOptions(f.scene).device.max_force_N;
+  {
+    const Settings settings = ResolveSettings(f.scene);
+    const char* why = "serve couples the tool to the device directly";
+    if (settings.load.device.coupling != Coupling::kDirect) {
+      RefuseUnused(settings, {"device.coupling"}, why);
+    }
+    RefuseUnused(settings,
+                 {"device.coupling_stiffness_N_per_m", "device.coupling_damping_Ns_per_m"}, why);
+  }
   if (f.device == "sim") {
-    analysis::TapExperimentConfig c;
-    c.scene_path = f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
-    c.load = ToLoadOptions(f.scene);
+    analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, f.rate_hz, f.speed_mps, f.taps);
     c.load.device.coupling = Coupling::kDirect;
-    c.device_preset = f.preset;
-    c.rate_hz = f.rate_hz;
-    c.stiffness_N_per_m = f.scene.stiffness_N_per_m;
-    c.damping_Ns_per_m = f.scene.damping_Ns_per_m;
-    c.script.taps = f.taps;
-    c.script.approach_speed_mps = f.speed_mps;
     analysis::TapSetup setup = analysis::PrepareTap(c);
     Model& model = setup.model;
-    model.device.max_force_N = render::StricterLimit(model.device.max_force_N, config_max_force_N);
     device::TightenDeviceParams(model.device, setup.simulated->limits());
     SetPlausibility(f, model.device);
-    Configure(model);  // refuses a stiffness or damping the device cannot display
+    // refuses a stiffness or damping the device cannot display
+    Configure(model);
     lo.duration_s = f.duration_s > 0.0 ? f.duration_s : setup.simulated->duration_s();
     Data data = MakeData(model);
     r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get());
@@ -138,24 +137,18 @@ void Run(const ServeFlags& f) {
                         {"preset", f.preset},
                         {"energy_to_user_J", setup.simulated->energy_to_user_J()}};
   } else {
-    LoadOptions load = ToLoadOptions(f.scene);
-    load.timestep_s = 1.0 / f.rate_hz;
-    load.device.coupling = Coupling::kDirect;
     // the wall defaults to what the device can display, as on the simulated path (and the tap
     // experiment): the preset's stiffness, damping k h capped at the preset's
-    const ContactOverrides set = ExplicitContact(f.scene);
-    if (!set.stiffness_N_per_m && preset.max_stiffness_N_per_m > 0.0) {
-      load.contact.stiffness_N_per_m = preset.max_stiffness_N_per_m;
-    }
-    if (!set.damping_Ns_per_m && preset.max_damping_Ns_per_m > 0.0) {
-      load.contact.damping_Ns_per_m =
-          std::min(load.contact.stiffness_N_per_m / f.rate_hz, preset.max_damping_Ns_per_m);
-    }
+    Settings settings = ResolveSettings(f.scene);
+    ApplyDevicePreset(settings, preset, f.rate_hz);
+    LoadOptions load = settings.load;
+    load.device.coupling = Coupling::kDirect;
     device::TightenDeviceParams(load.device, preset);
     SetPlausibility(f, load.device);
     const std::string scene =
         f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
-    Model model = LoadModel(scene, load);  // Configure refuses what the preset cannot display
+    // Configure refuses what the preset cannot display
+    Model model = LoadModel(scene, load);
     // the tool is the end effector; without a model of the real device, the simulated one's
     analysis::UseDeviceAndHandMass(model, device::DeviceModelParams{}, device::HandParams{});
     Configure(model);
@@ -244,12 +237,15 @@ void Register(CLI::App& root) {
   app->add_option("--trace", f->trace, "write the trace CSV here");
   app->add_flag("--json", f->json, "print one JSON object");
   app->footer(
-      "Device limits: a --stiffness or --damping (or config value) above what the preset or the "
+      std::string(kPrecedence) +
+      "\n\nDevice limits: a --stiffness or --damping (or config value) above what the preset or "
+      "the "
       "device can display is refused with an error naming the parameter and the limit (exit "
       "status 2); unset, they default to the preset's stiffness and to k h capped at its "
       "damping. Every command is clipped to the stricter force limit. Exit status 5: the UDP "
       "device sent no state within --startup-timeout.");
-  app->callback([f] { Run(*f); });
+  // an error about a parameter the user wrote says where it was written
+  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
 }
 
 const CommandRegistrar registrar(&Register);

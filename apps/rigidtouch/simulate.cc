@@ -88,7 +88,8 @@ void Register(CLI::App& root) {
   app->add_option("--tool-force", flags->tool_force, "constant force on the tool FX FY FZ [N]")
       ->expected(3);
   app->add_flag("--json", flags->json, "print one JSON object");
-  app->callback([flags] { Run(*flags); });
+  // an error about a parameter the user wrote says where it was written
+  app->callback([flags] { WithOrigins(ResolveSettings(flags->scene), [&] { Run(*flags); }); });
 }
 
 const CommandRegistrar registrar(&Register);

@@ -23,7 +23,7 @@ struct TapFlags {
   std::optional<int> wall;
   double rate_hz = 1000.0;
   std::string device = "touch";
-  std::string coupling = "direct";
+  std::optional<std::string> coupling;  // default: the config file's, else direct
   double speed_mps = 0.2;
   double spread = 0.0;
   int taps = 3;
@@ -56,9 +56,20 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     c.load.render.t_collision_s = r.t_collision_s;
     c.load.render.frequency_hz = r.frequency_hz;
   }
-  c.load.device.coupling = io::ParseCoupling(f.coupling);
+  const Settings settings = ResolveSettings(f.scene);
+  if (f.coupling) {
+    c.load.device.coupling = io::ParseCoupling(*f.coupling);
+  } else if (!settings.Given("device.coupling")) {
+    c.load.device.coupling = Coupling::kDirect;
+  }
+  if (c.load.device.coupling == Coupling::kDirect) {
+    RefuseUnused(settings,
+                 {"device.coupling_stiffness_N_per_m", "device.coupling_damping_Ns_per_m"},
+                 "the coupling is direct (the device renders the tool's contact)");
+  }
   if (c.load.device.coupling == Coupling::kNone) {
-    throw Error("--coupling none has no device; valid couplings for tap: direct, virtual");
+    throw Error(std::string(f.coupling ? "--coupling" : "device.coupling in " + f.scene.config) +
+                " none has no device; valid couplings for tap: direct, virtual");
   }
   c.script.seed = f.seed;
   c.script.speed_spread = f.spread;
@@ -186,6 +197,7 @@ void CompareWalls(const TapFlags& f) {
   nlohmann::json results = nlohmann::json::object();
   std::ostringstream table;
   table << kTableHeader << "\n";
+  std::string coupling = "direct";
   for (int w = -1; w <= 2; ++w) {
     TapFlags g = f;
     std::optional<int> wall;
@@ -199,7 +211,8 @@ void CompareWalls(const TapFlags& f) {
     const std::string trace = OutPath(f, key + ".csv");
     io::WriteTraceCsv(trace, run.trace);
     if (w >= 0) traces.push_back(trace);
-    results[key] = RunJson(run, g.coupling.c_str());
+    coupling = io::CouplingName(run.model.device.coupling);
+    results[key] = RunJson(run, coupling.c_str());
     results[key]["trace"] = trace;
     table << Row(names[w + 1], run) << "\n";
   }
@@ -207,7 +220,7 @@ void CompareWalls(const TapFlags& f) {
   {
     std::ostringstream out;
     out << "Means over " << f.taps << " taps at " << f.speed_mps << " m/s on the " << f.device
-        << " preset (" << f.coupling << " coupling, " << f.rate_hz << " Hz)\n\n"
+        << " preset (" << coupling << " coupling, " << f.rate_hz << " Hz)\n\n"
         << table.str();
     io::WriteFileAtomically(table_path, out.str(), "table");
   }
@@ -258,7 +271,7 @@ void Run(const TapFlags& f) {
     }
     if (temporary) std::filesystem::remove(trace, ignored);
   }
-  nlohmann::json result = RunJson(run, f.coupling.c_str());
+  nlohmann::json result = RunJson(run, io::CouplingName(run.model.device.coupling));
   if (!f.trace.empty()) result["trace"] = f.trace;
   if (f.json) {
     std::cout << result.dump() << "\n";
@@ -280,7 +293,8 @@ void Register(CLI::App& root) {
   app->add_option("--rate", f->rate_hz, "haptic rate [Hz], 100 to 20000")->capture_default_str();
   app->add_option("--device", f->device, "device preset: touch, omni, falcon, omega3, generic")
       ->capture_default_str();
-  app->add_option("--coupling", f->coupling, "direct | virtual")->capture_default_str();
+  app->add_option("--coupling", f->coupling,
+                  "direct | virtual (default: the config's device.coupling, else direct)");
   app->add_option("--speed", f->speed_mps, "approach speed [m/s]")->capture_default_str();
   app->add_option("--spread", f->spread, "relative random spread of the speed (seeded)");
   app->add_option("--taps", f->taps, "number of taps")->capture_default_str();
@@ -292,7 +306,8 @@ void Register(CLI::App& root) {
   app->add_option("--out-dir", f->out_dir, "output folder of --compare-walls")
       ->capture_default_str();
   app->add_flag("--json", f->json, "print one JSON object");
-  app->callback([f] { Run(*f); });
+  // an error about a parameter the user wrote says where it was written
+  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
 }
 
 const CommandRegistrar registrar(&Register);

@@ -83,9 +83,10 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;
   if (load.device.coupling == Coupling::kVirtual) {
     // the coupling is what the device renders: its limits bound the coupling, not the wall
-    load.device.coupling_stiffness_N_per_m = limits.max_stiffness_N_per_m;
-    load.device.coupling_damping_Ns_per_m =
-        std::min(limits.max_stiffness_N_per_m * h, limits.max_damping_Ns_per_m);
+    load.device.coupling_stiffness_N_per_m =
+        config.coupling_stiffness_N_per_m.value_or(limits.max_stiffness_N_per_m);
+    load.device.coupling_damping_Ns_per_m = config.coupling_damping_Ns_per_m.value_or(
+        std::min(load.device.coupling_stiffness_N_per_m * h, limits.max_damping_Ns_per_m));
   }
   Model model = LoadModel(config.scene_path, load);
 

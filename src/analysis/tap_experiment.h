@@ -27,8 +27,11 @@ struct TapExperimentConfig {
   double rate_hz = 1000.0;                  // haptic rate: engine step and device tick, h = 1/rate
   std::optional<double> stiffness_N_per_m;  // default: the preset's maximum stiffness
   std::optional<double> damping_Ns_per_m;   // default: k h, twice Colgate's bound k T / 2
-  Vec3 wall_point_m = Vec3::Zero();         // a point of the wall surface
-  Vec3 wall_normal = Vec3::UnitZ();         // its outward normal
+  // virtual coupling only; default: the preset's maximum stiffness, and k h capped at its damping
+  std::optional<double> coupling_stiffness_N_per_m;
+  std::optional<double> coupling_damping_Ns_per_m;
+  Vec3 wall_point_m = Vec3::Zero();  // a point of the wall surface
+  Vec3 wall_normal = Vec3::UnitZ();  // its outward normal
   device::HandParams hand;
   device::DeviceModelParams device_model;  // tick_rate_hz is set from rate_hz
   device::TapScript script;                // surface point and normal are set from the wall

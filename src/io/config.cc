@@ -21,9 +21,9 @@ const char* NameOf(const std::vector<std::string>& names, int index) {
 using NumberFields = std::vector<std::pair<std::string, double*>>;
 
 // reads section `name` if present: `others` (the fields that are not numbers) with `read_others`,
-// then the number fields
+// then the number fields; appends "name.field" to `given` for each field the file has
 void ReadSection(const StrictObject& top, const std::string& name, const NumberFields& numbers,
-                 const std::vector<std::string>& others = {},
+                 std::vector<std::string>& given, const std::vector<std::string>& others = {},
                  const std::function<void(const StrictObject&)>& read_others = {}) {
   if (!top.Has(name)) return;
   std::vector<std::string> fields;
@@ -32,6 +32,9 @@ void ReadSection(const StrictObject& top, const std::string& name, const NumberF
   const StrictObject in = top.Object(name, fields, "the " + name + " section");
   if (read_others) read_others(in);
   for (const auto& [field, out] : numbers) in.Read(field, *out);
+  for (const std::string& field : fields) {
+    if (in.Has(field)) given.push_back(name + "." + field);
+  }
 }
 
 }  // namespace
@@ -60,11 +63,19 @@ Coupling ParseCoupling(const std::string& name) {
   return static_cast<Coupling>(i);
 }
 
-void ApplyConfigFile(const std::string& path, LoadOptions& options) {
+const char* CouplingName(Coupling coupling) {
+  return NameOf(kCouplingNames, static_cast<int>(coupling));
+}
+
+std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options) {
   const nlohmann::json root = ReadJsonFile(path, "config file");
   const JsonSource source(path);
   const StrictObject top(source, root, "", {"tool", "timestep_s", "contact", "render", "device"},
                          "a config object");
+  std::vector<std::string> given;
+  for (const char* field : {"tool", "timestep_s"}) {
+    if (top.Has(field)) given.push_back(field);
+  }
   top.Read("tool", options.tool_name);
   if (auto h = top.Number("timestep_s")) options.timestep_s = *h;
 
@@ -77,14 +88,15 @@ void ApplyConfigFile(const std::string& path, LoadOptions& options) {
                {"friction_static", &c.friction_static},
                {"friction_kinetic", &c.friction_kinetic},
                {"tangential_ratio", &c.tangential_ratio},
-               {"onset_speed_mps", &c.onset_speed_mps}});
+               {"onset_speed_mps", &c.onset_speed_mps}},
+              given);
 
   RenderParams& r = options.render;
   ReadSection(top, "render",
               {{"restitution", &r.restitution},
                {"t_collision_s", &r.t_collision_s},
                {"frequency_hz", &r.frequency_hz}},
-              {"renderer", "reference_solver"}, [&r](const StrictObject& in) {
+              given, {"renderer", "reference_solver"}, [&r](const StrictObject& in) {
                 if (auto name = in.OneOf("renderer", kRendererNames, "renderer")) {
                   r.renderer = ParseRenderer(*name);
                 }
@@ -96,11 +108,12 @@ void ApplyConfigFile(const std::string& path, LoadOptions& options) {
               {{"max_force_N", &d.max_force_N},
                {"coupling_stiffness_N_per_m", &d.coupling_stiffness_N_per_m},
                {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m}},
-              {"coupling"}, [&d](const StrictObject& in) {
+              given, {"coupling"}, [&d](const StrictObject& in) {
                 if (auto name = in.OneOf("coupling", kCouplingNames, "coupling")) {
                   d.coupling = ParseCoupling(*name);
                 }
               });
+  return given;
 }
 
 }  // namespace rigidtouch::io

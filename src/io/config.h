@@ -15,7 +15,9 @@ namespace rigidtouch::io {
 /// throws Error naming the file and the field's path ("contact.stiffness_N_per_m") for an unknown
 /// field (listing the valid ones), a wrong type or a non-finite number, and naming the file when
 /// it is missing, empty or not JSON (with line and column). Ranges are checked by Configure.
-void ApplyConfigFile(const std::string& path, LoadOptions& options);
+/// Returns the fields the file gives, as paths ("tool", "contact.stiffness_N_per_m"), so a caller
+/// can tell a value the user wrote from a default.
+std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options);
 
 /// Parses a renderer name: "penalty", "impulse" or "train"; throws Error listing them.
 RendererKind ParseRenderer(const std::string& name);
@@ -28,5 +30,8 @@ const char* RendererName(RendererKind kind);
 
 /// Parses a coupling name: "none", "direct" or "virtual"; throws Error listing them.
 Coupling ParseCoupling(const std::string& name);
+
+/// The name of a coupling.
+const char* CouplingName(Coupling coupling);
 
 }  // namespace rigidtouch::io

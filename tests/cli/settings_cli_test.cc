@@ -1,0 +1,112 @@
+// A value the user wrote is used or refused with the reason (docs/config.md): flag > config file
+// > device preset > default, in tap, serve and simulate; errors say where a value was written.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli/cli_util.h"
+
+namespace rigidtouch::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+class SettingsCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = TempDir("settings"); }
+  void TearDown() override { fs::remove_all(dir_); }
+  // writes a config file and returns its path
+  std::string Config(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  static nlohmann::json Json(const CliResult& r) {
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+  }
+  fs::path dir_;
+};
+
+TEST_F(SettingsCliTest, StiffnessFromTheConfigBeatsThePresetAndTheFlagBeatsTheConfig) {
+  const std::string k = Config("k.json", R"({"contact": {"stiffness_N_per_m": 300}})");
+  // the Touch preset's 400 N/m is the default; the file's 300 wins over it; the flag over both
+  EXPECT_EQ(Json(RunCli("tap --taps 1 --json"))["stiffness_N_per_m"], 400.0);
+  const auto from_file = Json(RunCli("tap --taps 1 --json --config " + k));
+  EXPECT_EQ(from_file["stiffness_N_per_m"], 300.0);
+  EXPECT_DOUBLE_EQ(from_file["damping_Ns_per_m"].get<double>(), 0.3);  // k h, under the 4 cap
+  EXPECT_EQ(Json(RunCli("tap --taps 1 --json --stiffness 350 --config " + k))["stiffness_N_per_m"],
+            350.0);
+  // serve on the simulated device reads the same file the same way
+  const auto served = Json(RunCli("serve --device sim --taps 1 --json --config " + k));
+  EXPECT_EQ(served["contact"]["stiffness_N_per_m"], 300.0);
+}
+
+TEST_F(SettingsCliTest, ForceLimitFromTheConfigIsUsedBelowThePresetsAndRefusedAbove) {
+  const std::string gentle = Config("gentle.json", R"({"device": {"max_force_N": 2}})");
+  const auto j = Json(RunCli("tap --taps 1 --json --config " + gentle));
+  EXPECT_EQ(j["max_force_N"], 2.0);
+  for (const auto& tap : j["taps"]) EXPECT_LE(tap["peak_force_N"].get<double>(), 2.0);
+  const std::string strong = Config("strong.json", R"({"device": {"max_force_N": 100}})");
+  for (const std::string command : {"tap --taps 1 --config ", "serve --device sim --config "}) {
+    const CliResult r = RunCli(command + strong);
+    EXPECT_EQ(r.exit_code, 2) << command << r.err;
+    EXPECT_NE(r.err.find("rigidtouch: error: device.max_force_N = 100 N (set in " + strong +
+                         " as device.max_force_N) is above the touch preset's force limit, 3.3 N"),
+              std::string::npos)
+        << r.err;
+  }
+}
+
+TEST_F(SettingsCliTest, ToolFromTheConfigIsUsedUnlessTheFlagSaysOtherwise) {
+  const std::string t = Config("t.json", R"({"tool": "probe"})");
+  for (const std::string& command :
+       {"tap --taps 1 --config " + t, "simulate --steps 1 --scene " +
+                                          std::string(RIGIDTOUCH_SCENES) + "/wall.xml --config " +
+                                          t}) {
+    const CliResult r = RunCli(command);
+    EXPECT_EQ(r.exit_code, 2) << command;
+    EXPECT_NE(r.err.find("no free body named 'probe'"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(RunCli("tap --taps 1 --tool tool --config " + t).exit_code, 0);
+}
+
+TEST_F(SettingsCliTest, ValuesThatCannotBeUsedAreRefusedSayingWhereTheyWereWritten) {
+  const std::string r = Config("r.json", R"({"render": {"restitution": 2}})");
+  CliResult c = RunCli("simulate --steps 1 --scene " + std::string(RIGIDTOUCH_SCENES) +
+                       "/wall.xml --config " + r);
+  EXPECT_EQ(c.exit_code, 2);
+  EXPECT_NE(c.err.find("restitution = 2 is out of range"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("(set in " + r + " as render.restitution)"), std::string::npos) << c.err;
+  c = RunCli("tap --taps 1 --renderer impulse --restitution 3");
+  EXPECT_NE(c.err.find("(set by --restitution)"), std::string::npos) << c.err;
+  // the time step of tap and serve is the haptic period
+  const std::string h = Config("h.json", R"({"timestep_s": 0.002})");
+  c = RunCli("tap --taps 1 --config " + h);
+  EXPECT_EQ(c.exit_code, 2);
+  EXPECT_NE(c.err.find("differs from the haptic period"), std::string::npos) << c.err;
+  // coupling settings where the coupling is direct, or a coupling serve does not run
+  const std::string cs = Config("cs.json", R"({"device": {"coupling_stiffness_N_per_m": 300}})");
+  c = RunCli("tap --taps 1 --config " + cs);
+  EXPECT_EQ(c.exit_code, 2);
+  EXPECT_NE(c.err.find("has no effect here: the coupling is direct"), std::string::npos) << c.err;
+  const std::string v = Config("v.json", R"({"device": {"coupling": "virtual"}})");
+  c = RunCli("serve --device sim --config " + v);
+  EXPECT_EQ(c.exit_code, 2);
+  EXPECT_NE(c.err.find("serve couples the tool to the device directly"), std::string::npos)
+      << c.err;
+  // tap takes the config's coupling when --coupling is not given
+  EXPECT_EQ(Json(RunCli("tap --taps 1 --json --config " + v))["coupling"], "virtual");
+}
+
+TEST_F(SettingsCliTest, HelpStatesTheOrder) {
+  for (const char* command : {"tap", "serve", "simulate", "bench"}) {
+    const CliResult r = RunCli(std::string(command) + " --help");
+    EXPECT_NE(r.out.find("a flag overrides the config file"), std::string::npos) << command;
+  }
+}
+
+}  // namespace
+}  // namespace rigidtouch::test
