@@ -1,5 +1,6 @@
 // `rigidtouch device-sim`: the simulated hand and device as their own real-time process, serving
 // the UDP device protocol (docs/device-protocol.md) to `rigidtouch serve`.
+#include <cmath>
 #include <iostream>
 
 #include "command.h"
@@ -11,6 +12,7 @@
 #include "loop/stop_signal.h"
 #include "rigidtouch/bridge.h"
 #include "rigidtouch/types.h"
+#include "scene_flags.h"
 
 namespace rigidtouch::cli {
 namespace {
@@ -81,8 +83,9 @@ void Register(CLI::App& root) {
   app->add_option("--listen", f->listen, "udp://HOST:PORT to bind (loopback unless told)")
       ->capture_default_str();
   app->add_option("--preset", f->preset, "device preset")->capture_default_str();
-  app->add_option("--rate", f->rate_hz, "device rate [Hz]")->capture_default_str();
-  app->add_option("--duration", f->duration_s, "run time [s]; 0: until SIGINT/SIGTERM");
+  AddRateFlag(app, f->rate_hz, "device rate [Hz]");
+  app->add_option("--duration", f->duration_s, "run time [s]; 0: until SIGINT/SIGTERM")
+      ->check(InRange(0.0, INFINITY, "s"));
   app->add_option("--taps", f->taps, "scripted taps")->capture_default_str();
   app->add_option("--speed", f->speed_mps, "approach speed [m/s]")->capture_default_str();
   app->add_option("--wall-height", f->wall_height_m,

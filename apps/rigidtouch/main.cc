@@ -2,9 +2,10 @@
 // non-zero exit; with --json a subcommand prints exactly one JSON object on stdout. Exit codes
 // (README, "Exit codes"): 0 success, 2 bad input (a file, field, value or output path), 3 an
 // internal error, 4 an output file could not be written (disk full, file size limit), 5 serve's
-// device did not answer, CLI11's own codes (above 100) for a malformed command line.
+// device did not answer. A malformed command line is bad input too: status 2, the same prefix.
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "io/output_file.h"
 #include "rigidtouch/command.h"
@@ -28,8 +29,21 @@ int main(int argc, char** argv) {
   for (auto factory : rigidtouch::cli::Commands()) factory(app);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::RuntimeError& e) {
+    // a subcommand that printed its own message and chose its status (serve: 5)
+    return e.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    // CLI11 would exit with its own code (above 100) and no prefix: one voice for every error
+    std::cerr << "rigidtouch: error: " << e.what() << "\n"
+              << "Run `" << argv[0] << (argc > 1 ? std::string(" ") + argv[1] : std::string())
+              << " --help` for the options.\n";
+    return 2;
   } catch (const rigidtouch::io::OutputError& e) {
     std::cerr << "rigidtouch: error: " << e.what() << "\n";
     return 4;

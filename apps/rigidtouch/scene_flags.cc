@@ -6,6 +6,7 @@
 #include "io/config.h"
 #include "io/resources.h"
 #include "io/text.h"
+#include "render/limits.h"
 
 namespace rigidtouch::cli {
 
@@ -39,6 +40,26 @@ std::string Where(const Settings& s, const std::string& field) {
 }
 
 }  // namespace
+
+CLI::Validator InRange(double lo, double hi, const std::string& unit) {
+  const std::string valid =
+      std::isinf(hi) ? "valid " + io::FormatNumber(lo) + " " + unit + " or more"
+                     : "valid " + io::FormatNumber(lo) + " to " + io::FormatNumber(hi) + " " + unit;
+  return CLI::Validator(
+      [lo, hi, valid](std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return text + " is not a number";
+        if (!(value >= lo && value <= hi)) return text + " is out of range: " + valid;
+        return "";
+      },
+      "[" + io::FormatNumber(lo) + ", " + (std::isinf(hi) ? "inf" : io::FormatNumber(hi)) + "]");
+}
+
+void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description) {
+  app->add_option("--rate", rate_hz, description)
+      ->capture_default_str()
+      ->check(InRange(render::kMinRate_hz, render::kMaxRate_hz, "Hz"));
+}
 
 void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   auto* scene = app->add_option("--scene", f.scene, "MJCF scene file");

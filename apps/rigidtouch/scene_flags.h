@@ -34,6 +34,13 @@ struct SceneFlags {
 /// How a setting is resolved, stated in every subcommand's --help and in docs/cli.md.
 extern const char kPrecedence[];
 
+/// A CLI11 check that a number lies in [lo, hi] (hi may be infinity), with the message every
+/// subcommand gives: "VALUE is out of range: valid LO to HI UNIT".
+CLI::Validator InRange(double lo, double hi, const std::string& unit);
+
+/// Adds --rate with the one range every subcommand takes (render::kMinRate_hz to kMaxRate_hz).
+void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description);
+
 /// Adds --scene (required unless `scene_required` is false), --config, --tool, --timestep,
 /// --renderer, --restitution, --t-collision, --frequency, --stiffness, --damping,
 /// --reference-solver.

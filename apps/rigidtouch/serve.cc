@@ -211,9 +211,10 @@ void Register(CLI::App& root) {
                   "device preset: its force, stiffness and damping limits apply on every device "
                   "(with the device's own, the stricter wins); the simulated device's model")
       ->capture_default_str();
-  app->add_option("--rate", f->rate_hz, "loop rate [Hz], 1 to 20000")->capture_default_str();
+  AddRateFlag(app, f->rate_hz, "loop rate [Hz]");
   app->add_option("--duration", f->duration_s,
-                  "run time [s]; 0: until SIGINT (udp) or the end of the taps (sim)");
+                  "run time [s]; 0: until SIGINT (udp) or the end of the taps (sim)")
+      ->check(InRange(0.0, INFINITY, "s"));
   app->add_flag("--realtime", f->realtime, "SCHED_FIFO and locked memory when allowed");
   app->add_option("--spin-us", f->spin_us, "busy-wait before each deadline [us]");
   app->add_option("--watchdog", f->watchdog_s, "no fresh device state for this long: zero force")

@@ -25,6 +25,12 @@ constexpr bool TrainFrequencyFitsWindow(double frequency_hz, double t_collision_
   return frequency_hz > 0.0 && frequency_hz * t_collision_s >= 1.0 - kTrainFrequencyTolerance;
 }
 
+/// Haptic rates the command-line tool takes (tap, serve, device-sim): one range for every
+/// subcommand, from the slowest loop that still renders contact to the fastest a desktop device
+/// and this host's scheduler keep up with.
+inline constexpr double kMinRate_hz = 100.0;
+inline constexpr double kMaxRate_hz = 20000.0;
+
 /// Time step h in [kMinTimestep_s, kMaxTimestep_s].
 inline constexpr double kMinTimestep_s = 1e-6;
 inline constexpr double kMaxTimestep_s = 0.1;

@@ -108,5 +108,26 @@ TEST_F(SettingsCliTest, HelpStatesTheOrder) {
   }
 }
 
+// one voice: a malformed command line is bad input (status 2) with the one prefix, and --rate has
+// one range in every subcommand
+TEST(CliVoiceTest, MalformedCommandLinesExitTwoWithThePrefix) {
+  for (const std::string args : {"tap --bogus", "tap --taps", "tap --taps x", "serve --duration -1",
+                                 "device-sim --duration -2", "nosuchcommand"}) {
+    const CliResult r = RunCli(args);
+    EXPECT_EQ(r.exit_code, 2) << args << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("rigidtouch: error: ", 0), 0u) << args << ": " << r.err;
+  }
+  for (const std::string command : {"tap", "serve", "device-sim"}) {
+    for (const std::string rate : {"50", "50000"}) {
+      const CliResult r = RunCli(command + " --rate " + rate);
+      EXPECT_EQ(r.exit_code, 2) << command;
+      EXPECT_NE(r.err.find("--rate: " + rate + " is out of range: valid 100 to 20000 Hz"),
+                std::string::npos)
+          << command << ": " << r.err;
+    }
+  }
+  EXPECT_EQ(RunCli("tap --help").exit_code, 0);
+}
+
 }  // namespace
 }  // namespace rigidtouch::test
