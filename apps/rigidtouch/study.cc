@@ -43,6 +43,8 @@ struct RunOptions {
   std::string presenter = "device";
   std::string scene;
   std::string device;
+  std::string preset = "touch";
+  std::string key_file;
   bool json = false;
 };
 
@@ -107,7 +109,8 @@ void Run(const RunOptions& o) {
     screen << "Dry run with the text presenter: it names the rendered wall, so do not use it with "
               "a participant.\n";
   } else {
-    presenter = st::MakeDeviceWallPresenter(st::PresenterOptions{o.scene, o.device});
+    presenter =
+        st::MakeDeviceWallPresenter(st::PresenterOptions{o.scene, o.device, o.preset, o.key_file});
   }
   st::SessionConfig config;
   config.participant = o.participant;
@@ -116,6 +119,7 @@ void Run(const RunOptions& o) {
   config.software_version = kSoftwareVersion;
   config.mode = "person";
   config.start_extra["presenter"] = presenter->Describe();
+  config.start_extra["dry_run"] = presenter->dry_run();
   st::TerminalResponder responder(std::cin, screen);
   const st::SessionOutcome outcome =
       st::RunLoggedSession(protocol, config, o.log, *presenter, responder);
@@ -242,7 +246,14 @@ void AddStudyCommand(CLI::App& root) {
       ->check(CLI::IsMember({"device", "text"}))
       ->capture_default_str();
   run->add_option("--scene", run_options->scene, "Scene for the device presenter");
-  run->add_option("--device", run_options->device, "Device preset or address");
+  run->add_option("--device", run_options->device,
+                  "device presenter: udp://HOST:PORT (a device through the bridge), or sim (a "
+                  "dry run on the in-process simulated device, logged as one); required");
+  run->add_option("--preset", run_options->preset,
+                  "device preset whose limits apply (force, stiffness, damping)")
+      ->capture_default_str();
+  run->add_option("--key", run_options->key_file,
+                  "bridge key file (rigidtouch keygen); default: the per-user key");
   run->add_flag("--json", run_options->json,
                 "Prompts on stderr, one JSON summary object on stdout");
   run->callback([run_options] { Run(*run_options); });

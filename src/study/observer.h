@@ -118,6 +118,7 @@ class SimulatedParticipant : public WallPresenter, public Responder {
 
   void Present(const Condition& condition, int taps) override;
   std::string Describe() const override;
+  bool dry_run() const override { return true; }  // no person: a simulated participant
   void Show(std::string_view text) override;
   std::optional<int> Ask(const Protocol& protocol, const Step& step) override;
 

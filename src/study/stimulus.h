@@ -63,6 +63,9 @@ class WallPresenter {
   virtual void Present(const Condition& condition, int taps) = 0;
   /// One-line description recorded in the session log (which device, which scene).
   virtual std::string Describe() const = 0;
+  /// True when no person feels what is presented (text, or the in-process simulated device):
+  /// recorded in the log's session_start as "dry_run".
+  virtual bool dry_run() const = 0;
 };
 
 /// A presenter that renders nothing and prints "rendering wall X for N taps" to a stream: for dry
@@ -74,6 +77,7 @@ class TextPresenter : public WallPresenter {
   explicit TextPresenter(std::ostream& out) : out_(out) {}
   void Present(const Condition& condition, int taps) override;
   std::string Describe() const override;
+  bool dry_run() const override { return true; }
 
  private:
   std::ostream& out_;
@@ -92,7 +96,9 @@ struct TapSourceOptions {
 /// Options for the device-backed presenter used by `study run`.
 struct PresenterOptions {
   std::string scene;   ///< MJCF scene path; empty: the engine's default wall scene
-  std::string device;  ///< device preset or address; empty: the engine's default
+  std::string device;  ///< "udp://HOST:PORT" (a device through the bridge) or "sim" (dry run)
+  std::string preset = "touch";  ///< device preset: its limits apply on either device
+  std::string key_file;          ///< bridge key file; empty: the per-user key
 };
 
 /// Builds the tap source backed by the real tap experiment (simulated device + engine + tap

@@ -1,11 +1,13 @@
 // The engine behind the study: simulated taps as percepts (StimulusSource), and walls rendered on
 // a device for a person (WallPresenter). Declared in study/stimulus.h.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <iostream>
 #include <sstream>
 
 #include "analysis/tap_experiment.h"
+#include "device/presets.h"
 #include "device/udp_device.h"
 #include "io/resources.h"
 #include "loop/haptic_loop.h"
@@ -110,14 +112,24 @@ class TapStimulusSource final : public StimulusSource {
 // the simulated hand felt) or, with a udp:// address, on a real device through the bridge
 class DeviceWallPresenter final : public WallPresenter {
  public:
-  explicit DeviceWallPresenter(const PresenterOptions& o) : options_(o) {}
+  explicit DeviceWallPresenter(const PresenterOptions& o) : options_(o) {
+    // a person's session needs a real device; the simulated one only as an explicit dry run
+    if (o.device != "sim" && o.device.rfind("udp://", 0) != 0) {
+      throw Error(
+          "study run: --device " + (o.device.empty() ? std::string("is missing") : o.device) +
+          ": a participant's session needs a device: udp://HOST:PORT (a device through the "
+          "bridge), or sim for a dry run on the in-process simulated device, which no person "
+          "feels (it is recorded in the log as a dry run)");
+    }
+    device::FindPreset(o.preset);  // an unknown preset is an error before the session starts
+  }
 
   void Present(const Condition& condition, int taps) override {
     if (options_.device.rfind("udp://", 0) == 0) {
       PresentOnBridge(condition, taps);
       return;
     }
-    analysis::TapExperimentConfig config = TapConfig(condition, options_.scene, options_.device, 0);
+    analysis::TapExperimentConfig config = TapConfig(condition, options_.scene, options_.preset, 0);
     config.script.taps = taps;
     const analysis::TapRun run = analysis::RunTapExperiment(config);
     double peak = 0.0;
@@ -126,18 +138,29 @@ class DeviceWallPresenter final : public WallPresenter {
   }
 
   std::string Describe() const override {
-    return options_.device.rfind("udp://", 0) == 0 ? "device bridge " + options_.device
-                                                   : "in-process simulated device";
+    return options_.device.rfind("udp://", 0) == 0
+               ? "device bridge " + options_.device + " (" + options_.preset + " limits)"
+               : "in-process simulated device, " + options_.preset +
+                     " preset (dry run: no person felt these walls)";
   }
+  bool dry_run() const override { return options_.device == "sim"; }
 
  private:
   void PresentOnBridge(const Condition& condition, int taps) {
+    // the preset's limits on every path, as serve applies them: the wall defaults to what the
+    // device can display (its stiffness, damping k h capped at its damping), the force to its
+    // limit, and the device's own announced limits tighten them further
+    const device::DeviceLimits& preset = device::FindPreset(options_.preset);
+    const double h = 0.001;
     LoadOptions load;
     load.render = ToRenderParams(condition);
     load.device.coupling = Coupling::kDirect;
-    load.timestep_s = 0.001;
-    if (condition.stiffness_N_per_m) load.contact.stiffness_N_per_m = *condition.stiffness_N_per_m;
-    if (condition.damping_Ns_per_m) load.contact.damping_Ns_per_m = *condition.damping_Ns_per_m;
+    load.timestep_s = h;
+    load.contact.stiffness_N_per_m =
+        condition.stiffness_N_per_m.value_or(preset.max_stiffness_N_per_m);
+    load.contact.damping_Ns_per_m = condition.damping_Ns_per_m.value_or(
+        std::min(load.contact.stiffness_N_per_m * h, preset.max_damping_Ns_per_m));
+    device::TightenDeviceParams(load.device, preset);
     const std::string scene = condition.scene          ? *condition.scene
                               : options_.scene.empty() ? io::ShippedFile("scenes/wall.xml")
                                                        : options_.scene;
@@ -145,6 +168,8 @@ class DeviceWallPresenter final : public WallPresenter {
     Data data = MakeData(model);
     device::UdpDeviceOptions dev_options;
     dev_options.server = options_.device;
+    dev_options.limits = preset;
+    dev_options.key_file = options_.key_file;
     device::UdpDevice dev(dev_options);
     loop::LoopOptions loop;
     loop.rate_hz = 1000.0;

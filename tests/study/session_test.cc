@@ -43,6 +43,7 @@ class RecordingPresenter : public WallPresenter {
     shown.push_back(condition.label + "x" + std::to_string(taps));
   }
   std::string Describe() const override { return "recording presenter"; }
+  bool dry_run() const override { return true; }
   std::vector<std::string> shown;
 };
 

@@ -177,6 +177,40 @@ TEST(StudyCliTest, ScriptedSessionRecordsEveryAnswer) {
   EXPECT_EQ(ReadLog(log).records.front()["seed"], 42);
 }
 
+// a person's session needs a real device: without --device (or with a preset name, as it used to
+// take) nothing starts and no log is written; --device sim is a dry run, recorded as one, as is
+// the text presenter
+TEST(StudyCliTest, APersonsSessionNeedsADeviceAndADryRunIsLoggedAsOne) {
+  ScratchDir dir;
+  const std::string protocol = WriteProtocol(dir);
+  const std::string log = dir.File("p01.jsonl");
+  std::vector<std::string> device_run = {"study",         "run", "--protocol",  protocol,
+                                         "--participant", "P01", "--log",       log,
+                                         "--seed",        "42",  "--presenter", "device"};
+  for (const std::vector<std::string>& extra :
+       {std::vector<std::string>{}, std::vector<std::string>{"--device", "omega3"}}) {
+    std::vector<std::string> args = device_run;
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Result r = RunCli(dir, args, Lines(0, 12));
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("a participant's session needs a device"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(log));
+  }
+  std::vector<std::string> sim = device_run;
+  sim.insert(sim.end(), {"--device", "sim", "--preset", "omega3"});
+  const Result r = RunCli(dir, sim, Lines(0, 12));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json start = ReadLog(log).records.at(0);
+  EXPECT_EQ(start["dry_run"], true);
+  EXPECT_NE(start["presenter"].get<std::string>().find("dry run"), std::string::npos);
+  EXPECT_NE(start["presenter"].get<std::string>().find("omega3"), std::string::npos);
+  EXPECT_EQ(Records(log, "answer").size(), 12u);
+
+  const std::string text_log = dir.File("p02.jsonl");
+  ASSERT_EQ(RunCli(dir, RunArgs(protocol, text_log, "P02"), Lines(0, 12)).exit_code, 0);
+  EXPECT_EQ(ReadLog(text_log).records.at(0)["dry_run"], true);
+}
+
 TEST(StudyCliTest, KilledAtRandomPointsThenResumedEqualsAnUninterruptedRun) {
   ScratchDir dir;
   const std::string protocol = WriteProtocol(dir);
