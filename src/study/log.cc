@@ -87,6 +87,12 @@ ValidLog Validate(const std::vector<json>& records, const std::string& src) {
     throw Error(src + ": does not start with a session_start record");
   }
   CheckFirstRecord(start, src);
+  for (const char* key : {"protocol_hash", "participant", "mode"}) {
+    if (start.contains(key) && !start[key].is_string()) {
+      throw Error(src + ": malformed record: the session_start record's \"" + key + "\" is " +
+                  start[key].dump() + ", not a string");
+    }
+  }
   ValidLog log;
   if (!start.contains("protocol")) {
     throw Error(src + ": the session_start record has no embedded protocol");
