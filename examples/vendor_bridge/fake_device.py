@@ -8,7 +8,7 @@ simulated hand. Every datagram carries an HMAC-SHA-256 under the pre-shared key 
 bindings: replace the simulated hand with the SDK's reads and writes. See docs/device-protocol.md.
 Python's sleep is not a real-time clock: expect jitter. Standard library only.
 
-    python3 fake_device.py --listen 127.0.0.1:47000 --rate 1000 [--key FILE] [--max-force 3.3]
+    python3 fake_device.py --listen udp://127.0.0.1:47000 --rate 1000 [--key FILE] [--max-force 3.3]
                            [--duration S] [--json]
 
 With --json it prints one JSON object when it ends (--duration, SIGINT or SIGTERM): the largest
@@ -94,7 +94,7 @@ def stop_on_signal(signum, frame):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--listen", default="127.0.0.1:47000")
+    parser.add_argument("--listen", default="udp://127.0.0.1:47000", help="udp://HOST:PORT")
     parser.add_argument("--rate", type=float, default=1000.0, help="Hz")
     parser.add_argument("--watchdog", type=float, default=0.05, help="s")
     parser.add_argument("--session-timeout", type=float, default=0.5, help="s")
@@ -108,7 +108,9 @@ def main():
     signal.signal(signal.SIGTERM, stop_on_signal)
     key = load_key(args.key or default_key_path(), create=not args.key)
     limits = REPLY_PAYLOAD.pack(args.max_force, 0.0, 0.0)
-    host, port = args.listen.rsplit(":", 1)
+    # the same address form as rigidtouch's own flags (udp://HOST:PORT); HOST:PORT also works
+    address = args.listen[len("udp://"):] if args.listen.startswith("udp://") else args.listen
+    host, port = address.rsplit(":", 1)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind((host, int(port)))
     sock.setblocking(False)

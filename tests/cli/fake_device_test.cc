@@ -27,7 +27,7 @@ pid_t SpawnFakeDevice(int port, const std::string& key, double seconds,
                       const std::filesystem::path& out) {
   const std::string script =
       std::string(RIGIDTOUCH_SOURCE_DIR) + "/examples/vendor_bridge/fake_device.py";
-  return SpawnCommand("python3 " + script + " --listen 127.0.0.1:" + std::to_string(port) +
+  return SpawnCommand("python3 " + script + " --listen udp://127.0.0.1:" + std::to_string(port) +
                           " --key " + key + " --max-force " + std::to_string(kDeviceLimit_N) +
                           " --rate 1000 --duration " + std::to_string(seconds) + " --json",
                       out.string());
