@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 #include "analysis/figures.h"
 #include "analysis/tap_experiment.h"
@@ -21,6 +22,8 @@ namespace {
 struct TapFlags {
   SceneFlags scene;
   std::optional<int> wall;
+  std::string wall_geom;
+  std::vector<double> wall_point, wall_normal;
   double rate_hz = 1000.0;
   std::string device = "touch";
   std::optional<std::string> coupling;  // default: the config file's, else direct
@@ -46,6 +49,11 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     throw Error("--spread " + std::to_string(f.spread) + " is out of range: valid [0, 0.5]");
   }
   analysis::TapExperimentConfig c = TapConfig(f.scene, f.device, f.rate_hz, f.speed_mps, f.taps);
+  c.wall_geom = f.wall_geom;
+  if (!f.wall_point.empty()) {
+    c.wall_point_m = Vec3(f.wall_point[0], f.wall_point[1], f.wall_point[2]);
+    c.wall_normal = Vec3(f.wall_normal[0], f.wall_normal[1], f.wall_normal[2]);
+  }
   if (wall) {
     const RenderParams r = analysis::WallRenderParams(*wall);
     c.load.render.renderer = r.renderer;
@@ -287,6 +295,18 @@ void Register(CLI::App& root) {
                   "the method's walls: 0 single impulse, 1 train 250 Hz, "
                   "2 train 50 Hz")
       ->check(CLI::IsMember({0, 1, 2}));
+  auto* wall_geom =
+      app->add_option("--wall-geom", f->wall_geom,
+                      "the static plane or box the taps aim at (default: the geom named wall, "
+                      "else the scene's only plane)");
+  auto* wall_point = app->add_option("--wall-point", f->wall_point,
+                                     "a point of the wall's surface X Y Z [m] (with --wall-normal)")
+                         ->expected(3);
+  auto* wall_normal =
+      app->add_option("--wall-normal", f->wall_normal, "the wall's outward normal X Y Z")
+          ->expected(3);
+  wall_point->needs(wall_normal)->excludes(wall_geom);
+  wall_normal->needs(wall_point);
   AddRateFlag(app, f->rate_hz, "haptic rate [Hz]");
   app->add_option("--device", f->device, "device preset: touch, omni, falcon, omega3, generic")
       ->capture_default_str();

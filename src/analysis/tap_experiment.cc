@@ -1,5 +1,6 @@
 #include "analysis/tap_experiment.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -22,7 +23,92 @@ double ToolReach(const Model& model, const Vec3& n) {
   return reach;
 }
 
+std::string StaticSurfaces(const Model& model) {
+  std::string names;
+  for (const GeomModel& g : model.geoms) {
+    if (g.body >= 0 || (g.type != GeomType::kPlane && g.type != GeomType::kBox)) continue;
+    names += (names.empty() ? "'" : ", '") + g.name + "'";
+  }
+  return names.empty() ? "none" : names;
+}
+
+// the tool's distance to the wall plane when it first touched something in each tap: a tap that
+// met another body first (or never touched) measured that body, not the wall
+void CheckTheWallWasTapped(const TapRun& run, const std::string& scene_path) {
+  const Vec3& n = run.wall.normal;
+  const double reach = ToolReach(run.model, n);
+  const std::string wall = run.wall.geom.empty() ? "the wall" : "the wall '" + run.wall.geom + "'";
+  int tap = -1;
+  bool touched = true;
+  for (const TraceSample& s : run.trace) {
+    if (s.tap != tap) {
+      if (!touched) break;
+      tap = s.tap;
+      touched = tap < 0;
+    }
+    if (touched || s.tool_contacts == 0) continue;
+    touched = true;
+    const double gap_m = (s.tool_position_m - run.wall.point_m).dot(n) - reach;
+    if (gap_m > 1e-3) {
+      std::ostringstream msg;
+      msg << "scene file '" << scene_path << "': tap " << tap << " touched something "
+          << gap_m * 1e3 << " mm before " << wall
+          << " (another body is in the way); choose the wall with --wall-geom NAME or "
+             "--wall-point X Y Z --wall-normal X Y Z";
+      throw Error(msg.str());
+    }
+  }
+  if (!touched) {
+    throw Error("scene file '" + scene_path + "': tap " + std::to_string(tap) + " never touched " +
+                wall + "; is it within reach of the tool's start?");
+  }
+}
+
 }  // namespace
+
+Wall FindWall(const Model& model, const std::string& scene_path, const std::string& geom) {
+  const std::string where = "scene file '" + scene_path + "'";
+  const std::string choose =
+      "; choose one with --wall-geom NAME (a static plane or box: " + StaticSurfaces(model) +
+      ") or give --wall-point X Y Z and --wall-normal X Y Z";
+  const GeomModel* found = nullptr;
+  if (!geom.empty() || std::any_of(model.geoms.begin(), model.geoms.end(),
+                                   [](const GeomModel& g) { return g.name == "wall"; })) {
+    const std::string name = geom.empty() ? "wall" : geom;
+    for (const GeomModel& g : model.geoms) {
+      if (g.name == name) found = &g;
+    }
+    if (found == nullptr) throw Error(where + ": no geom named '" + name + "'" + choose);
+  } else {
+    int planes = 0;
+    for (const GeomModel& g : model.geoms) {
+      if (g.body < 0 && g.type == GeomType::kPlane) {
+        found = &g;
+        ++planes;
+      }
+    }
+    if (planes != 1) {
+      throw Error(where + ": which surface is the wall? there is no geom named 'wall' and " +
+                  std::to_string(planes) + " static planes" + choose);
+    }
+  }
+  if (found->body >= 0) {
+    throw Error(where + ": geom '" + found->name + "' belongs to a moving body; the wall must be " +
+                "static (a worldbody geom)" + choose);
+  }
+  const Mat3 R = found->quat_B.toRotationMatrix();
+  Wall wall;
+  wall.geom = found->name;
+  wall.normal = R.col(2);
+  if (found->type == GeomType::kPlane) {
+    wall.point_m = found->pos_B;
+  } else if (found->type == GeomType::kBox) {
+    wall.point_m = found->pos_B + found->size.z() * wall.normal;
+  } else {
+    throw Error(where + ": geom '" + found->name + "' is not a plane or a box" + choose);
+  }
+  return wall;
+}
 
 RenderParams WallRenderParams(int wall) {
   RenderParams r;
@@ -93,9 +179,15 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   device::DeviceModelParams dm = config.device_model;
   dm.tick_rate_hz = config.rate_hz;
   device::TapScript script = config.script;
-  const Vec3 n = config.wall_normal.normalized();
+  if (config.wall_point_m) {
+    setup.wall.point_m = *config.wall_point_m;
+    setup.wall.normal = config.wall_normal.normalized();
+  } else {
+    setup.wall = FindWall(model, config.scene_path, config.wall_geom);
+  }
+  const Vec3 n = setup.wall.normal;
   script.surface_normal = n;
-  script.surface_point_m = config.wall_point_m + ToolReach(model, n) * n;
+  script.surface_point_m = setup.wall.point_m + ToolReach(model, n) * n;
   setup.simulated = std::make_unique<device::SimulatedDevice>(limits, config.hand, dm, script);
   device::SimulatedDevice& dev = *setup.simulated;
 
@@ -155,6 +247,8 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
     run.taps.push_back(ComputeTapMetrics(samples, options));
   }
   run.model = std::move(model);
+  run.wall = setup.wall;
+  CheckTheWallWasTapped(run, config.scene_path);
   return run;
 }
 

@@ -18,6 +18,13 @@ namespace rigidtouch::analysis {
 /// impulse, 1 train at 250 Hz, 2 train at 50 Hz (t_c = 0.1 s, e = 0).
 RenderParams WallRenderParams(int wall);
 
+/// The surface a tap is aimed at: a point of it and its outward normal.
+struct Wall {
+  Vec3 point_m = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  std::string geom;  // the static geom it belongs to; empty when given as a point and normal
+};
+
 /// Everything a tap run needs.
 struct TapExperimentConfig {
   std::string scene_path;  // MJCF with a wall and the tool
@@ -30,8 +37,11 @@ struct TapExperimentConfig {
   // virtual coupling only; default: the preset's maximum stiffness, and k h capped at its damping
   std::optional<double> coupling_stiffness_N_per_m;
   std::optional<double> coupling_damping_Ns_per_m;
-  Vec3 wall_point_m = Vec3::Zero();  // a point of the wall surface
-  Vec3 wall_normal = Vec3::UnitZ();  // its outward normal
+  // the wall: a static geom of the scene (FindWall with wall_geom), or, when wall_point_m is set,
+  // that point of its surface and wall_normal, its outward normal
+  std::string wall_geom;
+  std::optional<Vec3> wall_point_m;
+  Vec3 wall_normal = Vec3::UnitZ();
   device::HandParams hand;
   device::DeviceModelParams device_model;  // tick_rate_hz is set from rate_hz
   device::TapScript script;                // surface point and normal are set from the wall
@@ -40,6 +50,7 @@ struct TapExperimentConfig {
 /// The result of a run.
 struct TapRun {
   Model model;  // as rendered (tool mass, stiffness, schedule)
+  Wall wall;    // where the taps were aimed
   device::DeviceLimits device;
   std::vector<TraceSample> trace;          // one sample per tick
   std::vector<TapMetrics> taps;            // one per scripted tap
@@ -48,6 +59,13 @@ struct TapRun {
   std::int64_t clipped_impulse_ticks = 0;  // ... while an impulsive force was in the command
   std::array<WarningStat, static_cast<int>(Warning::kCount)> warnings{};
 };
+
+/// The wall of `model` (loaded from `scene_path`, for messages): the static geom named `geom`, or
+/// when `geom` is empty the static geom named "wall", else the scene's only static plane. A
+/// plane's surface passes through its centre with the normal its frame's z axis; a box's is the
+/// face whose outward normal is its frame's z axis. Throws Error naming the scene and listing its
+/// static planes and boxes when there is no such geom, it is not static, or it is another type.
+Wall FindWall(const Model& model, const std::string& scene_path, const std::string& geom);
 
 /// Makes the tool the end effector of a directly coupled device: its mass in Eq. 1 becomes the
 /// device's apparent mass plus the hand's (the rotational inertia keeps its shape).
@@ -58,6 +76,7 @@ void UseDeviceAndHandMass(Model& model, const device::DeviceModelParams& device,
 /// start position, with the device's and hand's mass when coupled directly.
 struct TapSetup {
   Model model;
+  Wall wall;
   device::DeviceLimits device;
   std::unique_ptr<device::SimulatedDevice> simulated;
 };

@@ -4,6 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <string>
+
+#include "test_util.h"
 
 namespace rigidtouch::analysis {
 namespace {
@@ -173,6 +177,62 @@ TEST(TapExperimentTest, BadConfigurationNamesTheParameter) {
     EXPECT_NE(std::string(e.what()).find("touch"), std::string::npos) << e.what();  // lists them
   }
   EXPECT_THROW(WallRenderParams(3), Error);
+}
+
+// a scene with a tilted static plane ("slope"), a static box ("table", its z axis turned to +x)
+// and no geom named "wall": the wall is found by name, its surface point and normal from the geom's
+// frame; ambiguity and moving bodies are errors naming the scene
+TEST(TapExperimentTest, TheWallIsAStaticGeomOfTheScene) {
+  const std::string scene = test::WriteTempFile("walls.xml", R"(
+<mujoco>
+  <worldbody>
+    <geom name="slope" type="plane" size="1 1 0.1" pos="0 0 0.1" euler="30 0 0"/>
+    <geom name="floor" type="plane" size="1 1 0.1"/>
+    <geom name="table" type="box" size="0.2 0.3 0.05" pos="1 2 0.3" euler="0 90 0"/>
+    <body name="tool" pos="0 0 0.5"><freejoint/><geom type="sphere" size="0.005" mass="0.1"/></body>
+  </worldbody>
+</mujoco>)");
+  LoadOptions o;
+  const Model model = LoadModel(scene, o);
+  const Wall slope = FindWall(model, scene, "slope");
+  const double a = 30.0 * M_PI / 180.0;  // MJCF euler in degrees, about x
+  EXPECT_NEAR((slope.normal - Vec3(0.0, -std::sin(a), std::cos(a))).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((slope.point_m - Vec3(0.0, 0.0, 0.1)).norm(), 0.0, 1e-12);
+  const Wall table = FindWall(model, scene, "table");  // the face of the box along its z axis
+  EXPECT_NEAR((table.normal - Vec3(1.0, 0.0, 0.0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((table.point_m - Vec3(1.05, 2.0, 0.3)).norm(), 0.0, 1e-12);
+  auto message = [&](const std::string& geom) {
+    try {
+      FindWall(model, scene, geom);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message("").find("2 static planes"), std::string::npos) << message("");
+  EXPECT_NE(message("").find("'slope', 'floor', 'table'"), std::string::npos) << message("");
+  EXPECT_NE(message("nope").find("no geom named 'nope'"), std::string::npos);
+  EXPECT_NE(message("tool").find("no geom named 'tool'"), std::string::npos);  // a body's name
+}
+
+// the shipped stack: the floor is its only plane, but the boxes stand on it: the first tap meets
+// the top box 40 mm before the floor, and that is an error, not a row of metrics (it used to exit 0
+// with rate hardness nan and 30 mm of penetration)
+TEST(TapExperimentTest, ATapThatMeetsAnotherBodyBeforeTheWallIsAnError) {
+  TapExperimentConfig c = Config(1, "touch", 0.2);
+  c.scene_path = std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/stack.xml";
+  try {
+    RunTapExperiment(c);
+    FAIL() << "the tap on the stack ran";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("mm before the wall 'floor'"), std::string::npos)
+        << e.what();
+  }
+  // the shipped wall is found by its name, and its taps touch it
+  c = Config(1, "touch", 0.2);
+  const TapRun run = RunTapExperiment(c);
+  EXPECT_EQ(run.wall.geom, "wall");
+  EXPECT_GT(run.taps.at(0).max_penetration_m, 0.0);
 }
 
 }  // namespace
