@@ -134,6 +134,13 @@ struct Model {
   int max_contacts = 0;                 // capacity of the contact list; extra contacts are dropped
   int max_group_bodies = 0;             // capacity of one group (implicit penalty solve is dense)
   std::shared_ptr<mjModel_> collision;  // compiled MJCF, owned (shared by copies of the Model)
+  /// Problems found at load that do not stop the scene (e.g. a contact stiffness that cannot hold
+  /// a body or is unstable for it at h), one sentence each; the CLI prints them to stderr.
+  std::vector<std::string> load_warnings;
+  /// The scene-contact stiffness and damping Configure derived from the bodies' masses and h
+  /// (docs/method.md, "Contact defaults from the scene"); 0 if they were set by the user.
+  double derived_scene_stiffness_N_per_m = 0.0;
+  double derived_scene_damping_Ns_per_m = 0.0;
 };
 
 }  // namespace rigidtouch
