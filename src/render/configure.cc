@@ -46,13 +46,13 @@ void RequireDisplayable(const std::string& name, double value, const std::string
 // Contact defaults from the scene (docs/method.md): the static sink m g / k of a body resting on
 // one contact pair is at most kSinkFraction of its smallest geom size; the lightest body's contact
 // keeps k h^2 / m <= kStableStiffness and b h / m <= kStableDamping (explicit tool contacts: the
-// symplectic-Euler limits 4 and 2); damping gives the heaviest body about kDampingRatio of
+// symplectic-Euler limits 4 and 2); damping gives the heaviest body at least kDampingRatio of
 // critical.
 constexpr double kSinkFraction = 0.01;
 constexpr double kStableStiffness = 4.0;
 constexpr double kStableDamping = 1.0;
 constexpr double kExplicitStableDamping = 2.0;
-constexpr double kDampingRatio = 0.35;
+constexpr double kDampingRatio = 0.2;
 
 std::string Num(double x) {
   return io::FormatNumber(x);
