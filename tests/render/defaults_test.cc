@@ -73,7 +73,8 @@ TEST(DefaultsTest, LightPlateAtTwoMillisecondsStaysFiniteAndRests) {
   EXPECT_NEAR(data.bodies[0].x_W.z(), 0.0005, 0.0005);
   EXPECT_LT(data.bodies[0].v_W.norm(), 1e-3);
   // the scene law is stable for the plate; the tool's explicit law would not be if it pushed it
-  EXPECT_LE(model.contact.scene_stiffness_N_per_m * 0.002 * 0.002 / 0.0002, 4.0 + 1e-12);
+  EXPECT_LE(model.contact.scene_stiffness_N_per_m * 0.002 * 0.002 / 0.0002, 8.0 + 1e-12);
+  EXPECT_LE(model.contact.scene_damping_Ns_per_m * 0.002 / 0.0002, 4.0 + 1e-12);
   EXPECT_TRUE(Mentions(model, "stiffness_N_per_m = 2000", "body 'plate'"));
 }
 
@@ -93,8 +94,8 @@ TEST(DefaultsTest, UserSetUnstableSceneStiffnessIsWarnedNamingTheLightestBody) {
   options.contact.scene_stiffness_N_per_m = 1e5;  // k h^2 / m = 2000 for the plate
   options.contact.scene_damping_Ns_per_m = 50.0;  // b h / m = 500
   const Model model = LoadModel(LightPlate(), options);
-  EXPECT_TRUE(Mentions(model, "scene_stiffness_N_per_m = 100000 N/m is unstable", "'plate'"));
-  EXPECT_TRUE(Mentions(model, "scene_damping_Ns_per_m = 50 N s/m is unstable", "'plate'"));
+  EXPECT_TRUE(Mentions(model, "scene_stiffness_N_per_m = 100000 N/m may be unstable", "'plate'"));
+  EXPECT_TRUE(Mentions(model, "scene_damping_Ns_per_m = 50 N s/m may be unstable", "'plate'"));
 }
 
 TEST(DefaultsTest, ATooHeavyUncompensatedToolIsWarned) {
