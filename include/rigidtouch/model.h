@@ -73,6 +73,12 @@ struct ContactParams {
   double tangential_ratio = 1.0;
   /// A new contact starts a collision window only if it approaches faster than this.
   double onset_speed_mps = 1.0e-3;
+  /// The user gave the scene stiffness / damping (flag or config): Configure keeps it even when it
+  /// equals the default. Unset and equal to the default, Configure derives it from the scene
+  /// (docs/method.md, "Contact defaults from the scene"); a value that differs from the default
+  /// counts as given either way.
+  bool scene_stiffness_given = false;
+  bool scene_damping_given = false;
 };
 
 /// Collision rendering (Eq. 6-7, docs/method.md).

@@ -125,14 +125,15 @@ void CheckStable(const Model& model, int i, const std::string& k_name, double k,
 void SceneContactDefaults(Model& model, std::vector<std::string>& warnings) {
   const ContactParams defaults;
   ContactParams& c = model.contact;
-  // a value equal to the built-in default or to what an earlier Configure derived is not the
-  // user's (the config reader cannot tell "absent" from "the default value")
-  const bool derive_k = c.scene_stiffness_N_per_m == defaults.scene_stiffness_N_per_m ||
-                        (model.derived_scene_stiffness_N_per_m > 0.0 &&
-                         c.scene_stiffness_N_per_m == model.derived_scene_stiffness_N_per_m);
-  const bool derive_b = c.scene_damping_Ns_per_m == defaults.scene_damping_Ns_per_m ||
-                        (model.derived_scene_damping_Ns_per_m > 0.0 &&
-                         c.scene_damping_Ns_per_m == model.derived_scene_damping_Ns_per_m);
+  // not given and equal to the built-in default, or what an earlier Configure derived: derive
+  const bool derive_k = !c.scene_stiffness_given &&
+                        (c.scene_stiffness_N_per_m == defaults.scene_stiffness_N_per_m ||
+                         (model.derived_scene_stiffness_N_per_m > 0.0 &&
+                          c.scene_stiffness_N_per_m == model.derived_scene_stiffness_N_per_m));
+  const bool derive_b = !c.scene_damping_given &&
+                        (c.scene_damping_Ns_per_m == defaults.scene_damping_Ns_per_m ||
+                         (model.derived_scene_damping_Ns_per_m > 0.0 &&
+                          c.scene_damping_Ns_per_m == model.derived_scene_damping_Ns_per_m));
   const double h = model.timestep_s, g = model.gravity_W.norm();
   int lightest = -1, heaviest = -1;
   double k_hold = 0.0;

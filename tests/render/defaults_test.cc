@@ -98,6 +98,17 @@ TEST(DefaultsTest, UserSetUnstableSceneStiffnessIsWarnedNamingTheLightestBody) {
   EXPECT_TRUE(Mentions(model, "scene_damping_Ns_per_m = 50 N s/m may be unstable", "'plate'"));
 }
 
+TEST(DefaultsTest, AGivenValueEqualToTheDefaultIsKept) {
+  LoadOptions options;
+  options.contact.scene_stiffness_given = true;  // 2e5 N/m, as written by the user
+  Model model = LoadModel(HeavyBox(), options);
+  EXPECT_EQ(model.contact.scene_stiffness_N_per_m, 2.0e5);
+  EXPECT_GT(model.contact.scene_damping_Ns_per_m, 100.0);  // not given: derived
+  // without the flag the same value derives the stiffness that holds the box
+  model = LoadModel(HeavyBox(), LoadOptions{});
+  EXPECT_NEAR(model.contact.scene_stiffness_N_per_m, 20.0 * 9.81 / (0.01 * 0.05), 1e-6);
+}
+
 TEST(DefaultsTest, ATooHeavyUncompensatedToolIsWarned) {
   const std::string path = test::WriteTempFile(
       "heavy_tool.xml",
