@@ -27,6 +27,7 @@ double Percentile(const std::vector<double>& sorted, double q) {
 void Run(const BenchFlags& f) {
   if (f.steps < 1) throw Error("--steps must be >= 1");
   const Model model = LoadModel(f.scene.scene, ToLoadOptions(f.scene));
+  PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
   input.tool_wrench.force_N = Vec3(f.tool_force[0], f.tool_force[1], f.tool_force[2]);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 
 #include "io/config.h"
 #include "io/resources.h"
@@ -185,6 +186,11 @@ void PrintWarnings(const nlohmann::json& warnings, std::ostream& out) {
   for (const auto& [name, count] : warnings.items()) {
     out << "warning: " << name << " x" << count << "\n";
   }
+}
+
+void PrintLoadWarnings(const Model& model) {
+  for (const std::string& w : model.load_warnings)
+    std::cerr << "rigidtouch: warning: " << w << "\n";
 }
 
 analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& device_preset,

@@ -88,6 +88,9 @@ inline nlohmann::json WarningsJson(const Data& data) {
 /// Prints a WarningsJson object as "warning: NAME xCOUNT" lines.
 void PrintWarnings(const nlohmann::json& warnings, std::ostream& out);
 
+/// Prints the model's load warnings as "rigidtouch: warning: ..." lines to stderr.
+void PrintLoadWarnings(const Model& model);
+
 /// The tap experiment on the scene flags' scene (the shipped wall when none is given) with the
 /// resolved settings (ApplyDevicePreset for `device_preset` at `rate_hz`), approach speed and
 /// taps.

@@ -152,6 +152,7 @@ void Run(const ServeFlags& f) {
     // the tool is the end effector; without a model of the real device, the simulated one's
     analysis::UseDeviceAndHandMass(model, device::DeviceModelParams{}, device::HandParams{});
     Configure(model);
+    PrintLoadWarnings(model);
     device::UdpDeviceOptions o;
     o.server = f.device;
     o.watchdog_s = f.watchdog_s;

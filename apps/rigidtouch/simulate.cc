@@ -20,6 +20,7 @@ struct SimulateFlags {
 void Run(const SimulateFlags& f) {
   if (f.steps < 0) throw Error("--steps must be >= 0, got " + std::to_string(f.steps));
   const Model model = LoadModel(f.scene.scene, ToLoadOptions(f.scene));
+  PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
   input.tool_wrench.force_N = Vec3(f.tool_force[0], f.tool_force[1], f.tool_force[2]);

@@ -73,6 +73,12 @@ struct ContactParams {
   double tangential_ratio = 1.0;
   /// A new contact starts a collision window only if it approaches faster than this.
   double onset_speed_mps = 1.0e-3;
+  /// The user gave the scene stiffness / damping (flag or config): Configure keeps it even when it
+  /// equals the default. Unset and equal to the default, Configure derives it from the scene
+  /// (docs/method.md, "Contact defaults from the scene"); a value that differs from the default
+  /// counts as given either way.
+  bool scene_stiffness_given = false;
+  bool scene_damping_given = false;
 };
 
 /// Collision rendering (Eq. 6-7, docs/method.md).
@@ -134,6 +140,13 @@ struct Model {
   int max_contacts = 0;                 // capacity of the contact list; extra contacts are dropped
   int max_group_bodies = 0;             // capacity of one group (implicit penalty solve is dense)
   std::shared_ptr<mjModel_> collision;  // compiled MJCF, owned (shared by copies of the Model)
+  /// Problems found at load that do not stop the scene (e.g. a contact stiffness that cannot hold
+  /// a body or is unstable for it at h), one sentence each; the CLI prints them to stderr.
+  std::vector<std::string> load_warnings;
+  /// The scene-contact stiffness and damping Configure derived from the bodies' masses and h
+  /// (docs/method.md, "Contact defaults from the scene"); 0 if they were set by the user.
+  double derived_scene_stiffness_N_per_m = 0.0;
+  double derived_scene_damping_Ns_per_m = 0.0;
 };
 
 }  // namespace rigidtouch

@@ -40,6 +40,17 @@ inline Vec3 GyroscopicTorque(const BodyModel& b, const Mat3& R_WB, const Vec3& w
   return -w.cross(WorldInertiaTimes(b, R_WB, w));
 }
 
+/// The gyroscopic part of Eq. 1 over one step h as an equivalent torque: the torque that takes the
+/// world angular velocity w to w' of the implicit-midpoint step of Euler's torque-free equations
+/// in the body frame, L' = L - h w_m x L_m with L = diag(I) w_B, L_m = (L + L') / 2 and
+/// w_m = diag(I)^-1 L_m, solved by Newton iterations. The midpoint rule keeps every quadratic
+/// invariant of those equations, so with the position update below (which turns the body about w',
+/// leaving w' fixed in the body frame) the kinetic energy 1/2 w.I w and |L| carry over from step to
+/// step to the solver's tolerance; the explicit term -w x I w gains energy near the intermediate
+/// axis. Falls back to GyroscopicTorque if the iteration does not converge (h |w| far above 1).
+/// Returns I_W (w' - w) / h  [N m].
+Vec3 ImplicitGyroscopicTorque(const BodyModel& b, const Mat3& R_WB, const Vec3& w, double h);
+
 /// Semi-implicit Euler position update with the new velocities: x += h v, q = exp(h w) q, with
 /// the quaternion renormalised so it stays unit.
 void IntegratePosition(BodyState& s, double h);

@@ -32,7 +32,8 @@ void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& use
     const BodyModel& b = model.bodies[i];
     const bool compensated = i == model.tool && model.device.coupling != Coupling::kNone;
     scratch.force_W[i] = compensated ? Vec3::Zero() : Vec3(b.mass_kg * model.gravity_W);
-    scratch.torque_W[i] = GyroscopicTorque(b, data.R_WB[i], data.bodies[i].w_W);
+    scratch.torque_W[i] =
+        ImplicitGyroscopicTorque(b, data.R_WB[i], data.bodies[i].w_W, model.timestep_s);
   }
   scratch.force_W[model.tool] += user.force_N;
   scratch.torque_W[model.tool] += user.torque_Nm;

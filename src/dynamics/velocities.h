@@ -34,8 +34,10 @@ struct VelocityScratch {
   }
 };
 
-/// Starts stage 4's force sums: gravity and the gyroscopic torque of Eq. 1 on every body, and the
-/// user wrench on the tool. A tool held through a device is gravity-compensated like the device.
+/// Starts stage 4's force sums: gravity and the gyroscopic torque of Eq. 1 on every body (the
+/// implicit-midpoint step's equivalent torque, ImplicitGyroscopicTorque, so that free flight keeps
+/// its kinetic energy and |L|), and the user wrench on the tool. A tool held through a device is
+/// gravity-compensated like the device.
 void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& user,
                          VelocityScratch& scratch);
 

@@ -1,7 +1,13 @@
-// Parameter validation (load-time error tier: throw with the parameter and its range).
+// Parameter validation (load-time error tier: throw with the parameter and its range), the scene
+// contact defaults derived from the bodies' masses and h, and the load-time warnings about contact
+// laws that cannot hold a body or are unstable for it (docs/method.md, "Contact defaults from the
+// scene").
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "contact/schedule.h"
 #include "io/text.h"
@@ -35,6 +41,182 @@ void RequireDisplayable(const std::string& name, double value, const std::string
       << " is above what the device can display: device " << limit_name << " = " << limit << " "
       << unit << " (" << why << "); lower it or use a device that can display it";
   throw Error(msg.str());
+}
+
+// Contact defaults from the scene (docs/method.md): the static sink m g / k of a body resting on
+// one contact pair is at most kSinkFraction of its smallest geom size; the lightest body's implicit
+// scene contact keeps k h^2 / m <= kStableStiffness and b h / m <= kStableDamping (measured: a
+// 0.2 g plate dropped tilted at h = 2 ms rests up to k h^2 / m = 16 and is thrown off from 32);
+// explicit tool contacts keep the symplectic-Euler limits k h^2 / m < 4 and b h / m < 2; damping
+// gives the heaviest body at least kDampingRatio of critical.
+constexpr double kSinkFraction = 0.01;
+constexpr double kStableStiffness = 8.0;
+constexpr double kStableDamping = 4.0;
+constexpr double kExplicitStableStiffness = 4.0;
+constexpr double kExplicitStableDamping = 2.0;
+constexpr double kDampingRatio = 0.2;
+
+std::string Num(double x) {
+  return io::FormatNumber(x);
+}
+
+// The smallest size of a body's colliding geoms: radius, or smallest box half-extent, or a mesh's
+// bounding radius [m]; infinity if the body has none.
+double BodySize(const Model& model, int body) {
+  double size = kInf;
+  for (const GeomModel& g : model.geoms) {
+    if (g.body != body || (g.contype == 0 && g.conaffinity == 0)) continue;
+    switch (g.type) {
+      case GeomType::kSphere:
+      case GeomType::kCapsule:
+        size = std::min(size, g.size.x());
+        break;
+      case GeomType::kBox:
+        size = std::min(size, g.size.minCoeff());
+        break;
+      case GeomType::kMesh:
+        size = std::min(size, g.rbound_m);
+        break;
+      case GeomType::kPlane:
+        break;
+    }
+  }
+  return size;
+}
+
+std::string Body(const Model& model, int i) {
+  return "body '" + model.bodies[i].name + "' (" + Num(model.bodies[i].mass_kg) + " kg)";
+}
+
+// Warns if stiffness k (named `name`) cannot hold body i on one contact pair: m g / k > size.
+void CheckHold(const Model& model, int i, const std::string& name, double k,
+               std::vector<std::string>& warnings) {
+  const double weight = model.bodies[i].mass_kg * model.gravity_W.norm();
+  const double size = BodySize(model, i);
+  if (!(weight > 0.0) || !std::isfinite(size) || weight <= k * size) return;
+  warnings.push_back(name + " = " + Num(k) + " N/m cannot hold " + Body(model, i) +
+                     ": it would sink m g / k = " + Num(weight / k) +
+                     " m into what it rests on, more than its size " + Num(size) + " m");
+}
+
+// Warns if k h^2 / m or b h / m of body i exceeds the stability bounds (`verdict`: "is" for the
+// explicit law's linear limits, "may be" for the implicit law's measured, margined ones).
+void CheckStable(const Model& model, int i, const std::string& k_name, double k,
+                 const std::string& b_name, double b, double k_bound, double b_bound,
+                 const std::string& solve, const std::string& verdict,
+                 std::vector<std::string>& warnings) {
+  const double h = model.timestep_s, m = model.bodies[i].mass_kg;
+  if (k * h * h / m > k_bound) {
+    warnings.push_back(k_name + " = " + Num(k) + " N/m " + verdict + " unstable for " +
+                       Body(model, i) + " at h = " + Num(h) +
+                       " s: k h^2 / m = " + Num(k * h * h / m) + " > " + Num(k_bound) + " (" +
+                       solve + "); at most " + Num(k_bound * m / (h * h)) + " N/m");
+  }
+  if (b * h / m > b_bound) {
+    warnings.push_back(b_name + " = " + Num(b) + " N s/m " + verdict + " unstable for " +
+                       Body(model, i) + " at h = " + Num(h) + " s: b h / m = " + Num(b * h / m) +
+                       " > " + Num(b_bound) + " (" + solve + "); at most " + Num(b_bound * m / h) +
+                       " N s/m");
+  }
+}
+
+// Scene contacts (every contact without the tool, implicit): derives the stiffness and damping
+// the user left at their defaults, and warns about the ones the user set.
+void SceneContactDefaults(Model& model, std::vector<std::string>& warnings) {
+  const ContactParams defaults;
+  ContactParams& c = model.contact;
+  // not given and equal to the built-in default, or what an earlier Configure derived: derive
+  const bool derive_k = !c.scene_stiffness_given &&
+                        (c.scene_stiffness_N_per_m == defaults.scene_stiffness_N_per_m ||
+                         (model.derived_scene_stiffness_N_per_m > 0.0 &&
+                          c.scene_stiffness_N_per_m == model.derived_scene_stiffness_N_per_m));
+  const bool derive_b = !c.scene_damping_given &&
+                        (c.scene_damping_Ns_per_m == defaults.scene_damping_Ns_per_m ||
+                         (model.derived_scene_damping_Ns_per_m > 0.0 &&
+                          c.scene_damping_Ns_per_m == model.derived_scene_damping_Ns_per_m));
+  const double h = model.timestep_s, g = model.gravity_W.norm();
+  int lightest = -1, heaviest = -1;
+  double k_hold = 0.0;
+  for (int i = 0; i < static_cast<int>(model.bodies.size()); ++i) {
+    if (i == model.tool) continue;
+    const double m = model.bodies[i].mass_kg;
+    if (lightest < 0 || m < model.bodies[lightest].mass_kg) lightest = i;
+    if (heaviest < 0 || m > model.bodies[heaviest].mass_kg) heaviest = i;
+    const double size = BodySize(model, i);
+    if (std::isfinite(size) && size > 0.0 && m * g / (kSinkFraction * size) > k_hold) {
+      k_hold = m * g / (kSinkFraction * size);
+    }
+  }
+  if (derive_k) {
+    double k = defaults.scene_stiffness_N_per_m;
+    if (lightest >= 0) {
+      const double k_stable = kStableStiffness * model.bodies[lightest].mass_kg / (h * h);
+      k = std::min(std::max(k, k_hold), k_stable);
+      // the stable bound wins; a body it cannot hold (sinks more than its size) is reported
+      for (int i = 0; k < k_hold && i < static_cast<int>(model.bodies.size()); ++i) {
+        const double size = BodySize(model, i);
+        const double sink = model.bodies[i].mass_kg * g / k;
+        if (i == model.tool || !std::isfinite(size) || sink <= size) continue;
+        warnings.push_back("no scene contact stiffness both holds " + Body(model, i) +
+                           " and is stable for " + Body(model, lightest) + " at h = " + Num(h) +
+                           " s (k h^2 / m <= " + Num(kStableStiffness) +
+                           "): the derived scene_stiffness_N_per_m = " + Num(k) +
+                           " N/m lets it sink m g / k = " + Num(sink) + " m, more than its size " +
+                           Num(size) + " m; lower the time step or set the stiffness");
+      }
+    }
+    c.scene_stiffness_N_per_m = k;
+    model.derived_scene_stiffness_N_per_m = k;
+  } else {
+    model.derived_scene_stiffness_N_per_m = 0.0;
+  }
+  if (derive_b) {
+    double b = defaults.scene_damping_Ns_per_m;
+    if (lightest >= 0) {
+      const double b_ratio = 2.0 * kDampingRatio *
+                             std::sqrt(c.scene_stiffness_N_per_m * model.bodies[heaviest].mass_kg);
+      b = std::min(std::max(b, b_ratio), kStableDamping * model.bodies[lightest].mass_kg / h);
+    }
+    c.scene_damping_Ns_per_m = b;
+    model.derived_scene_damping_Ns_per_m = b;
+  } else {
+    model.derived_scene_damping_Ns_per_m = 0.0;
+  }
+  if (lightest < 0) return;
+  if (!derive_k) {
+    for (int i = 0; i < static_cast<int>(model.bodies.size()); ++i) {
+      if (i != model.tool)
+        CheckHold(model, i, "scene_stiffness_N_per_m", c.scene_stiffness_N_per_m, warnings);
+    }
+  }
+  if (!derive_k || !derive_b) {
+    CheckStable(model, lightest, "scene_stiffness_N_per_m",
+                derive_k ? 0.0 : c.scene_stiffness_N_per_m, "scene_damping_Ns_per_m",
+                derive_b ? 0.0 : c.scene_damping_Ns_per_m, kStableStiffness, kStableDamping,
+                "implicit scene contact", "may be", warnings);
+  }
+}
+
+// Tool contacts (explicit, the law the device renders): never derived, but a law that cannot
+// hold the tool under gravity (no device: nothing compensates it) or is unstable for a body the
+// tool can push is reported.
+void ToolContactWarnings(const Model& model, std::vector<std::string>& warnings) {
+  const ContactParams& c = model.contact;
+  if (model.device.coupling == Coupling::kNone) {
+    CheckHold(model, model.tool, "stiffness_N_per_m", c.stiffness_N_per_m, warnings);
+  }
+  int lightest = -1;
+  for (int i = 0; i < static_cast<int>(model.bodies.size()); ++i) {
+    // a directly coupled tool is not integrated: its pose is the device's
+    if (i == model.tool && model.device.coupling == Coupling::kDirect) continue;
+    if (lightest < 0 || model.bodies[i].mass_kg < model.bodies[lightest].mass_kg) lightest = i;
+  }
+  if (lightest < 0) return;
+  CheckStable(model, lightest, "stiffness_N_per_m", c.stiffness_N_per_m, "damping_Ns_per_m",
+              c.damping_Ns_per_m, kExplicitStableStiffness, kExplicitStableDamping,
+              lightest == model.tool ? "explicit tool contact"
+                                     : "explicit tool contact, if the tool pushes it",
+              "is", warnings);
 }
 
 }  // namespace
@@ -120,6 +302,16 @@ void Configure(Model& model) {
   for (auto& b : model.bodies) {
     Require(std::isfinite(b.mass_kg) && b.mass_kg > 0.0, "mass_kg of body '" + b.name + "'",
             b.mass_kg, "> 0 kg");
+  }
+  std::vector<std::string> warnings;
+  SceneContactDefaults(model, warnings);
+  ToolContactWarnings(model, warnings);
+  for (std::string& w : warnings) {
+    // Configure may run again on the same model (serve sets the device's law): no repeats
+    if (std::find(model.load_warnings.begin(), model.load_warnings.end(), w) ==
+        model.load_warnings.end()) {
+      model.load_warnings.push_back(std::move(w));
+    }
   }
 }
 

@@ -45,6 +45,23 @@ TEST(RigidBodyTest, GyroscopicTorqueIsMinusOmegaCrossIOmega) {
   EXPECT_TRUE(GyroscopicTorque(b, R, Vec3(1.0, 1.0, 0.0)).isApprox(Vec3(0.0, 0.0, -1.0), 1e-15));
 }
 
+TEST(RigidBodyTest, ImplicitGyroscopicStepKeepsEnergyAndMomentumOverOneStep) {
+  const BodyModel b = Brick();
+  const Mat3 R = Quat(Eigen::AngleAxisd(0.7, Vec3(1.0, 2.0, -1.0).normalized())).toRotationMatrix();
+  const double h = 0.01;
+  // spin about a principal axis: no torque
+  EXPECT_LT(ImplicitGyroscopicTorque(b, R, R * Vec3(0.0, 4.0, 0.0), h).norm(), 1e-12);
+  // a skew spin: w' = w + h I_W^-1 tau keeps 1/2 w.I w and |I w| to rounding (midpoint rule)
+  const Vec3 w(0.3, -1.2, 2.5);
+  const Vec3 next = w + h * WorldInverseInertiaTimes(b, R, ImplicitGyroscopicTorque(b, R, w, h));
+  EXPECT_FALSE(next.isApprox(w, 1e-6));
+  EXPECT_NEAR(next.dot(WorldInertiaTimes(b, R, next)), w.dot(WorldInertiaTimes(b, R, w)), 1e-13);
+  EXPECT_NEAR(WorldInertiaTimes(b, R, next).norm(), WorldInertiaTimes(b, R, w).norm(), 1e-13);
+  // to first order in h it is the explicit torque -w x I w
+  const Vec3 small = ImplicitGyroscopicTorque(b, R, w, 1e-7);
+  EXPECT_TRUE(small.isApprox(GyroscopicTorque(b, R, w), 1e-5));
+}
+
 TEST(RigidBodyTest, PositionUpdateIsExactForConstantVelocities) {
   BodyState s;
   s.x_W = Vec3(0.1, 0.2, 0.3);
