@@ -6,6 +6,7 @@
 #include "command.h"
 #include "io/config.h"
 #include "scene_flags.h"
+#include "simulate_nonfinite.h"
 
 namespace rigidtouch::cli {
 namespace {
@@ -27,9 +28,16 @@ void Run(const SimulateFlags& f) {
   if (!input.tool_wrench.force_N.allFinite()) throw Error("--tool-force must be finite");
   nlohmann::json impulses = nlohmann::json::array();
   int max_contacts = 0;
+  const WarningStat& non_finite = data.warnings[static_cast<int>(Warning::kNonFiniteState)];
+  NonFiniteReport report;
   for (long s = 0; s < f.steps; ++s) {
     Tick(model, data, input);
     max_contacts = std::max(max_contacts, data.ncontact);
+    if (non_finite.count > 0 && report.count == 0) {
+      report.step = non_finite.last_step;
+      report.time_s = data.time_s;
+    }
+    report.count = non_finite.count;
     for (int k = 0; k < data.nimpulse; ++k) {
       const ImpulseEvent& e = data.impulses[k];
       impulses.push_back({{"step", e.step},
@@ -63,9 +71,11 @@ void Run(const SimulateFlags& f) {
                                  {"bodies", bodies},
                                  {"impulses", impulses},
                                  {"max_contacts", max_contacts},
-                                 {"warnings", WarningsJson(data)}};
+                                 {"warnings", WarningsJson(data)},
+                                 {"non_finite_state", NonFiniteJson(report)}};
   if (f.json) {
     std::cout << result.dump() << "\n";
+    ThrowIfNonFinite(report);
     return;
   }
   std::cout << "simulated " << f.steps << " steps of " << model.timestep_s << " s (" << data.time_s
@@ -79,6 +89,7 @@ void Run(const SimulateFlags& f) {
               << " m, velocity " << s.v_W.transpose() << " m/s\n";
   }
   PrintWarnings(result["warnings"], std::cout);
+  ThrowIfNonFinite(report);
 }
 
 void Register(CLI::App& root) {

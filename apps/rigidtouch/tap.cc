@@ -15,6 +15,7 @@
 #include "io/resources.h"
 #include "io/trace_csv.h"
 #include "scene_flags.h"
+#include "simulate_nonfinite.h"
 
 namespace rigidtouch::cli {
 namespace {
@@ -81,6 +82,17 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
   return c;
 }
 
+// the run's non-finite resets: the experiment keeps the count and the last step only
+NonFiniteReport NonFinite(const analysis::TapRun& run) {
+  const WarningStat& w = run.warnings[static_cast<int>(Warning::kNonFiniteState)];
+  NonFiniteReport r;
+  r.count = w.count;
+  r.step = w.last_step;
+  r.time_s = static_cast<double>(w.last_step) * run.model.timestep_s;
+  r.first = false;
+  return r;
+}
+
 nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
   const Model& m = run.model;
   nlohmann::json taps = nlohmann::json::array();
@@ -125,7 +137,8 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"clipped_ticks", run.clipped_ticks},
       {"clipped_impulse_ticks", run.clipped_impulse_ticks},
       {"taps", taps},
-      {"warnings", WarningsJson(run.warnings)}};
+      {"warnings", WarningsJson(run.warnings)},
+      {"non_finite_state", NonFiniteJson(NonFinite(run))}};
 }
 
 // draws a figure; a missing matplotlib is reported, not fatal (the trace is already written)
@@ -203,6 +216,8 @@ void CompareWalls(const TapFlags& f) {
   std::ostringstream table;
   table << kTableHeader << "\n";
   std::string coupling = "direct";
+  NonFiniteReport non_finite;
+  std::string non_finite_wall;
   for (int w = -1; w <= 2; ++w) {
     TapFlags g = f;
     std::optional<int> wall;
@@ -220,6 +235,10 @@ void CompareWalls(const TapFlags& f) {
     results[key] = RunJson(run, coupling.c_str());
     results[key]["trace"] = trace;
     table << Row(names[w + 1], run) << "\n";
+    if (non_finite.count == 0 && NonFinite(run).count > 0) {
+      non_finite = NonFinite(run);
+      non_finite_wall = names[w + 1];
+    }
   }
   const std::string table_path = OutPath(f, "walls.md");
   {
@@ -239,13 +258,18 @@ void CompareWalls(const TapFlags& f) {
   }
   results["table"] = table_path;
   results["figures"] = {fig};
+  auto check = [&non_finite, &non_finite_wall] {
+    if (non_finite.count > 0) throw Error(non_finite_wall + ": " + NonFiniteMessage(non_finite));
+  };
   if (f.json) {
     std::cout << results.dump() << "\n";
+    check();
     return;
   }
   std::cout << table.str() << "\ntable: " << table_path << "\nfigures: " << fig << " and "
             << f.out_dir << "/wall{0,1,2}_tap.png\ntraces: " << f.out_dir
             << "/{penalty,wall0,wall1,wall2}.csv\n";
+  check();
 }
 
 void Run(const TapFlags& f) {
@@ -280,10 +304,12 @@ void Run(const TapFlags& f) {
   if (!f.trace.empty()) result["trace"] = f.trace;
   if (f.json) {
     std::cout << result.dump() << "\n";
+    ThrowIfNonFinite(NonFinite(run));
     return;
   }
   std::cout << kTableHeader << "\n" << Row(result["renderer"].get<std::string>(), run) << "\n";
   PrintWarnings(result["warnings"], std::cout);
+  ThrowIfNonFinite(NonFinite(run));
 }
 
 void Register(CLI::App& root) {

@@ -23,7 +23,7 @@ struct LoadOptions {
   ContactParams contact;
   RenderParams render;
   DeviceParams device;
-  int max_contacts = 0;      // 0: 16 per collision geom, at least 64
+  int max_contacts = 0;      // 0: what the scene can produce; less than that is refused
   int max_group_bodies = 0;  // 0: every body
 };
 

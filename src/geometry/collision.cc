@@ -6,6 +6,9 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <string>
+
+#include "geometry/capacity.h"
 
 namespace rigidtouch::geometry {
 namespace {
@@ -128,7 +131,14 @@ void SetStaticPoses(const Model& model, CollisionScratch& s) {
 
 void CollisionScratch::Reserve(const Model& model) {
   poses.assign(model.geoms.size(), GeomPose{Vec3::Zero(), Mat3::Identity()});
-  broadphase.Reserve(model, std::max(64, 8 * static_cast<int>(model.geoms.size())));
+  // every pair the scene can produce in one tick (BoundCapacity): none is dropped
+  const long pair_capacity = BoundCapacity(model).pairs;
+  if (pair_capacity > kMaxCapacity) {
+    throw Error("the scene can produce up to " + std::to_string(pair_capacity) +
+                " geom pairs in one step, more than the " + std::to_string(kMaxCapacity) +
+                " rigidtouch preallocates");
+  }
+  broadphase.Reserve(model, static_cast<int>(pair_capacity));
   mj_contacts.assign(mjMAXCONPAIR, mjContact{});
   geom_kind.clear();
   for (const GeomModel& g : model.geoms) {

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "geometry/capacity.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -340,9 +341,7 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   model.contact = options.contact;
   model.render = options.render;
   model.device = options.device;
-  model.max_contacts = options.max_contacts > 0
-                           ? options.max_contacts
-                           : std::max(64, 16 * static_cast<int>(model.geoms.size()));
+  model.max_contacts = geometry::MaxContactsFor(model, options.max_contacts);
   model.max_group_bodies = options.max_group_bodies > 0
                                ? std::min<int>(options.max_group_bodies, model.bodies.size())
                                : static_cast<int>(model.bodies.size());
