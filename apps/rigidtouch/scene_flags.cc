@@ -110,6 +110,10 @@ Settings ResolveSettings(const SceneFlags& f) {
     o.render.reference_solver = true;
     s.origin["render.reference_solver"] = "--reference-solver";
   }
+  // a scene law the user wrote is kept even when it equals the default (Configure derives the
+  // scene's otherwise)
+  o.contact.scene_stiffness_given = s.Given("contact.scene_stiffness_N_per_m");
+  o.contact.scene_damping_given = s.Given("contact.scene_damping_Ns_per_m");
   return s;
 }
 
