@@ -95,8 +95,8 @@ void AssemblePatch(GroupAssembly& g, BlockCholesky& factor, const Data& data,
   double sxx = 0.0, syy = 0.0, szz = 0.0, sxy = 0.0, sxz = 0.0, syz = 0.0;  // S, symmetric
   for (int k = begin; k < end; ++k) {
     const ImplicitContact& c = contacts[k];
-    Vec3 f = c.phi_n_N * c.n_W;
-    if (c.stick) f += c.phi_t_W;
+    // the anchor spring of a sticking contact, the kinetic friction of a slipping one
+    const Vec3 f = c.phi_n_N * c.n_W + c.phi_t_W;
     const Vec3 r = c.p_W - origin;
     F += f;
     T += r.cross(f);
@@ -279,6 +279,12 @@ bool PatchForces(GroupAssembly& g, const BlockCholesky& factor, const Data& data
       fx += tx;
       fy += ty;
       fz += tz;
+    } else {
+      // slipping: the kinetic friction, independent of the new velocity
+      c.friction_force_W = c.phi_t_W;
+      fx += c.phi_t_W.x();
+      fy += c.phi_t_W.y();
+      fz += c.phi_t_W.z();
     }
     if constexpr (kAccumulate) {
       Fx += fx;
@@ -301,6 +307,54 @@ bool PatchForces(GroupAssembly& g, const BlockCholesky& factor, const Data& data
     }
   }
   return pulled;
+}
+
+int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) {
+  // a slipping patch is scaled only when its friction exceeds the bound by more than rounding,
+  // and then below the bound by as much as it was over (at most 1e-3 of it): its kinetic
+  // friction moves its normal force too (through the tilt it gives the body), by a fraction of
+  // the change, so that the next solve lands inside, at most that fraction below the bound
+  constexpr double kSlack = 1e-10;
+  constexpr double kMaxBelow = 1e-3;
+  const int nc = static_cast<int>(contacts.size());
+  int changed = kFrictionKept;
+  for (int begin = 0; begin < nc;) {
+    const ImplicitContact& first = contacts[begin];
+    int end = begin + 1;
+    while (first.patch >= 0 && end < nc && contacts[end].patch == first.patch) ++end;
+    double fn = 0.0, ft = 0.0;  // the active contacts' normal force, tangential forces' norms
+    Vec3 resultant = Vec3::Zero();
+    for (int k = begin; k < end; ++k) {
+      const ImplicitContact& c = contacts[k];
+      if (!c.active) continue;
+      fn += std::max(0.0, c.normal_force_N);
+      ft += c.friction_force_W.norm();
+      resultant += c.friction_force_W;
+    }
+    if (first.stick && ft > first.mu_static * fn) {
+      // slip: the kinetic friction of each point along its trial force (the resultant's
+      // direction for a point without one)
+      const double rn = resultant.norm();
+      const Vec3 fallback = rn > 0.0 ? Vec3(resultant / rn) : Vec3::Zero();
+      for (int k = begin; k < end; ++k) {
+        ImplicitContact& c = contacts[k];
+        c.stick = false;
+        c.c_t_Ns_per_m = 0.0;
+        const double f = c.friction_force_W.norm();
+        const Vec3 dir = f > 0.0 ? Vec3(c.friction_force_W / f) : fallback;
+        c.phi_t_W = c.mu_kinetic * std::max(0.0, c.phi_n_N) * dir;
+      }
+      changed |= kFrictionSlipped;
+    } else if (!first.stick && ft > first.mu_kinetic * fn * (1.0 + kSlack)) {
+      const double bound = first.mu_kinetic * fn;
+      const double below = std::min(kMaxBelow, ft / bound - 1.0);
+      const double scale = last_chance ? 0.0 : (1.0 - below) * bound / ft;
+      for (int k = begin; k < end; ++k) contacts[k].phi_t_W *= scale;
+      changed |= kFrictionScaled;
+    }
+    begin = end;
+  }
+  return changed;
 }
 
 template bool PatchForces<false>(GroupAssembly&, const BlockCholesky&, const Data&,

@@ -59,4 +59,23 @@ bool PatchForces(GroupAssembly& a, const BlockCholesky& factor, const Data& data
                  std::span<const int> slot, std::span<ImplicitContact> contacts, int begin, int end,
                  bool may_drop, double h);
 
+/// What EnforceFrictionCones changed (bit flags).
+enum FrictionChange : int {
+  kFrictionKept = 0,
+  kFrictionSlipped = 1,  // a sticking patch started to slip
+  kFrictionScaled = 2,   // a slipping patch's kinetic friction was lowered
+};
+
+/// Coulomb's cone per friction patch (consecutive contacts with the same ImplicitContact::patch;
+/// dropped ones count for nothing, and so does a pulling normal force) at the forces PatchForces
+/// left in the contacts. A sticking patch whose tangential forces sum to more than mu_static
+/// times its normal force slips: each active contact's tangential force becomes kinetic friction
+/// mu_kinetic phi_n along the force it had (its trial stick force, which opposes the slip). A
+/// slipping patch whose kinetic friction sums to more than mu_kinetic times its normal force at
+/// these velocities is scaled down to below it by as much as it was over (at most 1e-3), or, with
+/// `last_chance` (no solve after the next), taken out for this step, so that no patch ends a step
+/// beyond its cone. Returns the FrictionChange flags; any but kFrictionKept means the group must be
+/// solved again.
+int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance);
+
 }  // namespace rigidtouch::dynamics
