@@ -167,8 +167,11 @@ TEST(FrictionSlipTest, BoxLandingWhileSlidingIsCoulombBounded) {
 }
 
 // A box placed on a ramp at rest. With tan(theta) = 0.44 < mu = 0.45 it sticks: after settling
-// for 0.2 s it moves less than 0.1 mm in 1 s. With tan(theta) = 0.46 > mu it slides, at
-// g (sin - mu cos) = 0.0892 m/s^2 within 2% (measured over 0.2..1.2 s).
+// for 0.2 s it moves less than 0.1 mm in 1 s (and launched, it stops where Coulomb says and sticks
+// again). With tan(theta) = 0.46 > mu it slides, at
+// g (sin - mu cos) = 0.0892 m/s^2 within 2% (measured over 0.2..1.2 s); and launched down the
+// ramp at 0.2 m/s once settled, it keeps that acceleration from the first step on (within 2%
+// over the first 0.5 s, the launch step included).
 TEST(FrictionSlipTest, InclineJustBelowTheFrictionAngleSticks) {
   const double theta = std::atan(0.44);
   const Model m = LoadBox("incline_stick", theta, 0.0);
@@ -179,6 +182,28 @@ TEST(FrictionSlipTest, InclineJustBelowTheFrictionAngleSticks) {
   const double drift = (d.bodies[0].x_W - settled).norm();
   std::printf("tan 0.44: drift over 1 s %.3g m\n", drift);
   EXPECT_LT(drift, 1e-4);
+  // launched down the ramp at 0.05 m/s: it slows at g (mu cos - sin) = 0.0909 m/s^2, stops after
+  // v^2 / (2 a) = 13.8 mm (within 3%), and then sticks (less than 0.1 mm in the next 1 s)
+  const Vec3 downhill(std::cos(theta), 0.0, -std::sin(theta));
+  const double decel = kG * (kMu * std::cos(theta) - std::sin(theta));
+  constexpr double kV = 0.05;
+  d.bodies[0].v_W += kV * downhill;
+  const Vec3 launch = d.bodies[0].x_W;
+  for (int step = 0; step < 2000 && d.bodies[0].v_W.dot(downhill) > 0.0; ++step) {
+    Tick(m, d, TickInput{});
+  }
+  Simulate(m, d, 0.1);
+  const Vec3 stopped = d.bodies[0].x_W;
+  const double distance = (stopped - launch).dot(downhill);
+  const double expected = kV * kV / (2.0 * decel);
+  Simulate(m, d, 1.0);
+  const double creep = (d.bodies[0].x_W - stopped).norm();
+  std::printf(
+      "tan 0.44, launched at 0.05 m/s: stopped after %.6g m (v^2 / (2 a) %.6g), then moved "
+      "%.3g m in 1 s\n",
+      distance, expected, creep);
+  EXPECT_NEAR(distance, expected, 0.03 * expected);
+  EXPECT_LT(creep, 1e-4);
 }
 
 TEST(FrictionSlipTest, InclineJustAboveTheFrictionAngleSlidesAtCoulombAcceleration) {
@@ -194,6 +219,15 @@ TEST(FrictionSlipTest, InclineJustAboveTheFrictionAngleSlidesAtCoulombAccelerati
   const double expected = kG * (std::sin(theta) - kMu * std::cos(theta));
   std::printf("tan 0.46: acceleration %.6g (g (sin - mu cos) %.6g)\n", a, expected);
   EXPECT_NEAR(a, expected, 0.02 * expected);
+  // launched: the first steps of sliding are Coulomb's too
+  Data launched = MakeData(m);
+  Simulate(m, launched, 0.2);
+  launched.bodies[0].v_W += 0.2 * downhill;
+  const double v0 = launched.bodies[0].v_W.dot(downhill);
+  Simulate(m, launched, 0.5);
+  const double a_launched = (launched.bodies[0].v_W.dot(downhill) - v0) / 0.5;
+  std::printf("tan 0.46, launched at 0.2 m/s: acceleration %.6g\n", a_launched);
+  EXPECT_NEAR(a_launched, expected, 0.02 * expected);
 }
 
 }  // namespace
