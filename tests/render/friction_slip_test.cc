@@ -39,9 +39,11 @@ std::string BoxXml(double theta_rad, double lift_m) {
          "<geom type=\"sphere\" size=\"0.005\" mass=\"0.1\"/></body></worldbody></mujoco>";
 }
 
-Model LoadBox(const std::string& name, double theta_rad, double lift_m) {
+Model LoadBox(const std::string& name, double theta_rad, double lift_m, double mu_static = kMu,
+              double mu_kinetic = kMu) {
   LoadOptions o;
-  o.contact.friction_static = o.contact.friction_kinetic = kMu;
+  o.contact.friction_static = mu_static;
+  o.contact.friction_kinetic = mu_kinetic;
   return LoadModel(test::WriteTempFile(name + ".xml", BoxXml(theta_rad, lift_m)), o);
 }
 
@@ -169,9 +171,10 @@ TEST(FrictionSlipTest, BoxLandingWhileSlidingIsCoulombBounded) {
 // A box placed on a ramp at rest. With tan(theta) = 0.44 < mu = 0.45 it sticks: after settling
 // for 0.2 s it moves less than 0.1 mm in 1 s (and launched, it stops where Coulomb says and sticks
 // again). With tan(theta) = 0.46 > mu it slides, at
-// g (sin - mu cos) = 0.0892 m/s^2 within 2% (measured over 0.2..1.2 s); and launched down the
-// ramp at 0.2 m/s once settled, it keeps that acceleration from the first step on (within 2%
-// over the first 0.5 s, the launch step included).
+// g (sin - mu cos) = 0.0892 m/s^2 within 2% (measured over 0.2..1.2 s). With mu_s = 0.5 and
+// mu_k = 0.45 the box rests there; launched down the ramp at 0.2 m/s it slides at
+// g (sin - mu_k cos) from the first step on (within 2% over the first 0.5 s, the launch step
+// included).
 TEST(FrictionSlipTest, InclineJustBelowTheFrictionAngleSticks) {
   const double theta = std::atan(0.44);
   const Model m = LoadBox("incline_stick", theta, 0.0);
@@ -219,12 +222,19 @@ TEST(FrictionSlipTest, InclineJustAboveTheFrictionAngleSlidesAtCoulombAccelerati
   const double expected = kG * (std::sin(theta) - kMu * std::cos(theta));
   std::printf("tan 0.46: acceleration %.6g (g (sin - mu cos) %.6g)\n", a, expected);
   EXPECT_NEAR(a, expected, 0.02 * expected);
-  // launched: the first steps of sliding are Coulomb's too
-  Data launched = MakeData(m);
-  Simulate(m, launched, 0.2);
+  // launched: the first steps of sliding are Coulomb's too. With mu_s = 0.5 the box rests on
+  // this ramp (settled with mu_s = mu_k = 0.5, so that it does not slide while its normal force
+  // builds up); launched, it slides with mu_k
+  const Model m_rest = LoadBox("incline_rest", theta, 0.0, 0.5, 0.5);
+  Data rest = MakeData(m_rest);
+  Simulate(m_rest, rest, 0.2);
+  ASSERT_LT(rest.bodies[0].v_W.norm(), 1e-9);
+  const Model m_s = LoadBox("incline_launch", theta, 0.0, 0.5);
+  Data launched = MakeData(m_s);
+  launched.bodies = rest.bodies;
   launched.bodies[0].v_W += 0.2 * downhill;
   const double v0 = launched.bodies[0].v_W.dot(downhill);
-  Simulate(m, launched, 0.5);
+  Simulate(m_s, launched, 0.5);
   const double a_launched = (launched.bodies[0].v_W.dot(downhill) - v0) / 0.5;
   std::printf("tan 0.46, launched at 0.2 m/s: acceleration %.6g\n", a_launched);
   EXPECT_NEAR(a_launched, expected, 0.02 * expected);
