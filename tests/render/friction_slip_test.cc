@@ -168,6 +168,43 @@ TEST(FrictionSlipTest, BoxLandingWhileSlidingIsCoulombBounded) {
   EXPECT_LE(worst_ratio, kMu * (1.0 + 1e-9));
 }
 
+// The same slide with the box as the tool, whose contacts are explicit (the haptic law, 2000 N/m):
+// the explicit and the implicit law agree on the closed form. Both: first-step loss mu g h within
+// 1e-6 (relative), stopping distance V^2 / (2 mu g) within 3%, and the two distances within 1% of
+// each other.
+double SlideDistance(bool explicit_law, double* first_loss) {
+  LoadOptions o;
+  o.contact.friction_static = o.contact.friction_kinetic = kMu;
+  if (explicit_law) o.tool_name = "box";
+  const Model m = LoadModel(test::WriteTempFile("law.xml", BoxXml(0.0, 0.0)), o);
+  Data d = MakeData(m);
+  const int box = 0;
+  Simulate(m, d, 3.0);  // settle at rest (the explicit law is lightly damped: 0.05 of critical)
+  constexpr double kV = 0.8;
+  const double x0 = d.bodies[box].x_W.x();
+  d.bodies[box].v_W.x() = kV;
+  Tick(m, d, TickInput{});
+  *first_loss = kV - d.bodies[box].v_W.x();
+  for (int step = 0; step < 2000 && d.bodies[box].v_W.x() > 0.0; ++step) Tick(m, d, TickInput{});
+  Simulate(m, d, 0.2);
+  return d.bodies[box].x_W.x() - x0;
+}
+
+TEST(FrictionSlipTest, ExplicitAndImplicitLawsAgreeOnTheSlidingBox) {
+  double loss_explicit = 0.0, loss_implicit = 0.0;
+  const double explicit_m = SlideDistance(true, &loss_explicit);
+  const double implicit_m = SlideDistance(false, &loss_implicit);
+  const double expected = 0.8 * 0.8 / (2.0 * kMu * kG);
+  const double coulomb = kMu * kG * 0.001;
+  std::printf("explicit: loss %.9g, distance %.6g; implicit: loss %.9g, distance %.6g (%.6g)\n",
+              loss_explicit, explicit_m, loss_implicit, implicit_m, expected);
+  EXPECT_NEAR(loss_explicit, coulomb, 1e-6 * coulomb);
+  EXPECT_NEAR(loss_implicit, coulomb, 1e-6 * coulomb);
+  EXPECT_NEAR(explicit_m, expected, 0.03 * expected);
+  EXPECT_NEAR(implicit_m, expected, 0.03 * expected);
+  EXPECT_NEAR(explicit_m, implicit_m, 0.01 * expected);
+}
+
 // A box placed on a ramp at rest. With tan(theta) = 0.44 < mu = 0.45 it sticks: after settling
 // for 0.2 s it moves less than 0.1 mm in 1 s (and launched, it stops where Coulomb says and sticks
 // again). With tan(theta) = 0.46 > mu it slides, at
