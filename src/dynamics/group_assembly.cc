@@ -146,7 +146,63 @@ void AssemblePatch(GroupAssembly& g, BlockCholesky& factor, const Data& data,
   }
 }
 
+// adds contacts [begin, end) (one patch, all active) to the right-hand side only:
+// h sum phi J^T d, as AssemblePatch does (same sums in the same order)
+void AddPatchLoad(GroupAssembly& g, const BlockCholesky& factor, const Data& data,
+                  std::span<const int> slot, std::span<const ImplicitContact> contacts, int begin,
+                  int end, double h) {
+  const ImplicitContact& first = contacts[begin];
+  const int pa = first.body_a >= 0 ? factor.pos[slot[first.body_a]] : -1;
+  const int pb = first.body_b >= 0 ? factor.pos[slot[first.body_b]] : -1;
+  const Vec3& origin = data.bodies[pa >= 0 ? first.body_a : first.body_b].x_W;
+  Vec3 F = Vec3::Zero(), T = Vec3::Zero();
+  for (int k = begin; k < end; ++k) {
+    const ImplicitContact& c = contacts[k];
+    const Vec3 f = c.phi_n_N * c.n_W + c.phi_t_W;
+    F += f;
+    T += (c.p_W - origin).cross(f);
+  }
+  F *= h;
+  T *= h;
+  if (pa < 0 || pb < 0) {
+    const int p = pa >= 0 ? pa : pb;
+    const double sign = pa >= 0 ? 1.0 : -1.0;
+    g.b[p].head<3>() += sign * F;
+    g.b[p].tail<3>() += sign * T;
+    return;
+  }
+  const Vec3 d = origin - data.bodies[first.body_b].x_W;
+  g.b[pa].head<3>() += F;
+  g.b[pa].tail<3>() += T;
+  g.b[pb].head<3>() -= F;
+  g.b[pb].tail<3>() -= T + d.cross(F);
+}
+
+// M v + h F of body slot k into the right-hand side at its elimination position
+void AddMomentum(const Model& model, const Data& data, std::span<const int> bodies,
+                 std::span<const Vec3> force_W, std::span<const Vec3> torque_W, GroupAssembly& g,
+                 const BlockCholesky& factor, int k) {
+  const double h = model.timestep_s;
+  const int i = bodies[k];
+  const BodyModel& bm = model.bodies[i];
+  const BodyState& st = data.bodies[i];
+  g.b[factor.pos[k]] << bm.mass_kg * st.v_W + h * force_W[i],
+      WorldInertia(bm, st) * st.w_W + h * torque_W[i];
+}
+
 }  // namespace
+
+void AssembleRightHandSide(const Model& model, const Data& data, std::span<const int> bodies,
+                           std::span<const int> slot, std::span<const ImplicitContact> contacts,
+                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+                           GroupAssembly& g, const BlockCholesky& factor) {
+  const int nb = static_cast<int>(bodies.size());
+  for (int k = 0; k < nb; ++k) AddMomentum(model, data, bodies, force_W, torque_W, g, factor, k);
+  for (int q = 0; q < g.npatch; ++q) {
+    AddPatchLoad(g, factor, data, slot, contacts, g.patch_range[2 * q], g.patch_range[2 * q + 1],
+                 model.timestep_s);
+  }
+}
 
 void GroupAssembly::Reserve(int max_bodies, int max_contacts) {
   pairs.assign(max_contacts, 0);

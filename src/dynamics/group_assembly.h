@@ -50,6 +50,14 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
               std::span<const Vec3> force_W, std::span<const Vec3> torque_W, GroupAssembly& a,
               BlockCholesky& factor);
 
+/// Writes only M v + h F + h sum phi J^T into a.b, over the patches of the last Assemble (whose
+/// contacts may since have changed their phi, not their activity, stick state or coefficients):
+/// the factor of that Assemble solves the system again.
+void AssembleRightHandSide(const Model& model, const Data& data, std::span<const int> bodies,
+                           std::span<const int> slot, std::span<const ImplicitContact> contacts,
+                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+                           GroupAssembly& a, const BlockCholesky& factor);
+
 /// The forces of patch [begin, end) at the velocities a.x, left in its contacts. Returns true if
 /// a normal force would pull. `may_drop`: such a contact is taken out (active = false, no
 /// force), so the system is solved again without it. kAccumulate: the patch's impulse over the

@@ -47,11 +47,17 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
   if (!lagged) {
     s.lagged.factor_valid = false;
     bool dropped = false;
+    bool same_matrix = false;  // only slipping friction changed since the last factorisation
     for (int pass = 0; pass < kMaxPasses; ++pass) {
-      // the factorisation overwrites the system: each pass assembles it over the contacts left
-      Assemble(model, data, bodies, slot, contacts, force_W, torque_W, g, s.factor);
-      if (!s.factor.Factor(nb)) return false;
-      ++s.factorisations;
+      if (same_matrix) {
+        AssembleRightHandSide(model, data, bodies, slot, contacts, force_W, torque_W, g, s.factor);
+      } else {
+        // the factorisation overwrites the system: each pass assembles it over the contacts left
+        Assemble(model, data, bodies, slot, contacts, force_W, torque_W, g, s.factor);
+        if (!s.factor.Factor(nb)) return false;
+        ++s.factorisations;
+      }
+      same_matrix = false;
       std::copy(g.b.begin(), g.b.begin() + nb, g.x.begin());
       if (!s.factor.Solve(nb, g.x)) return false;
       for (ImplicitContact& c : contacts) {
@@ -70,7 +76,11 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
       const int cone = EnforceFrictionCones(contacts, pass + 2 == kMaxPasses);
       if (cone & kFrictionSlipped) continue;
       if (!pulled) {
-        if (cone != kFrictionKept) continue;
+        if (cone != kFrictionKept) {
+          // a slipping patch's friction, a force independent of the new velocities, changed
+          same_matrix = true;
+          continue;
+        }
         // a factor of the system with every contact is kept for the next steps
         if (!dropped && reuse) KeepFactor(s.lagged, g, bodies, contacts);
         break;
