@@ -33,7 +33,7 @@ void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::Veloci
 }
 
 bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
-                      dynamics::ImplicitContact& ic, dynamics::VelocityScratch& forces) {
+                      dynamics::ImplicitContact& ic) {
   Contact& c = data.contacts[ci];
   const PenaltyLaw& law = scratch.laws[ci];
   const double h = model.timestep_s;
@@ -56,7 +56,17 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
   ic.phi_n_N = law.k_N_per_m * c.depth_m;
   ic.c_n_Ns_per_m = h * law.k_N_per_m + law.b_Ns_per_m;
   ic.contact = ci;
-  // stick or slip was decided for the whole geom pair in stage 3 (DecidePatchFriction)
+  ic.mu_static = law.mu_static;
+  ic.mu_kinetic = law.mu_kinetic;
+  // the friction patch: the geom pair's points, consecutive in data.contacts
+  ic.patch = ci;
+  while (ic.patch > 0 && data.contacts[ic.patch - 1].geom_a == c.geom_a &&
+         data.contacts[ic.patch - 1].geom_b == c.geom_b) {
+    --ic.patch;
+  }
+  // stick or slip was decided for the whole geom pair in stage 3 (DecidePatchFriction) from the
+  // anchor springs; a sticking patch whose forces at the new velocities leave the friction cone
+  // slips too (SolveGroupVelocities, EnforceFrictionCones), so sliding starts Coulomb-bounded
   const Vec3 s = scratch.anchor_displacement[ci];
   if (c.sticking) {
     // the anchor spring (s lies in the tangent plane) with implicit tangential damping
@@ -64,15 +74,14 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
     ic.phi_t_W = -law.kt_N_per_m * s;
     ic.c_t_Ns_per_m = h * law.kt_N_per_m + law.bt_Ns_per_m;
   } else {
-    // kinetic friction opposes the stretch of the anchor, which trails the sliding contact
+    // kinetic friction opposes the stretch of the anchor, which trails the sliding contact; it
+    // enters the solve as the contact's tangential force, so it goes with the contact if that
+    // would pull, and the solve keeps it within mu_k times the normal force
     const double stretch = s.norm();
     const Vec3 ft =
         stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * ic.phi_n_N / stretch)) : Vec3::Zero();
     SlideAnchor(data, c, s, ft, law.kt_N_per_m);
-    c.friction_force_W = ft;
-    Vec3 r_a, r_b;
-    Offsets(data, c, &r_a, &r_b);
-    forces.AddContactForce(c, ft, r_a, r_b);
+    ic.phi_t_W = ft;
   }
   return true;
 }
@@ -97,7 +106,7 @@ void ContactForces(const Model& model, Data& data, const ContactScratch& scratch
       for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
         const int ci = G.contacts[k];
         if (scratch.laws[ci].implicit &&
-            LinearizeContact(model, data, scratch, ci, forces.implicit[n], forces)) {
+            LinearizeContact(model, data, scratch, ci, forces.implicit[n])) {
           ++n;
         }
       }

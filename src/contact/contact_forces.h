@@ -1,7 +1,7 @@
 // Penalty stage (tick stage 4): the forces of every contact's law at this tick's state. Tool
 // contacts (and scene contacts of a group too large for the implicit solve) are explicit: their
 // penalty and friction forces enter the bodies' force sums. Scene contacts are linearised for the
-// backward-Euler solve of stage 5; only their slipping friction is explicit.
+// backward-Euler solve of stage 5, with their friction cones.
 #pragma once
 
 #include "contact/phases.h"
@@ -15,10 +15,11 @@ namespace rigidtouch::contact {
 /// the bodies' sums.
 void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::VelocityScratch& forces);
 
-/// Contact ci as a row of the implicit solve (false: not penetrating, nothing to solve). A
-/// slipping contact's kinetic friction stays explicit and is added to the bodies' sums.
+/// Contact ci as a row of the implicit solve (false: not penetrating, nothing to solve): its
+/// normal row, and the tangential rows of a sticking contact or the kinetic friction of a
+/// slipping one (mu_k k d against the anchor's stretch), with its patch's friction cone.
 bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
-                      dynamics::ImplicitContact& ic, dynamics::VelocityScratch& forces);
+                      dynamics::ImplicitContact& ic);
 
 /// Stage 4 over data.contacts: the explicit contacts' forces, and each group's implicit contacts
 /// in forces.implicit (group g's at [implicit_start[g], implicit_start[g + 1])). A group with more

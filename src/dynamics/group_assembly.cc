@@ -95,8 +95,8 @@ void AssemblePatch(GroupAssembly& g, BlockCholesky& factor, const Data& data,
   double sxx = 0.0, syy = 0.0, szz = 0.0, sxy = 0.0, sxz = 0.0, syz = 0.0;  // S, symmetric
   for (int k = begin; k < end; ++k) {
     const ImplicitContact& c = contacts[k];
-    Vec3 f = c.phi_n_N * c.n_W;
-    if (c.stick) f += c.phi_t_W;
+    // the anchor spring of a sticking contact, the kinetic friction of a slipping one
+    const Vec3 f = c.phi_n_N * c.n_W + c.phi_t_W;
     const Vec3 r = c.p_W - origin;
     F += f;
     T += r.cross(f);
@@ -146,7 +146,63 @@ void AssemblePatch(GroupAssembly& g, BlockCholesky& factor, const Data& data,
   }
 }
 
+// adds contacts [begin, end) (one patch, all active) to the right-hand side only:
+// h sum phi J^T d, as AssemblePatch does (same sums in the same order)
+void AddPatchLoad(GroupAssembly& g, const BlockCholesky& factor, const Data& data,
+                  std::span<const int> slot, std::span<const ImplicitContact> contacts, int begin,
+                  int end, double h) {
+  const ImplicitContact& first = contacts[begin];
+  const int pa = first.body_a >= 0 ? factor.pos[slot[first.body_a]] : -1;
+  const int pb = first.body_b >= 0 ? factor.pos[slot[first.body_b]] : -1;
+  const Vec3& origin = data.bodies[pa >= 0 ? first.body_a : first.body_b].x_W;
+  Vec3 F = Vec3::Zero(), T = Vec3::Zero();
+  for (int k = begin; k < end; ++k) {
+    const ImplicitContact& c = contacts[k];
+    const Vec3 f = c.phi_n_N * c.n_W + c.phi_t_W;
+    F += f;
+    T += (c.p_W - origin).cross(f);
+  }
+  F *= h;
+  T *= h;
+  if (pa < 0 || pb < 0) {
+    const int p = pa >= 0 ? pa : pb;
+    const double sign = pa >= 0 ? 1.0 : -1.0;
+    g.b[p].head<3>() += sign * F;
+    g.b[p].tail<3>() += sign * T;
+    return;
+  }
+  const Vec3 d = origin - data.bodies[first.body_b].x_W;
+  g.b[pa].head<3>() += F;
+  g.b[pa].tail<3>() += T;
+  g.b[pb].head<3>() -= F;
+  g.b[pb].tail<3>() -= T + d.cross(F);
+}
+
+// M v + h F of body slot k into the right-hand side at its elimination position
+void AddMomentum(const Model& model, const Data& data, std::span<const int> bodies,
+                 std::span<const Vec3> force_W, std::span<const Vec3> torque_W, GroupAssembly& g,
+                 const BlockCholesky& factor, int k) {
+  const double h = model.timestep_s;
+  const int i = bodies[k];
+  const BodyModel& bm = model.bodies[i];
+  const BodyState& st = data.bodies[i];
+  g.b[factor.pos[k]] << bm.mass_kg * st.v_W + h * force_W[i],
+      WorldInertia(bm, st) * st.w_W + h * torque_W[i];
+}
+
 }  // namespace
+
+void AssembleRightHandSide(const Model& model, const Data& data, std::span<const int> bodies,
+                           std::span<const int> slot, std::span<const ImplicitContact> contacts,
+                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+                           GroupAssembly& g, const BlockCholesky& factor) {
+  const int nb = static_cast<int>(bodies.size());
+  for (int k = 0; k < nb; ++k) AddMomentum(model, data, bodies, force_W, torque_W, g, factor, k);
+  for (int q = 0; q < g.npatch; ++q) {
+    AddPatchLoad(g, factor, data, slot, contacts, g.patch_range[2 * q], g.patch_range[2 * q + 1],
+                 model.timestep_s);
+  }
+}
 
 void GroupAssembly::Reserve(int max_bodies, int max_contacts) {
   pairs.assign(max_contacts, 0);
@@ -279,6 +335,12 @@ bool PatchForces(GroupAssembly& g, const BlockCholesky& factor, const Data& data
       fx += tx;
       fy += ty;
       fz += tz;
+    } else {
+      // slipping: the kinetic friction, independent of the new velocity
+      c.friction_force_W = c.phi_t_W;
+      fx += c.phi_t_W.x();
+      fy += c.phi_t_W.y();
+      fz += c.phi_t_W.z();
     }
     if constexpr (kAccumulate) {
       Fx += fx;
@@ -301,6 +363,54 @@ bool PatchForces(GroupAssembly& g, const BlockCholesky& factor, const Data& data
     }
   }
   return pulled;
+}
+
+int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) {
+  // a slipping patch is scaled only when its friction exceeds the bound by more than rounding,
+  // and then below the bound by as much as it was over (at most 1e-3 of it): its kinetic
+  // friction moves its normal force too (through the tilt it gives the body), by a fraction of
+  // the change, so that the next solve lands inside, at most that fraction below the bound
+  constexpr double kSlack = 1e-10;
+  constexpr double kMaxBelow = 1e-3;
+  const int nc = static_cast<int>(contacts.size());
+  int changed = kFrictionKept;
+  for (int begin = 0; begin < nc;) {
+    const ImplicitContact& first = contacts[begin];
+    int end = begin + 1;
+    while (first.patch >= 0 && end < nc && contacts[end].patch == first.patch) ++end;
+    double fn = 0.0, ft = 0.0;  // the active contacts' normal force, tangential forces' norms
+    Vec3 resultant = Vec3::Zero();
+    for (int k = begin; k < end; ++k) {
+      const ImplicitContact& c = contacts[k];
+      if (!c.active) continue;
+      fn += std::max(0.0, c.normal_force_N);
+      ft += c.friction_force_W.norm();
+      resultant += c.friction_force_W;
+    }
+    if (first.stick && ft > first.mu_static * fn) {
+      // slip: the kinetic friction of each point along its trial force (the resultant's
+      // direction for a point without one)
+      const double rn = resultant.norm();
+      const Vec3 fallback = rn > 0.0 ? Vec3(resultant / rn) : Vec3::Zero();
+      for (int k = begin; k < end; ++k) {
+        ImplicitContact& c = contacts[k];
+        c.stick = false;
+        c.c_t_Ns_per_m = 0.0;
+        const double f = c.friction_force_W.norm();
+        const Vec3 dir = f > 0.0 ? Vec3(c.friction_force_W / f) : fallback;
+        c.phi_t_W = c.mu_kinetic * std::max(0.0, c.phi_n_N) * dir;
+      }
+      changed |= kFrictionSlipped;
+    } else if (!first.stick && ft > first.mu_kinetic * fn * (1.0 + kSlack)) {
+      const double bound = first.mu_kinetic * fn;
+      const double below = std::min(kMaxBelow, ft / bound - 1.0);
+      const double scale = last_chance ? 0.0 : (1.0 - below) * bound / ft;
+      for (int k = begin; k < end; ++k) contacts[k].phi_t_W *= scale;
+      changed |= kFrictionScaled;
+    }
+    begin = end;
+  }
+  return changed;
 }
 
 template bool PatchForces<false>(GroupAssembly&, const BlockCholesky&, const Data&,

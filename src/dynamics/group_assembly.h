@@ -50,6 +50,14 @@ void Assemble(const Model& model, const Data& data, std::span<const int> bodies,
               std::span<const Vec3> force_W, std::span<const Vec3> torque_W, GroupAssembly& a,
               BlockCholesky& factor);
 
+/// Writes only M v + h F + h sum phi J^T into a.b, over the patches of the last Assemble (whose
+/// contacts may since have changed their phi, not their activity, stick state or coefficients):
+/// the factor of that Assemble solves the system again.
+void AssembleRightHandSide(const Model& model, const Data& data, std::span<const int> bodies,
+                           std::span<const int> slot, std::span<const ImplicitContact> contacts,
+                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
+                           GroupAssembly& a, const BlockCholesky& factor);
+
 /// The forces of patch [begin, end) at the velocities a.x, left in its contacts. Returns true if
 /// a normal force would pull. `may_drop`: such a contact is taken out (active = false, no
 /// force), so the system is solved again without it. kAccumulate: the patch's impulse over the
@@ -58,5 +66,24 @@ template <bool kAccumulate>
 bool PatchForces(GroupAssembly& a, const BlockCholesky& factor, const Data& data,
                  std::span<const int> slot, std::span<ImplicitContact> contacts, int begin, int end,
                  bool may_drop, double h);
+
+/// What EnforceFrictionCones changed (bit flags).
+enum FrictionChange : int {
+  kFrictionKept = 0,
+  kFrictionSlipped = 1,  // a sticking patch started to slip
+  kFrictionScaled = 2,   // a slipping patch's kinetic friction was lowered
+};
+
+/// Coulomb's cone per friction patch (consecutive contacts with the same ImplicitContact::patch;
+/// dropped ones count for nothing, and so does a pulling normal force) at the forces PatchForces
+/// left in the contacts. A sticking patch whose tangential forces sum to more than mu_static
+/// times its normal force slips: each active contact's tangential force becomes kinetic friction
+/// mu_kinetic phi_n along the force it had (its trial stick force, which opposes the slip). A
+/// slipping patch whose kinetic friction sums to more than mu_kinetic times its normal force at
+/// these velocities is scaled down to below it by as much as it was over (at most 1e-3), or, with
+/// `last_chance` (no solve after the next), taken out for this step, so that no patch ends a step
+/// beyond its cone. Returns the FrictionChange flags; any but kFrictionKept means the group must be
+/// solved again.
+int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance);
 
 }  // namespace rigidtouch::dynamics

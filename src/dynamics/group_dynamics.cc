@@ -5,7 +5,9 @@
 namespace rigidtouch::dynamics {
 namespace {
 
-constexpr int kMaxPasses = 4;
+// solves per step: a friction patch's slip at most twice (it slips, then its kinetic friction
+// meets its normal force), contacts that pull at most a few times
+constexpr int kMaxPasses = 6;
 
 }  // namespace
 
@@ -38,15 +40,24 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
   const bool reuse =
       s.lagged.reuse_factor && std::all_of(contacts.begin(), contacts.end(),
                                            [](const ImplicitContact& c) { return c.active; });
-  const bool lagged = reuse && SolveWithKeptFactor(model, data, bodies, slot, contacts, force_W,
-                                                   torque_W, s.lagged, g, s.factor);
+  // a kept factor's answer stands only if every friction patch keeps within its cone
+  bool lagged = reuse && SolveWithKeptFactor(model, data, bodies, slot, contacts, force_W, torque_W,
+                                             s.lagged, g, s.factor);
+  if (lagged && EnforceFrictionCones(contacts, false) != kFrictionKept) lagged = false;
   if (!lagged) {
     s.lagged.factor_valid = false;
+    bool dropped = false;
+    bool same_matrix = false;  // only slipping friction changed since the last factorisation
     for (int pass = 0; pass < kMaxPasses; ++pass) {
-      // the factorisation overwrites the system: each pass assembles it over the contacts left
-      Assemble(model, data, bodies, slot, contacts, force_W, torque_W, g, s.factor);
-      if (!s.factor.Factor(nb)) return false;
-      ++s.factorisations;
+      if (same_matrix) {
+        AssembleRightHandSide(model, data, bodies, slot, contacts, force_W, torque_W, g, s.factor);
+      } else {
+        // the factorisation overwrites the system: each pass assembles it over the contacts left
+        Assemble(model, data, bodies, slot, contacts, force_W, torque_W, g, s.factor);
+        if (!s.factor.Factor(nb)) return false;
+        ++s.factorisations;
+      }
+      same_matrix = false;
       std::copy(g.b.begin(), g.b.begin() + nb, g.x.begin());
       if (!s.factor.Solve(nb, g.x)) return false;
       for (ImplicitContact& c : contacts) {
@@ -55,14 +66,33 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
       }
       bool pulled = false;
       for (int q = 0; q < g.npatch; ++q) {
-        pulled |=
-            PatchForces<false>(g, s.factor, data, slot, contacts, g.patch_range[2 * q],
-                               g.patch_range[2 * q + 1], pass + 1 < kMaxPasses, model.timestep_s);
+        pulled |= PatchForces<false>(g, s.factor, data, slot, contacts, g.patch_range[2 * q],
+                                     g.patch_range[2 * q + 1], false, model.timestep_s);
       }
+      if (pass + 1 == kMaxPasses) break;
+      // Coulomb first: a sticking patch beyond its cone (a trial whose tangential damping would
+      // stop a sliding body in one step) slips, and the contacts that trial made pull are kept
+      // for the solve with the kinetic friction
+      const int cone = EnforceFrictionCones(contacts, pass + 2 == kMaxPasses);
+      if (cone & kFrictionSlipped) continue;
       if (!pulled) {
+        if (cone != kFrictionKept) {
+          // a slipping patch's friction, a force independent of the new velocities, changed
+          same_matrix = true;
+          continue;
+        }
         // a factor of the system with every contact is kept for the next steps
-        if (pass == 0 && reuse) KeepFactor(s.lagged, g, bodies, contacts);
+        if (!dropped && reuse) KeepFactor(s.lagged, g, bodies, contacts);
         break;
+      }
+      // a contact that stops pushing has no friction either: solve again without it
+      for (ImplicitContact& c : contacts) {
+        if (c.active && c.normal_force_N < 0.0) {
+          c.active = false;
+          c.normal_force_N = 0.0;
+          c.friction_force_W.setZero();
+          dropped = true;
+        }
       }
     }
   }

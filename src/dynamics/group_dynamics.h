@@ -44,7 +44,11 @@ struct GroupSolverScratch {
 /// Solves the new velocities of the group's bodies, in place in data.bodies. `force_W` and
 /// `torque_W` hold each body's explicit force (gravity, user, gyroscopic, explicit contacts).
 /// Contacts whose normal force would pull after the solve are dropped (friction included) and
-/// the solve repeated (at most a few times), so the penalty never pulls. Each contact's forces at
+/// the solve repeated (at most a few times), so the penalty never pulls. Each friction patch is
+/// held to its Coulomb cone at the solved velocities (EnforceFrictionCones): a sticking patch
+/// beyond it slips and the group is solved again (the pulls of that trial do not count); a
+/// slipping patch's kinetic friction beyond mu_k N is lowered and the right-hand side solved
+/// again with the same factor. Each contact's forces at
 /// the new velocities are left in it. Returns false if the group exceeds the scratch's capacity
 /// or the factorisation failed (then nothing is written). The ordering and fill-in analysis is
 /// kept in the scratch and reused while the group's bodies touch the same neighbours.

@@ -2,6 +2,8 @@
 // assembly (group_assembly.h) and the lagged factorisation (lagged_factor.h).
 #pragma once
 
+#include <limits>
+
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::dynamics {
@@ -10,8 +12,12 @@ namespace rigidtouch::dynamics {
 /// centres of mass are p - x_a and p - x_b), along the unit normal n (from b towards a). Its normal
 /// force is phi_n - c_n u_n at the new relative velocity u_n; while it sticks, its tangential
 /// force is phi_t - c_t u_t (phi_t and the tangential velocity u_t both in the tangent plane, so
-/// this is the two tangential rows of any orthonormal tangent basis at once). Forces act +on a,
-/// -on b.
+/// this is the two tangential rows of any orthonormal tangent basis at once); while it slips, its
+/// tangential force is phi_t alone, the kinetic friction (no tangential rows). The contacts of one
+/// friction patch (same `patch`, consecutive) share one Coulomb cone: the solve makes a sticking
+/// patch whose forces leave mu_static times its normal force slip, and keeps a slipping patch's
+/// kinetic friction within mu_kinetic times its normal force at the new velocities. Forces act
+/// +on a, -on b.
 struct ImplicitContact {
   int body_a = -1, body_b = -1;  // Model::bodies indices, -1 static
   Vec3 n_W = Vec3::UnitZ();
@@ -19,9 +25,14 @@ struct ImplicitContact {
   double phi_n_N = 0.0;       // normal force independent of the new velocity
   double c_n_Ns_per_m = 0.0;  // h k + b: normal force per unit of new approach velocity
   bool stick = false;         // tangential rows present
-  // tangential force on a independent of the new velocity, in the tangent plane (n . phi_t = 0)
+  // tangential force on a independent of the new velocity, in the tangent plane (n . phi_t = 0):
+  // the anchor spring while sticking, the kinetic friction while slipping
   Vec3 phi_t_W = Vec3::Zero();
   double c_t_Ns_per_m = 0.0;
+  // the friction patch's cone; infinite: no cone (the tangential rows are never limited)
+  double mu_static = std::numeric_limits<double>::infinity();
+  double mu_kinetic = std::numeric_limits<double>::infinity();
+  int patch = -1;      // friction patch (index of its geom pair's first contact); -1: its own
   int contact = -1;    // index in data.contacts
   bool active = true;  // false once dropped for pulling
   // output at the solved velocities (zero for a dropped contact): the normal force (negative only

@@ -55,8 +55,9 @@ Fixture MakeFixture(int nx, int ny, int nz, unsigned seed) {
   return f;
 }
 
-// one contact point p as the tick builds it: a normal row and, when sticking, a tangential force
-// in the tangent plane (the dense reference turns it into two tangential rows)
+// one contact point p as the tick builds it: a normal row and a tangential force in the tangent
+// plane, the anchor spring with damping c_t when sticking, kinetic friction when slipping (the
+// dense reference turns it into two tangential rows)
 void AddContact(std::vector<ImplicitContact>& contacts, int a, int b, const Vec3& n, const Vec3& p,
                 double phi, bool stick) {
   ImplicitContact c;
@@ -100,13 +101,14 @@ std::vector<Row> RowsOf(const std::vector<ImplicitContact>& contacts) {
   for (const ImplicitContact& c : contacts) {
     if (!c.active) continue;
     rows.push_back(Row{&c, c.n_W, c.phi_n_N, c.c_n_Ns_per_m});
-    if (!c.stick) continue;
-    // any orthonormal tangent basis: one not aligned with the one phi_t was built in
+    // any orthonormal tangent basis: one not aligned with the one phi_t was built in; a slipping
+    // contact's phi_t is its kinetic friction, a tangential force without velocity coefficient
     const Vec3 t1 =
         (c.n_W.unitOrthogonal() + 0.5 * c.n_W.cross(c.n_W.unitOrthogonal())).normalized();
     const Vec3 t2 = c.n_W.cross(t1);
-    rows.push_back(Row{&c, t1, c.phi_t_W.dot(t1), c.c_t_Ns_per_m});
-    rows.push_back(Row{&c, t2, c.phi_t_W.dot(t2), c.c_t_Ns_per_m});
+    const double ct = c.stick ? c.c_t_Ns_per_m : 0.0;
+    rows.push_back(Row{&c, t1, c.phi_t_W.dot(t1), ct});
+    rows.push_back(Row{&c, t2, c.phi_t_W.dot(t2), ct});
   }
   return rows;
 }
