@@ -259,11 +259,16 @@ int MjType(GeomType t) {
       return mjGEOM_BOX;
     case GeomType::kMesh:
       return mjGEOM_MESH;
+    case GeomType::kCylinder:
+      return mjGEOM_CYLINDER;
+    case GeomType::kEllipsoid:
+      return mjGEOM_ELLIPSOID;
   }
   return mjGEOM_NONE;
 }
 
-// MuJoCo's own function for one pair (capsules, meshes); it reads only the two geoms' poses
+// MuJoCo's own function for one pair (capsules, meshes, cylinders, ellipsoids); it reads only the
+// two geoms' poses
 void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int g1, int g2) {
   int t1 = MjType(model.geoms[g1].type), t2 = MjType(model.geoms[g2].type);
   if (t1 > t2) {  // MuJoCo's table is filled for type1 <= type2
