@@ -436,9 +436,10 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
                 ") m/s^2 is not finite or longer than " + Num(kMaxGravity) + " m/s^2");
   }
 
-  CheckElements(m, path, model.load_warnings);
   if (m->opt.disableflags & mjDSBL_GRAVITY) model.gravity_W.setZero();  // <flag gravity="disable"/>
+  // joints first: a scene of hinged bodies is refused for them, not for their actuators
   const std::vector<int> body_index = CopyBodies(m, path, model);
+  CheckElements(m, path, model.load_warnings);
   CopyGeoms(m, path, body_index, model);
   CheckPairs(m, path, model.load_warnings);
   model.tool = FindTool(model, path, options.tool_name);
