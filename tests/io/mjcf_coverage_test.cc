@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "cli/cli_util.h"
 #include "rigidtouch/rigidtouch.h"
@@ -293,14 +294,19 @@ const char kBall[] =
     "<body name=\"ball\" pos=\"0.1 0 0.1\"><freejoint/>"
     "<geom name=\"ball_geom\" type=\"sphere\" size=\"0.01\" mass=\"0.1\"/></body>";
 
-struct Refused {
-  const char* element;
+// one MJCF element rigidtouch refuses or warns about, in a scene, and what the message must say
+struct ElementCase {
+  const char* name;  // the test's name
   std::string xml;
   std::string expected;
 };
 
-TEST(MjcfCoverageTest, RefusedElementsAreNamed) {
-  const Refused cases[] = {
+std::string CaseName(const ::testing::TestParamInfo<ElementCase>& info) {
+  return info.param.name;
+}
+
+std::vector<ElementCase> RefusedCases() {
+  return {
       {"equality",
        Scene("<equality><weld name=\"glue\" body1=\"tool\" body2=\"ball\"/></equality>", kBall),
        "<equality> <weld> 'glue'"},
@@ -316,12 +322,12 @@ TEST(MjcfCoverageTest, RefusedElementsAreNamed) {
              "<body name=\"door\" pos=\"0.3 0 0.1\"><joint name=\"hinge\" type=\"hinge\"/>"
              "<geom type=\"box\" size=\"0.01 0.01 0.01\" mass=\"0.1\"/></body>"),
        "body 'door' has a hinge <joint> 'hinge'"},
-      {"nested joint",
+      {"nested_joint",
        Scene("", "",
              "<body name=\"arm\" pos=\"0.05 0 0\"><joint name=\"elbow\"/>"
              "<geom type=\"box\" size=\"0.01 0.01 0.01\" mass=\"0.1\"/></body>"),
        "body 'arm' has a hinge <joint> 'elbow'"},
-      {"joint damping",
+      {"joint_damping",
        "<mujoco><worldbody><body name=\"tool\" pos=\"0 0 0.1\">"
        "<joint name=\"slow\" type=\"free\" damping=\"1\"/>"
        "<geom type=\"sphere\" size=\"0.01\" mass=\"0.1\"/></body></worldbody></mujoco>",
@@ -329,13 +335,13 @@ TEST(MjcfCoverageTest, RefusedElementsAreNamed) {
       {"density", Scene("<option density=\"1.2\"/>"), "<option density=\"1.2\""},
       {"viscosity", Scene("<option viscosity=\"0.01\"/>"), "viscosity=\"0.01\""},
       {"wind", Scene("<option wind=\"1 0 0\"/>"), "<option wind=\"1 0 0\">"},
-      {"contact disabled", Scene("<option><flag contact=\"disable\"/></option>"),
+      {"contact_disabled", Scene("<option><flag contact=\"disable\"/></option>"),
        "<flag contact=\"disable\"/>"},
-      {"constraint disabled", Scene("<option><flag constraint=\"disable\"/></option>"),
+      {"constraint_disabled", Scene("<option><flag constraint=\"disable\"/></option>"),
        "<flag constraint=\"disable\"/>"},
-      {"predefined collision", Scene("<option collision=\"predefined\"/>"),
+      {"predefined_collision", Scene("<option collision=\"predefined\"/>"),
        "<option collision=\"predefined\">"},
-      {"pair of filtered geoms",
+      {"pair_of_filtered_geoms",
        Scene("<contact><pair name=\"p\" geom1=\"tip\" geom2=\"ball_geom\"/></contact>",
              "<body name=\"ball\" pos=\"0.1 0 0.1\"><freejoint/><geom name=\"ball_geom\" "
              "type=\"sphere\" size=\"0.01\" mass=\"0.1\" contype=\"2\" conaffinity=\"2\"/></body>"),
@@ -347,49 +353,49 @@ TEST(MjcfCoverageTest, RefusedElementsAreNamed) {
        "<geom type=\"sphere\" size=\"0.01\" mass=\"0.1\"/></body></worldbody></mujoco>",
        "geom 'terrain' has type hfield"},
   };
-  for (const Refused& c : cases) {
-    const std::string e = XmlError(c.xml);
-    EXPECT_NE(e.find(c.expected), std::string::npos) << c.element << ": " << e;
-  }
 }
 
-struct Warned {
-  const char* element;
-  std::string xml;
-  std::string expected;
-};
+class RefusedElementTest : public ::testing::TestWithParam<ElementCase> {};
 
-TEST(MjcfCoverageTest, WarnedElementsAreNamedAndTheSceneLoads) {
-  const Warned cases[] = {
-      {"geom solref",
+TEST_P(RefusedElementTest, ErrorNamesTheElement) {
+  const std::string e = XmlError(GetParam().xml);
+  EXPECT_NE(e.find(GetParam().expected), std::string::npos) << e;
+}
+
+INSTANTIATE_TEST_SUITE_P(MjcfCoverage, RefusedElementTest, ::testing::ValuesIn(RefusedCases()),
+                         CaseName);
+
+std::vector<ElementCase> WarnedCases() {
+  return {
+      {"geom_solref",
        Scene("", "",
              "<geom name=\"soft\" type=\"box\" size=\"0.01 0.01 0.01\" "
              "mass=\"0.1\" solref=\"0.01 1\"/>"),
        "<geom> solref, solimp, margin, gap, solmix or priority set on geom 'soft'"},
-      {"geom solimp",
+      {"geom_solimp",
        Scene("", "",
              "<geom name=\"soft\" type=\"box\" size=\"0.01 0.01 0.01\" "
              "mass=\"0.1\" solimp=\"0.8 0.9 0.01\"/>"),
        "on geom 'soft'"},
-      {"geom margin",
+      {"geom_margin",
        Scene("", "",
              "<geom name=\"wide\" type=\"box\" size=\"0.01 0.01 0.01\" "
              "mass=\"0.1\" margin=\"0.001\"/>"),
        "on geom 'wide'"},
-      {"condim 4",
+      {"condim_4",
        Scene("", "",
              "<geom name=\"grip\" type=\"box\" size=\"0.01 0.01 0.01\" "
              "mass=\"0.1\" condim=\"4\"/>"),
        "<geom condim=\"4\" or \"6\"> on geom 'grip'"},
       {"integrator", Scene("<option integrator=\"RK4\"/>"), "<option> integrator ignored"},
-      {"impratio and cone", Scene("<option impratio=\"10\" cone=\"elliptic\"/>"),
+      {"impratio_and_cone", Scene("<option impratio=\"10\" cone=\"elliptic\"/>"),
        "<option> cone, impratio ignored"},
-      {"warmstart flag", Scene("<option><flag warmstart=\"disable\"/></option>"),
+      {"warmstart_flag", Scene("<option><flag warmstart=\"disable\"/></option>"),
        "<flag warmstart=\"disable\"/> is ignored"},
       {"sensor",
        Scene("<sensor><framepos name=\"where\" objtype=\"body\" objname=\"tool\"/></sensor>"),
        "<sensor> 'where' ignored"},
-      {"passive tendon",
+      {"passive_tendon",
        Scene("<tendon><spatial name=\"string\"><site site=\"a\"/><site site=\"b\"/></spatial>"
              "</tendon>",
              "<site name=\"a\" pos=\"0 0 0.5\"/>", "<site name=\"b\"/>"),
@@ -399,26 +405,26 @@ TEST(MjcfCoverageTest, WarnedElementsAreNamedAndTheSceneLoads) {
              "<body name=\"target\" mocap=\"true\" pos=\"0.3 0 0.3\">"
              "<geom type=\"box\" size=\"0.01 0.01 0.01\"/></body>"),
        "body 'target' is a mocap body"},
-      {"pair of colliding geoms",
+      {"pair_of_colliding_geoms",
        Scene("<contact><pair name=\"p\" geom1=\"tip\" geom2=\"ball_geom\" condim=\"1\"/>"
              "</contact>",
              kBall),
        "<contact><pair> 'p' of geoms 'tip' and 'ball_geom': the geoms collide anyway"},
   };
-  for (const Warned& c : cases) {
-    Model m;
-    try {
-      m = LoadXml(c.xml, "warned.xml");
-    } catch (const Error& e) {
-      ADD_FAILURE() << c.element << " refused: " << e.what();
-      continue;
-    }
-    std::string all;
-    for (const std::string& w : m.load_warnings) all += w + "\n";
-    EXPECT_NE(all.find(c.expected), std::string::npos) << c.element << ": " << all;
-    EXPECT_NE(all.find("warned.xml"), std::string::npos) << c.element << ": " << all;
-  }
 }
+
+class WarnedElementTest : public ::testing::TestWithParam<ElementCase> {};
+
+TEST_P(WarnedElementTest, SceneLoadsAndAWarningNamesTheElement) {
+  const Model m = LoadXml(GetParam().xml, "warned.xml");
+  std::string all;
+  for (const std::string& w : m.load_warnings) all += w + "\n";
+  EXPECT_NE(all.find(GetParam().expected), std::string::npos) << all;
+  EXPECT_NE(all.find("warned.xml"), std::string::npos) << all;
+}
+
+INSTANTIATE_TEST_SUITE_P(MjcfCoverage, WarnedElementTest, ::testing::ValuesIn(WarnedCases()),
+                         CaseName);
 
 TEST(MjcfCoverageTest, PlainScenesLoadWithoutWarnings) {
   for (const char* name : {"box_plane.xml", "sphere_plane.xml", "stack3.xml", "two_spheres.xml",
