@@ -14,7 +14,9 @@ struct mjModel_;
 namespace rigidtouch {
 
 /// Geometric primitive of a collision geom (the MJCF geom types rigidtouch accepts).
-enum class GeomType { kPlane, kSphere, kCapsule, kBox, kMesh, kCylinder, kEllipsoid };
+/// kMesh also stands for the other convex shapes that MuJoCo's pair functions collide (cylinder,
+/// ellipsoid): GeomModel::mj_type says which.
+enum class GeomType { kPlane, kSphere, kCapsule, kBox, kMesh };
 
 /// Which rendering method produces the collision impulses (docs/method.md).
 enum class RendererKind {
@@ -60,6 +62,7 @@ struct GeomModel {
   /// both geoms' condim is 1); 4 and 6 keep sliding friction only (a load warning says so).
   int condim = 3;
   double mjcf_friction = 0.0;  // the MJCF sliding friction as written, before condim
+  int mj_type = -1;            // MuJoCo's geom type (mjtGeom) in the compiled model
 };
 
 /// Penalty contact law (tick stage 4). Stiffness and damping are per geom pair; a manifold of n

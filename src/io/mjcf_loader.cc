@@ -51,8 +51,9 @@ const char* MjGeomTypeName(int type) {
 
 // rigidtouch's geom type for a MuJoCo one, or false for a height field (no pair function of
 // MuJoCo's collides it with a geom outside the compiled model's own collision pipeline).
-// Cylinders and ellipsoids take MuJoCo's pair functions: a cylinder on a plane gets a manifold of
-// points, against anything else single-point MPR per tick.
+// Cylinders and ellipsoids take MuJoCo's pair functions as meshes do (GeomType::kMesh, with
+// GeomModel::mj_type telling them apart): a cylinder on a plane gets up to four points, against
+// anything else one MPR point per tick.
 bool ToGeomType(int mj_type, GeomType* out) {
   switch (mj_type) {
     case mjGEOM_PLANE:
@@ -70,11 +71,9 @@ bool ToGeomType(int mj_type, GeomType* out) {
     case mjGEOM_MESH:
       *out = GeomType::kMesh;
       return true;
-    case mjGEOM_CYLINDER:
-      *out = GeomType::kCylinder;
-      return true;
+    case mjGEOM_CYLINDER:  // convex shapes that only MuJoCo's pair functions collide, like meshes
     case mjGEOM_ELLIPSOID:
-      *out = GeomType::kEllipsoid;
+      *out = GeomType::kMesh;
       return true;
     default:
       return false;
@@ -293,10 +292,11 @@ void GeomPose(const mjModel* m, const Model& model, int g, GeomModel& geom) {
 // the sizes a geom type uses (a plane's may be 0: infinite), its pose, friction and bound
 void CheckGeomNumbers(const mjModel* m, const std::string& path, int g, const GeomModel& geom) {
   const std::string who = "geom '" + geom.name + "'";
-  const int used = geom.type == GeomType::kSphere                                        ? 1
-                   : geom.type == GeomType::kCapsule || geom.type == GeomType::kCylinder ? 2
-                   : geom.type == GeomType::kBox || geom.type == GeomType::kEllipsoid    ? 3
-                                                                                         : 0;
+  const int mj = m->geom_type[g];
+  const int used = mj == mjGEOM_SPHERE                             ? 1
+                   : mj == mjGEOM_CAPSULE || mj == mjGEOM_CYLINDER ? 2
+                   : mj == mjGEOM_BOX || mj == mjGEOM_ELLIPSOID    ? 3
+                                                                   : 0;
   for (int i = 0; i < 3; ++i) {
     const double lo = i < used ? kMinSize : 0.0;
     CheckRange(path, "size[" + std::to_string(i) + "] of " + who, m->geom_size[3 * g + i], lo,
@@ -326,6 +326,7 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
                   "' is a plane on a free body; planes must be static (in the worldbody)");
     }
     CheckGeomNumbers(m, path, g, geom);
+    geom.mj_type = m->geom_type[g];
     geom.mjcf_friction = m->geom_friction[3 * g];
     geom.condim = m->geom_condim[g];
     geom.friction = geom.condim == 1 ? 0.0 : geom.mjcf_friction;

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <mujoco/mujoco.h>
+
 #include "cli/cli_util.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
@@ -259,7 +261,7 @@ TEST(MjcfCoverageTest, CylinderRestsUprightOnItsFlatFace) {
   Data d;
   const double z =
       RestHeight("<geom name=\"can\" type=\"cylinder\" size=\"0.015 0.02\" mass=\"0.1\"/>", &m, &d);
-  EXPECT_EQ(m->geoms[1].type, GeomType::kCylinder);
+  EXPECT_EQ(m->geoms[1].mj_type, mjGEOM_CYLINDER);
   const double sink = 0.1 * 9.81 / m->contact.scene_stiffness_N_per_m;
   EXPECT_NEAR(z, 0.02 - sink, 1e-4);
   EXPECT_LT(d.bodies[0].v_W.norm(), 1e-3);
@@ -272,7 +274,7 @@ TEST(MjcfCoverageTest, EllipsoidRestsOnItsShortestSemiAxis) {
   Data d;
   const double z = RestHeight(
       "<geom name=\"egg\" type=\"ellipsoid\" size=\"0.03 0.02 0.01\" mass=\"0.1\"/>", &m, &d);
-  EXPECT_EQ(m->geoms[1].type, GeomType::kEllipsoid);
+  EXPECT_EQ(m->geoms[1].mj_type, mjGEOM_ELLIPSOID);
   const double sink = 0.1 * 9.81 / m->contact.scene_stiffness_N_per_m;
   EXPECT_NEAR(z, 0.01 - sink, 1e-4);
   EXPECT_LT(d.bodies[0].v_W.norm(), 1e-3);

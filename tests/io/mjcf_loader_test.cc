@@ -65,7 +65,8 @@ TEST(MjcfLoaderTest, MissingFileIsNamed) {
 TEST(MjcfLoaderTest, CylinderGeomLoads) {
   // refused before issue 16; now collided through MuJoCo's pair functions (mjcf_coverage_test.cc)
   const Model m = LoadModel(TestScene("cylinder.xml"), {});
-  EXPECT_EQ(m.geoms[1].type, GeomType::kCylinder);
+  EXPECT_EQ(m.geoms[1].type, GeomType::kMesh);  // collided by MuJoCo, as meshes are
+  EXPECT_EQ(m.geoms[1].mj_type, 5);             // mjGEOM_CYLINDER
   EXPECT_EQ(m.geoms[1].name, "can");
 }
 
