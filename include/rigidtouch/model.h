@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rigidtouch/types.h"
@@ -13,6 +14,8 @@ struct mjModel_;
 namespace rigidtouch {
 
 /// Geometric primitive of a collision geom (the MJCF geom types rigidtouch accepts).
+/// kMesh also stands for the other convex shapes that MuJoCo's pair functions collide (cylinder,
+/// ellipsoid): GeomModel::mj_type says which.
 enum class GeomType { kPlane, kSphere, kCapsule, kBox, kMesh };
 
 /// Which rendering method produces the collision impulses (docs/method.md).
@@ -54,6 +57,12 @@ struct GeomModel {
   Quat quat_B = Quat::Identity();    // orientation in the body's principal frame
   int contype = 1, conaffinity = 1;  // MJCF collision filter bits
   int mj_geom = -1;
+  /// MJCF condim (1 frictionless, 3 sliding friction). A condim-1 geom's `friction` is 0, so the
+  /// contact law's max over the two geoms gives MuJoCo's rule (a contact is frictionless when
+  /// both geoms' condim is 1); 4 and 6 keep sliding friction only (a load warning says so).
+  int condim = 3;
+  double mjcf_friction = 0.0;  // the MJCF sliding friction as written, before condim
+  int mj_type = -1;            // MuJoCo's geom type (mjtGeom) in the compiled model
 };
 
 /// Penalty contact law (tick stage 4). Stiffness and damping are per geom pair; a manifold of n
@@ -141,12 +150,16 @@ struct Model {
   int max_group_bodies = 0;             // capacity of one group (implicit penalty solve is dense)
   std::shared_ptr<mjModel_> collision;  // compiled MJCF, owned (shared by copies of the Model)
   /// Problems found at load that do not stop the scene (e.g. a contact stiffness that cannot hold
-  /// a body or is unstable for it at h), one sentence each; the CLI prints them to stderr.
+  /// a body or is unstable for it at h; an MJCF element accepted but not simulated as MuJoCo would,
+  /// named), one sentence each; the CLI prints them to stderr.
   std::vector<std::string> load_warnings;
   /// The scene-contact stiffness and damping Configure derived from the bodies' masses and h
   /// (docs/method.md, "Contact defaults from the scene"); 0 if they were set by the user.
   double derived_scene_stiffness_N_per_m = 0.0;
   double derived_scene_damping_Ns_per_m = 0.0;
+  /// Body pairs that never collide (MJCF <contact><exclude>), as indices into `bodies` with -1 for
+  /// static geometry, each pair (a, b) with a < b, sorted and without repeats.
+  std::vector<std::pair<int, int>> excluded_body_pairs;
 };
 
 }  // namespace rigidtouch

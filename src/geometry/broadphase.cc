@@ -85,7 +85,16 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
   const int capacity = static_cast<int>(bp.pairs.size());
   bp.npair = 0;
   bp.dropped = 0;
-  auto add = [&bp, capacity](int a, int b) {
+  // body pairs the scene excludes (MJCF <contact><exclude>), sorted; empty in most scenes
+  const std::vector<std::pair<int, int>>& excluded = model.excluded_body_pairs;
+  auto add = [&bp, capacity, &excluded](int a, int b) {
+    if (!excluded.empty()) {
+      const int ba = bp.filters[a].body, bb = bp.filters[b].body;
+      if (std::binary_search(excluded.begin(), excluded.end(),
+                             std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)))) {
+        return;
+      }
+    }
     if (bp.npair < capacity) {
       bp.pairs[bp.npair++] = {a, b};
     } else {

@@ -247,25 +247,12 @@ void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_
   c.group = -1;
 }
 
-int MjType(GeomType t) {
-  switch (t) {
-    case GeomType::kPlane:
-      return mjGEOM_PLANE;
-    case GeomType::kSphere:
-      return mjGEOM_SPHERE;
-    case GeomType::kCapsule:
-      return mjGEOM_CAPSULE;
-    case GeomType::kBox:
-      return mjGEOM_BOX;
-    case GeomType::kMesh:
-      return mjGEOM_MESH;
-  }
-  return mjGEOM_NONE;
-}
-
-// MuJoCo's own function for one pair (capsules, meshes); it reads only the two geoms' poses
+// MuJoCo's own function for one pair (capsules, meshes, cylinders, ellipsoids); it reads only the
+// two geoms' poses
 void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int g1, int g2) {
-  int t1 = MjType(model.geoms[g1].type), t2 = MjType(model.geoms[g2].type);
+  // the compiled model's types: GeomType::kMesh also stands for cylinders and ellipsoids
+  const int* mj_type = model.collision->geom_type;
+  int t1 = mj_type[model.geoms[g1].mj_geom], t2 = mj_type[model.geoms[g2].mj_geom];
   if (t1 > t2) {  // MuJoCo's table is filled for type1 <= type2
     std::swap(g1, g2);
     std::swap(t1, t2);

@@ -3,6 +3,7 @@
 // compiles 1e300 masses and NaN keyframes without complaint, and a tick on them yields NaN.
 #include <mujoco/mujoco.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <string>
 
 #include "geometry/capacity.h"
+#include "io/mjcf_checks.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -47,9 +49,11 @@ const char* MjGeomTypeName(int type) {
   }
 }
 
-// rigidtouch's geom type for a MuJoCo one, or false when the collision backend cannot give it
-// contact manifolds (MuJoCo 2.2 collides ellipsoids and cylinders through single-point MPR, so a
-// cylinder would rock on a plane instead of resting flat)
+// rigidtouch's geom type for a MuJoCo one, or false for a height field (no pair function of
+// MuJoCo's collides it with a geom outside the compiled model's own collision pipeline).
+// Cylinders and ellipsoids take MuJoCo's pair functions as meshes do (GeomType::kMesh, with
+// GeomModel::mj_type telling them apart): a cylinder on a plane gets up to four points, against
+// anything else one MPR point per tick.
 bool ToGeomType(int mj_type, GeomType* out) {
   switch (mj_type) {
     case mjGEOM_PLANE:
@@ -65,6 +69,10 @@ bool ToGeomType(int mj_type, GeomType* out) {
       *out = GeomType::kBox;
       return true;
     case mjGEOM_MESH:
+      *out = GeomType::kMesh;
+      return true;
+    case mjGEOM_CYLINDER:  // convex shapes that only MuJoCo's pair functions collide, like meshes
+    case mjGEOM_ELLIPSOID:
       *out = GeomType::kMesh;
       return true;
     default:
@@ -124,47 +132,136 @@ BodyState StateFromFreejoint(const BodyModel& b, const mjtNum* qpos, const mjtNu
   return s;
 }
 
-// the free bodies: freejoint children of the world are dynamic; joint-less bodies are static.
+// (pos, quat) given in body b's frame, expressed in the frame of b's ancestor `root` (0: the
+// world), by composing MuJoCo's body_pos and body_quat (each relative to the parent) up the chain
+void ToAncestor(const mjModel* m, int b, int root, Vec3* pos, Quat* quat) {
+  for (; b != root && b != 0; b = m->body_parentid[b]) {
+    const Vec3 bp(m->body_pos[3 * b], m->body_pos[3 * b + 1], m->body_pos[3 * b + 2]);
+    const Quat bq = MjQuat(m->body_quat + 4 * b).normalized();
+    *pos = bp + bq * *pos;
+    *quat = bq * *quat;
+  }
+}
+
+// the mass, centre of mass and principal inertia of free body `root` merged with its welded
+// descendants (bodies without joints nested in it: MuJoCo's bodies of body_weldid root), in
+// root's frame. MuJoCo keeps welded bodies apart in mjModel; one rigid body is their composite:
+// masses add, the centre of mass is the mass-weighted mean, and each part's inertia is rotated
+// into root's frame (R diag(I) R^T, R the part's principal frame) and shifted to the common centre
+// (parallel-axis theorem: + m (|d|^2 E - d d^T), d the part's centre from the common one). The
+// principal axes of the sum are its eigenvectors. Returns the number of bodies merged.
+int CompositeInertia(const mjModel* m, int root, BodyModel& body) {
+  struct Part {
+    double mass;
+    Vec3 com;      // in root's frame
+    Mat3 inertia;  // about the part's own centre, root's axes
+  };
+  std::vector<Part> parts;
+  for (int c = root; c < m->nbody; ++c) {
+    if (c != root && m->body_weldid[c] != root) continue;
+    Vec3 com(m->body_ipos[3 * c], m->body_ipos[3 * c + 1], m->body_ipos[3 * c + 2]);
+    Quat axes = MjQuat(m->body_iquat + 4 * c).normalized();
+    ToAncestor(m, c, root, &com, &axes);
+    const Vec3 principal(m->body_inertia[3 * c], m->body_inertia[3 * c + 1],
+                         m->body_inertia[3 * c + 2]);
+    const Mat3 R = axes.toRotationMatrix();
+    parts.push_back(Part{m->body_mass[c], com, R * principal.asDiagonal() * R.transpose()});
+  }
+  if (parts.size() == 1) {  // nothing welded: MuJoCo's numbers as they are
+    body.mass_kg = m->body_mass[root];
+    body.inertia_kgm2 = Vec3(m->body_inertia[3 * root], m->body_inertia[3 * root + 1],
+                             m->body_inertia[3 * root + 2]);
+    body.ipos_B =
+        Vec3(m->body_ipos[3 * root], m->body_ipos[3 * root + 1], m->body_ipos[3 * root + 2]);
+    body.iquat_B = MjQuat(m->body_iquat + 4 * root).normalized();
+    return 1;
+  }
+  double mass = 0.0;
+  Vec3 moment = Vec3::Zero();
+  for (const Part& p : parts) {
+    mass += p.mass;
+    moment += p.mass * p.com;
+  }
+  body.mass_kg = mass;
+  if (!(mass > 0.0)) return static_cast<int>(parts.size());  // refused by the caller
+  const Vec3 com = moment / mass;
+  Mat3 inertia = Mat3::Zero();
+  for (const Part& p : parts) {
+    const Vec3 d = p.com - com;
+    inertia += p.inertia + p.mass * (d.squaredNorm() * Mat3::Identity() - d * d.transpose());
+  }
+  inertia = 0.5 * (inertia + inertia.transpose());
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(inertia);
+  Mat3 axes = eig.eigenvectors();
+  if (axes.determinant() < 0.0) axes.col(2) = -axes.col(2);  // a rotation, not a reflection
+  body.inertia_kgm2 = eig.eigenvalues();
+  body.ipos_B = com;
+  body.iquat_B = Quat(axes).normalized();
+  return static_cast<int>(parts.size());
+}
+
+const char* MjJointTypeName(int type) {
+  switch (type) {
+    case mjJNT_FREE:
+      return "free";
+    case mjJNT_BALL:
+      return "ball";
+    case mjJNT_SLIDE:
+      return "slide";
+    case mjJNT_HINGE:
+      return "hinge";
+    default:
+      return "unknown";
+  }
+}
+
+// the free bodies: freejoint children of the world are dynamic, with the bodies welded into them
+// (no joint of their own) merged in; other joint-less bodies are static.
 // Returns the index in model.bodies of every MuJoCo body (-1: static).
 std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& model) {
   std::vector<int> body_index(m->nbody, -1);
   for (int b = 1; b < m->nbody; ++b) {
     const std::string name = MjName(m, mjOBJ_BODY, b);
     if (m->body_jntnum[b] == 0) {
-      if (m->body_weldid[b] != 0) {
-        throw Error("scene file '" + path + "': body '" + name +
-                    "' is nested in a free body; rigidtouch simulates free bodies as single rigid "
-                    "bodies: put its geoms into the free body itself");
+      if (m->body_weldid[b] != 0) body_index[b] = body_index[m->body_weldid[b]];
+      if (m->body_mocapid[b] >= 0) {
+        model.load_warnings.push_back(
+            "scene file '" + path + "': body '" + name +
+            "' is a mocap body (<body mocap=\"true\">); rigidtouch holds it static at its pose in "
+            "the file");
       }
-      continue;  // static, welded to the world
+      continue;  // welded into a free body (merged below), or static, welded to the world
     }
     const int jnt = m->body_jntadr[b];
     if (m->body_jntnum[b] != 1 || m->jnt_type[jnt] != mjJNT_FREE || m->body_parentid[b] != 0) {
-      throw Error("scene file '" + path + "': body '" + name +
-                  "' has joints other than one <freejoint/> at the top level; rigidtouch supports "
-                  "free bodies and static bodies only");
+      int shown = jnt;
+      for (int j = jnt; j < jnt + m->body_jntnum[b]; ++j) {
+        if (m->jnt_type[j] != mjJNT_FREE) shown = j;
+      }
+      throw Error("scene file '" + path + "': body '" + name + "' has a " +
+                  MjJointTypeName(m->jnt_type[shown]) + " <joint> '" +
+                  MjName(m, mjOBJ_JOINT, shown) +
+                  "'; rigidtouch simulates free bodies (one <freejoint/> at the top level, with "
+                  "joint-less child bodies welded in) and static bodies only");
     }
     BodyModel body;
     body.name = name;
-    body.mass_kg = m->body_mass[b];
-    body.inertia_kgm2 =
-        Vec3(m->body_inertia[3 * b], m->body_inertia[3 * b + 1], m->body_inertia[3 * b + 2]);
-    body.ipos_B = Vec3(m->body_ipos[3 * b], m->body_ipos[3 * b + 1], m->body_ipos[3 * b + 2]);
-    body.iquat_B = MjQuat(m->body_iquat + 4 * b).normalized();
+    const int merged = CompositeInertia(m, b, body);
     body.mj_body = b;
     body.mj_qpos_adr = m->jnt_qposadr[jnt];
     body.mj_qvel_adr = m->jnt_dofadr[jnt];
     if (!(body.mass_kg > 0.0) || !(body.inertia_kgm2.minCoeff() > 0.0)) {
-      throw Error("scene file '" + path + "': free body '" + name +
-                  "' has no positive mass and inertia (give its geoms a mass or density)");
+      throw Error("scene file '" + path + "': free body '" + name + "'" +
+                  (merged > 1 ? " (with the bodies welded into it)" : "") +
+                  " has no positive mass and inertia (give its geoms a mass or density)");
     }
     CheckRange(path, "the mass of body '" + name + "'", body.mass_kg, kMinMass, kMaxMass, "kg");
     for (int i = 0; i < 3; ++i) {
       CheckRange(path, "inertia[" + std::to_string(i) + "] of body '" + name + "'",
                  body.inertia_kgm2[i], 0.0, kMaxInertia, "kg m^2");
     }
-    CheckVec(path, "the centre of mass of body '" + name + "'", m->body_ipos + 3 * b, 3,
-             kMaxPosition, "m");
+    CheckVec(path, "the centre of mass of body '" + name + "'", body.ipos_B.data(), 3, kMaxPosition,
+             "m");
     body_index[b] = static_cast<int>(model.bodies.size());
     model.bodies.push_back(body);
   }
@@ -174,36 +271,32 @@ std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& mo
   return body_index;
 }
 
-// geom g's pose relative to its owner: the body's principal frame, or the world for static geoms
+// geom g's pose relative to its owner: the body's principal frame, or the world for static geoms.
+// A geom of a welded child body is first carried into the free body's frame.
 void GeomPose(const mjModel* m, const Model& model, int g, GeomModel& geom) {
-  const Vec3 pos(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]);
-  const Quat quat = MjQuat(m->geom_quat + 4 * g).normalized();
+  Vec3 pos(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]);
+  Quat quat = MjQuat(m->geom_quat + 4 * g).normalized();
   if (geom.body >= 0) {
     const BodyModel& owner = model.bodies[geom.body];
+    ToAncestor(m, m->geom_bodyid[g], owner.mj_body, &pos, &quat);
     geom.pos_B = owner.iquat_B.conjugate() * (pos - owner.ipos_B);
     geom.quat_B = (owner.iquat_B.conjugate() * quat).normalized();
     return;
   }
-  // static: compose the chain of static bodies up to the world (MuJoCo's body_pos/quat)
-  Vec3 p_W = pos;
-  Quat q_W = quat;
-  for (int b = m->geom_bodyid[g]; b != 0; b = m->body_parentid[b]) {
-    const Vec3 bp(m->body_pos[3 * b], m->body_pos[3 * b + 1], m->body_pos[3 * b + 2]);
-    const Quat bq = MjQuat(m->body_quat + 4 * b).normalized();
-    p_W = bp + bq * p_W;
-    q_W = bq * q_W;
-  }
-  geom.pos_B = p_W;
-  geom.quat_B = q_W.normalized();
+  // static: compose the chain of static bodies up to the world
+  ToAncestor(m, m->geom_bodyid[g], 0, &pos, &quat);
+  geom.pos_B = pos;
+  geom.quat_B = quat.normalized();
 }
 
 // the sizes a geom type uses (a plane's may be 0: infinite), its pose, friction and bound
 void CheckGeomNumbers(const mjModel* m, const std::string& path, int g, const GeomModel& geom) {
   const std::string who = "geom '" + geom.name + "'";
-  const int used = geom.type == GeomType::kSphere    ? 1
-                   : geom.type == GeomType::kCapsule ? 2
-                   : geom.type == GeomType::kBox     ? 3
-                                                     : 0;
+  const int mj = m->geom_type[g];
+  const int used = mj == mjGEOM_SPHERE                             ? 1
+                   : mj == mjGEOM_CAPSULE || mj == mjGEOM_CYLINDER ? 2
+                   : mj == mjGEOM_BOX || mj == mjGEOM_ELLIPSOID    ? 3
+                                                                   : 0;
   for (int i = 0; i < 3; ++i) {
     const double lo = i < used ? kMinSize : 0.0;
     CheckRange(path, "size[" + std::to_string(i) + "] of " + who, m->geom_size[3 * g + i], lo,
@@ -224,8 +317,8 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
     if (!ToGeomType(m->geom_type[g], &geom.type)) {
       throw Error("scene file '" + path + "': geom '" + geom.name + "' has type " +
                   MjGeomTypeName(m->geom_type[g]) +
-                  ", which the collision backend cannot give contact manifolds for; supported "
-                  "types: plane, sphere, capsule, box, mesh (convex)");
+                  ", which rigidtouch cannot collide; supported types: plane, sphere, capsule, "
+                  "box, cylinder, ellipsoid, mesh (convex)");
     }
     geom.body = body_index[m->body_weldid[m->geom_bodyid[g]]];
     if (geom.type == GeomType::kPlane && geom.body >= 0) {
@@ -233,7 +326,10 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
                   "' is a plane on a free body; planes must be static (in the worldbody)");
     }
     CheckGeomNumbers(m, path, g, geom);
-    geom.friction = m->geom_friction[3 * g];
+    geom.mj_type = m->geom_type[g];
+    geom.mjcf_friction = m->geom_friction[3 * g];
+    geom.condim = m->geom_condim[g];
+    geom.friction = geom.condim == 1 ? 0.0 : geom.mjcf_friction;
     geom.size = Vec3(m->geom_size[3 * g], m->geom_size[3 * g + 1], m->geom_size[3 * g + 2]);
     geom.rbound_m = m->geom_rbound[g];
     geom.contype = m->geom_contype[g];
@@ -242,11 +338,19 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
     geom.mj_geom = g;
     model.geoms.push_back(geom);
   }
-  if (m->npair > 0 || m->nexclude > 0) {
-    throw Error("scene file '" + path +
-                "': <contact> <pair> and <exclude> elements are not supported; use the geoms' "
-                "contype and conaffinity bits to filter contacts");
+  // <contact><exclude body1 body2>: MuJoCo's signature is (body1 + 1) << 16 | (body2 + 1)
+  for (int e = 0; e < m->nexclude; ++e) {
+    const int sig = m->exclude_signature[e];
+    const int b1 = (sig >> 16) - 1, b2 = (sig & 0xFFFF) - 1;
+    if (b1 < 0 || b2 < 0 || b1 >= m->nbody || b2 >= m->nbody) continue;
+    const int i1 = body_index[b1], i2 = body_index[b2];
+    if (i1 == i2) continue;  // the same rigid body, or both static: never in contact anyway
+    model.excluded_body_pairs.emplace_back(std::min(i1, i2), std::max(i1, i2));
   }
+  std::sort(model.excluded_body_pairs.begin(), model.excluded_body_pairs.end());
+  model.excluded_body_pairs.erase(
+      std::unique(model.excluded_body_pairs.begin(), model.excluded_body_pairs.end()),
+      model.excluded_body_pairs.end());
 }
 
 int FindTool(const Model& model, const std::string& path, const std::string& tool_name) {
@@ -333,8 +437,12 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
                 ") m/s^2 is not finite or longer than " + Num(kMaxGravity) + " m/s^2");
   }
 
+  if (m->opt.disableflags & mjDSBL_GRAVITY) model.gravity_W.setZero();  // <flag gravity="disable"/>
+  // joints first: a scene of hinged bodies is refused for them, not for their actuators
   const std::vector<int> body_index = CopyBodies(m, path, model);
+  CheckElements(m, path, model.load_warnings);
   CopyGeoms(m, path, body_index, model);
+  CheckPairs(m, path, model.load_warnings);
   model.tool = FindTool(model, path, options.tool_name);
   InitialState(m, path, model);
   CheckInitialOverlap(m, path);

@@ -1,0 +1,249 @@
+#include "io/mjcf_checks.h"
+
+#include <sstream>
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch {
+namespace {
+
+std::string Name(const mjModel* m, int type, int id) {
+  const char* name = mj_id2name(m, type, id);
+  std::string quoted = "'";
+  if (name != nullptr && name[0] != '\0') {
+    quoted += name;
+  } else {
+    quoted += '#';
+    quoted += std::to_string(id);
+  }
+  quoted += "'";
+  return quoted;
+}
+
+std::string Nums(const mjtNum* v, int n) {
+  std::ostringstream s;
+  for (int i = 0; i < n; ++i) s << (i ? " " : "") << v[i];
+  return s.str();
+}
+
+bool Differs(const mjtNum* a, const mjtNum* b, int n) {
+  for (int i = 0; i < n; ++i) {
+    if (a[i] != b[i]) return true;
+  }
+  return false;
+}
+
+const char* EqualityName(int type) {
+  switch (type) {
+    case mjEQ_CONNECT:
+      return "connect";
+    case mjEQ_WELD:
+      return "weld";
+    case mjEQ_JOINT:
+      return "joint";
+    case mjEQ_TENDON:
+      return "tendon";
+    default:
+      return "distance";
+  }
+}
+
+struct Reporter {
+  const std::string& path;
+  std::vector<std::string>& warnings;
+
+  [[noreturn]] void Refuse(const std::string& what) const {
+    throw Error("scene file '" + path + "': " + what);
+  }
+  void Warn(const std::string& what) const {
+    warnings.push_back("scene file '" + path + "': " + what);
+  }
+};
+
+// <option> attributes and <flag>s
+void CheckOptions(const mjModel* m, const Reporter& r) {
+  const mjOption& o = m->opt;
+  mjOption def;
+  mj_defaultOption(&def);
+  if (o.density != 0.0 || o.viscosity != 0.0) {
+    r.Refuse("<option density=\"" + Nums(&o.density, 1) + "\" viscosity=\"" +
+             Nums(&o.viscosity, 1) +
+             "\"> asks for fluid forces (drag, lift, viscosity), which rigidtouch does not "
+             "compute; remove them or set them to 0");
+  }
+  if (o.wind[0] != 0.0 || o.wind[1] != 0.0 || o.wind[2] != 0.0) {
+    r.Refuse("<option wind=\"" + Nums(o.wind, 3) +
+             "\"> asks for fluid forces, which rigidtouch does not compute; remove it");
+  }
+  if (o.disableflags & mjDSBL_CONTACT) {
+    r.Refuse(
+        "<flag contact=\"disable\"/>: rigidtouch always computes contacts (it is a contact "
+        "renderer); remove the flag");
+  }
+  if (o.disableflags & mjDSBL_CONSTRAINT) {
+    r.Refuse(
+        "<flag constraint=\"disable\"/> turns contacts off, which rigidtouch always computes; "
+        "remove the flag");
+  }
+  if (o.collision == mjCOL_PAIR) {
+    r.Refuse(
+        "<option collision=\"predefined\"> collides only <contact><pair> geoms; rigidtouch "
+        "collides every pair the contype/conaffinity bits allow");
+  }
+  if (o.collision == mjCOL_DYNAMIC && m->npair > 0) {
+    r.Refuse(
+        "<option collision=\"dynamic\"> ignores the <contact><pair> elements; rigidtouch cannot "
+        "tell which pairs that leaves out: remove the option or the pairs");
+  }
+  // flags that tune MuJoCo's solver or features rigidtouch has not got: nothing moves otherwise
+  struct Flag {
+    int bit;
+    const char* name;
+  };
+  const Flag disable[] = {
+      {mjDSBL_EQUALITY, "equality"},
+      {mjDSBL_FRICTIONLOSS, "frictionloss"},
+      {mjDSBL_LIMIT, "limit"},
+      {mjDSBL_PASSIVE, "passive"},
+      {mjDSBL_CLAMPCTRL, "clampctrl"},
+      {mjDSBL_WARMSTART, "warmstart"},
+      {mjDSBL_FILTERPARENT, "filterparent"},
+      {mjDSBL_ACTUATION, "actuation"},
+      {mjDSBL_REFSAFE, "refsafe"},
+      {mjDSBL_SENSOR, "sensor"},
+  };
+  for (const Flag& f : disable) {
+    if (o.disableflags & f.bit) {
+      r.Warn(std::string("<flag ") + f.name +
+             "=\"disable\"/> is ignored: it tunes a part of MuJoCo that rigidtouch replaces or "
+             "does not have");
+    }
+  }
+  const Flag enable[] = {{mjENBL_OVERRIDE, "override"},
+                         {mjENBL_ENERGY, "energy"},
+                         {mjENBL_FWDINV, "fwdinv"},
+                         {mjENBL_SENSORNOISE, "sensornoise"},
+                         {mjENBL_MULTICCD, "multiccd"}};
+  for (const Flag& f : enable) {
+    if (o.enableflags & f.bit) {
+      r.Warn(std::string("<flag ") + f.name +
+             "=\"enable\"/> is ignored: it tunes a part of MuJoCo that rigidtouch replaces or "
+             "does not have");
+    }
+  }
+  // MuJoCo's solver and integrator: rigidtouch integrates and resolves contact its own way
+  std::string tuned;
+  auto note = [&tuned](bool differs, const char* attribute) {
+    if (differs) tuned += std::string(tuned.empty() ? "" : ", ") + attribute;
+  };
+  note(o.integrator != def.integrator, "integrator");
+  note(o.cone != def.cone, "cone");
+  note(o.jacobian != def.jacobian, "jacobian");
+  note(o.solver != def.solver, "solver");
+  note(o.iterations != def.iterations, "iterations");
+  note(o.tolerance != def.tolerance, "tolerance");
+  note(o.noslip_iterations != def.noslip_iterations, "noslip_iterations");
+  note(o.noslip_tolerance != def.noslip_tolerance, "noslip_tolerance");
+  note(o.mpr_iterations != def.mpr_iterations, "mpr_iterations");
+  note(o.mpr_tolerance != def.mpr_tolerance, "mpr_tolerance");
+  note(o.impratio != def.impratio, "impratio");
+  note((o.enableflags & mjENBL_OVERRIDE) &&
+           (o.o_margin != def.o_margin || Differs(o.o_solref, def.o_solref, mjNREF) ||
+            Differs(o.o_solimp, def.o_solimp, mjNIMP)),
+       "o_margin/o_solref/o_solimp");
+  if (!tuned.empty()) {
+    r.Warn("<option> " + tuned +
+           " ignored: they tune MuJoCo's integrator and constraint solver, which rigidtouch "
+           "replaces with its own integration and contact (docs/method.md)");
+  }
+}
+
+void CheckGeoms(const mjModel* m, const Reporter& r) {
+  mjtNum def_solref[mjNREF], def_solimp[mjNIMP];
+  mj_defaultSolRefImp(def_solref, def_solimp);
+  std::string soft, torsional;
+  int nsoft = 0, ntorsional = 0;
+  for (int g = 0; g < m->ngeom; ++g) {
+    const bool tuned = Differs(m->geom_solref + mjNREF * g, def_solref, mjNREF) ||
+                       Differs(m->geom_solimp + mjNIMP * g, def_solimp, mjNIMP) ||
+                       m->geom_margin[g] != 0.0 || m->geom_gap[g] != 0.0 ||
+                       m->geom_solmix[g] != 1.0 || m->geom_priority[g] != 0;
+    if (tuned && nsoft++ < 3) soft += (soft.empty() ? "" : ", ") + Name(m, mjOBJ_GEOM, g);
+    if (m->geom_condim[g] > 3 && ntorsional++ < 3) {
+      torsional += (torsional.empty() ? "" : ", ") + Name(m, mjOBJ_GEOM, g);
+    }
+  }
+  auto more = [](int n) { return n > 3 ? " and " + std::to_string(n - 3) + " more" : ""; };
+  if (nsoft > 0) {
+    r.Warn("<geom> solref, solimp, margin, gap, solmix or priority set on geom " + soft +
+           std::string(more(nsoft)) +
+           ": ignored, they tune MuJoCo's soft contact, which rigidtouch replaces with its own "
+           "penalty and impulse contact (its stiffness and damping are rigidtouch's settings)");
+  }
+  if (ntorsional > 0) {
+    r.Warn("<geom condim=\"4\" or \"6\"> on geom " + torsional + std::string(more(ntorsional)) +
+           ": rigidtouch applies the sliding friction only; torsional and rolling friction are "
+           "not simulated");
+  }
+}
+
+}  // namespace
+
+void CheckElements(const mjModel* m, const std::string& path, std::vector<std::string>& warnings) {
+  const Reporter r{path, warnings};
+  for (int e = 0; e < m->neq; ++e) {
+    r.Refuse(std::string("<equality> <") + EqualityName(m->eq_type[e]) + "> " +
+             Name(m, mjOBJ_EQUALITY, e) +
+             ": rigidtouch simulates no equality constraints (free bodies and static geometry "
+             "only); weld parts by nesting bodies without a joint instead");
+  }
+  if (m->nu > 0) {
+    r.Refuse("<actuator> " + Name(m, mjOBJ_ACTUATOR, 0) + (m->nu > 1 ? " (and others)" : "") +
+             ": rigidtouch applies no actuator forces; the tool is driven by the device or "
+             "--tool-force");
+  }
+  for (int t = 0; t < m->ntendon; ++t) {
+    if (m->tendon_limited[t] || m->tendon_stiffness[t] != 0.0 || m->tendon_damping[t] != 0.0) {
+      r.Refuse("<tendon> " + Name(m, mjOBJ_TENDON, t) +
+               " has a limit, stiffness or damping: rigidtouch simulates no tendon forces");
+    }
+  }
+  if (m->ntendon > 0) {
+    r.Warn("<tendon> " + Name(m, mjOBJ_TENDON, 0) + (m->ntendon > 1 ? " (and others)" : "") +
+           " ignored: rigidtouch has no tendons (they exert no force here)");
+  }
+  for (int d = 0; d < m->nv; ++d) {
+    if (m->dof_damping[d] != 0.0 || m->dof_armature[d] != 0.0 || m->dof_frictionloss[d] != 0.0) {
+      r.Refuse("<joint> " + Name(m, mjOBJ_JOINT, m->dof_jntid[d]) +
+               " has damping, armature or frictionloss: rigidtouch's free bodies move without "
+               "joint forces");
+    }
+  }
+  if (m->nsensor > 0) {
+    r.Warn("<sensor> " + Name(m, mjOBJ_SENSOR, 0) + (m->nsensor > 1 ? " (and others)" : "") +
+           " ignored: rigidtouch computes no MuJoCo sensors");
+  }
+  CheckOptions(m, r);
+  CheckGeoms(m, r);
+}
+
+void CheckPairs(const mjModel* m, const std::string& path, std::vector<std::string>& warnings) {
+  const Reporter r{path, warnings};
+  for (int p = 0; p < m->npair; ++p) {
+    const int g1 = m->pair_geom1[p], g2 = m->pair_geom2[p];
+    const bool filtered = (m->geom_contype[g1] & m->geom_conaffinity[g2]) != 0 ||
+                          (m->geom_contype[g2] & m->geom_conaffinity[g1]) != 0;
+    const std::string who = "<contact><pair> " + Name(m, mjOBJ_PAIR, p) + " of geoms " +
+                            Name(m, mjOBJ_GEOM, g1) + " and " + Name(m, mjOBJ_GEOM, g2);
+    if (!filtered) {
+      r.Refuse(who +
+               ": rigidtouch collides only the geom pairs the contype/conaffinity bits allow, and "
+               "these two are not; set the bits so that they collide and remove the pair");
+    }
+    r.Warn(who +
+           ": the geoms collide anyway (contype/conaffinity); the pair's condim, friction, "
+           "solref, solimp and margin are ignored");
+  }
+}
+
+}  // namespace rigidtouch

@@ -1,0 +1,28 @@
+// What an MJCF scene asks for that rigidtouch does not simulate: refused with an Error naming the
+// element, or accepted with a warning naming it (docs/scenes.md lists which; docs/decisions.md,
+// "MJCF coverage", gives the rule). Nothing MuJoCo compiles into the model is ignored silently,
+// except what never moves a body (visuals, cameras, lights, sites, sensors' outputs are warned).
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <string>
+#include <vector>
+
+namespace rigidtouch {
+
+/// Refuses (Error) the elements that change the motion rigidtouch computes: equality constraints,
+/// actuators, tendons with stiffness, damping or limits, fluid forces, contacts or constraints
+/// disabled, contact of predefined pairs only, damping, armature or friction loss on a free joint.
+/// Appends a warning for those that only tune MuJoCo's own solver and soft contact, which
+/// rigidtouch replaces with its own (solver options, integrator, solref, solimp, margin, gap,
+/// priority, solmix), for torsional and rolling friction (condim 4 and 6), and for sensors and
+/// passive tendons.
+void CheckElements(const mjModel* m, const std::string& path, std::vector<std::string>& warnings);
+
+/// <contact><pair>: refused when the pair would add a contact that the geoms' contype and
+/// conaffinity bits exclude (rigidtouch collides only what the filter lets through); otherwise
+/// the contact exists anyway and only the pair's parameters are dropped, with a warning.
+void CheckPairs(const mjModel* m, const std::string& path, std::vector<std::string>& warnings);
+
+}  // namespace rigidtouch
