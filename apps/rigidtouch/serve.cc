@@ -125,6 +125,7 @@ void Run(const ServeFlags& f) {
     c.load.device.coupling = Coupling::kDirect;
     analysis::TapSetup setup = analysis::PrepareTap(c);
     Model& model = setup.model;
+    PrintLoadWarnings(model);
     device::TightenDeviceParams(model.device, setup.simulated->limits());
     SetPlausibility(f, model.device);
     // refuses a stiffness or damping the device cannot display

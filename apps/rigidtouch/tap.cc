@@ -227,6 +227,7 @@ void CompareWalls(const TapFlags& f) {
       wall = w;
     }
     const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(g, wall));
+    if (w < 0) PrintLoadWarnings(run.model);  // the same scene for every wall: once
     const std::string key = kWallKeys[w + 1];
     const std::string trace = OutPath(f, key + ".csv");
     io::WriteTraceCsv(trace, run.trace);
@@ -288,6 +289,7 @@ void Run(const TapFlags& f) {
   if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
   if (!f.plot.empty()) io::CheckOutputPath(f.plot, "figure");
   const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, f.wall));
+  PrintLoadWarnings(run.model);
   if (!trace.empty()) io::WriteTraceCsv(trace, run.trace);
   if (!f.plot.empty()) {
     // the temporary trace goes whether or not the figure could be drawn

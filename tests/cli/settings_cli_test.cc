@@ -101,6 +101,23 @@ TEST_F(SettingsCliTest, ValuesThatCannotBeUsedAreRefusedSayingWhereTheyWereWritt
   EXPECT_EQ(Json(RunCli("tap --taps 1 --json --config " + v))["coupling"], "virtual");
 }
 
+// a scene law the user wrote that cannot hold a body is used and warned about, in tap as in
+// simulate (tap loads its scene inside the library and printed no load warning)
+TEST_F(SettingsCliTest, TapPrintsTheScenesLoadWarnings) {
+  const std::string scene = Config("heavy.xml", R"(<mujoco><worldbody>
+    <geom name="wall" type="plane" size="1 1 0.1"/>
+    <body name="tool" pos="0 0 0.02"><freejoint/><geom type="sphere" size="0.005" mass="0.1"/></body>
+    <body name="heavy" pos="0.3 0 0.1"><freejoint/><geom type="box" size="0.05 0.05 0.05"
+      mass="20"/></body></worldbody></mujoco>)");
+  const std::string soft = Config("soft.json", R"({"contact": {"scene_stiffness_N_per_m": 100}})");
+  const CliResult r = RunCli("tap --taps 1 --scene " + scene + " --config " + soft);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("rigidtouch: warning: scene_stiffness_N_per_m = 100 N/m cannot hold body "
+                       "'heavy'"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST_F(SettingsCliTest, HelpStatesTheOrder) {
   for (const char* command : {"tap", "serve", "simulate", "bench"}) {
     const CliResult r = RunCli(std::string(command) + " --help");
