@@ -381,9 +381,10 @@ void Run(const TapFlags& f) {
     trace = f.plot + ".trace.csv";
     temporary = true;
   }
-  // a bad output path fails now, not after the run
-  if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
+  // a bad output path fails now, not after the run; the figure first, so a missing folder is
+  // blamed on the path the user wrote, not on the temporary trace beside it
   if (!f.plot.empty()) io::CheckOutputPath(f.plot, "figure");
+  if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
   const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, f.wall));
   PrintLoadWarnings(run.model);
   if (!trace.empty()) io::WriteTraceCsv(trace, run.trace);

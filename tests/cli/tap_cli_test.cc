@@ -147,6 +147,22 @@ TEST(TapCliTest, BadInputGetsAClearError) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find(bad.string()), std::string::npos) << r.err;
   EXPECT_TRUE(fs::is_empty(dir));
+  // an output folder that cannot be created (in /proc) is an error naming it, not an internal one
+  r = RunCli("tap --compare-walls --taps 1 --out-dir /proc/nope");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("rigidtouch: error: cannot create the output folder (--out-dir) "
+                       "'/proc/nope'"),
+            std::string::npos)
+      << r.err;
+  // a figure in a missing folder: the figure is named, not the temporary trace beside it
+  const fs::path figure = dir / "no_such_folder" / "t.png";
+  r = RunCli("tap --taps 1 --plot " + figure.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("rigidtouch: error: cannot write figure '" + figure.string() + "'"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find(".trace.csv"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::is_empty(dir));
   fs::remove_all(dir);
 }
 
