@@ -39,7 +39,8 @@ def tap_series(columns, tap, before_ms, after_ms):
         "requested_peak_N": max(penalty[i] + impulsive[i] for i in rows),
         "displayed_peak_N": max(displayed[i] for i in rows),
     }
-    window = [i for i in rows if i >= onset and time_s[i] - t0 < 0.1]
+    # as the metrics: 100 ms from onset, with a tolerance for the rounding of trace times
+    window = [i for i in rows if i >= onset and time_s[i] - t0 < 0.1 - 1e-9]
     s["window_displayed_N"] = [displayed[i] for i in window]
     s["window_transient_N"] = [displayed[i] - penalty[i] for i in window]
     s["sample_rate_hz"] = ((len(window) - 1) / (time_s[window[-1]] - t0)

@@ -145,7 +145,8 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   // part (displayed minus penalty: what the impulses add after the device limit)
   std::vector<double> force_N, transient_N;
   for (std::size_t k = onset; k < s.size(); ++k) {
-    if (s[k].time_s - s[onset].time_s >= options.collision_window_s) break;
+    // the tolerance keeps trace times' rounding from adding a sample: 100 ms is 100 ticks
+    if (s[k].time_s - s[onset].time_s >= options.collision_window_s - 1e-9) break;
     force_N.push_back(normal_force_N(k));
     transient_N.push_back(normal_force_N(k) - s[k].penalty_force_N.dot(n));
   }

@@ -279,8 +279,9 @@ TEST(TapMetricsTest, TrainOnASlowPressSeparatesDisplayedAndTransientSpectra) {
     s[k].device_force_N = s[k].penalty_force_N + s[k].impulsive_force_N;
   }
   TapMetrics m = ComputeTapMetrics(s);
-  // the press: the first bin above DC (7.8 Hz), below the 10 Hz resolution of 100 ms
-  EXPECT_DOUBLE_EQ(m.spectrum_resolution_hz, 1000.0 / 100.0);
+  // the press: the first bin above DC (7.8 Hz), below the 10 Hz resolution of 100 ms (exactly
+  // 100 samples, although the trace's times 1.0 + k * 0.001 are rounded)
+  EXPECT_NEAR(m.spectrum_resolution_hz, 1000.0 / 100.0, 1e-9);
   EXPECT_LT(m.dominant_frequency_hz, m.spectrum_resolution_hz);
   EXPECT_GT(m.band_energy_fraction[0], 0.5);
   // the train: 250 Hz to the bin (7.8 Hz), a line far above the mean (> 10), most of its power
@@ -335,6 +336,33 @@ TEST(TapMetricsTest, ExtendedRateHardnessSeesALaterLargerRise) {
   EXPECT_NEAR(m.extended_rate_hardness_N_per_m, (b + r) / hv, 1e-9 * b / hv);
   m = train(1.0);
   EXPECT_NEAR(m.extended_rate_hardness_N_per_m, m.rate_hardness_N_per_m, 1e-9 * a / hv);
+}
+
+}  // namespace
+}  // namespace rigidtouch::analysis
+
+namespace rigidtouch::analysis {
+namespace {
+
+// The collision window is 100 ticks at 1 kHz wherever the tap starts, although times summed
+// sub-step by sub-step (as the simulated device's clock is) are rounded: 100 ticks after onset
+// may read 0.09999999999998899 s, and one sample more would make the window 101 ticks and its
+// resolution 9.9 Hz (onsets from tick 46 on do so without the tolerance)
+TEST(TapMetricsTest, CollisionWindowIsAWholeNumberOfTicksDespiteRoundedTimes) {
+  for (int start = 0; start < 200; start += 7) {
+    std::vector<TraceSample> s = SyntheticTap(kOnset + 150);
+    double t = 0.0;
+    const auto tick = [&t] {
+      for (int j = 0; j < 10; ++j) t += kTick / 10;
+    };
+    for (int k = 0; k < start; ++k) tick();
+    for (TraceSample& x : s) {
+      x.time_s = t;
+      x.device_force_N.z() = x.tool_contacts > 0 ? 1.0 + 0.1 * (x.step % 3) : 0.0;
+      tick();
+    }
+    EXPECT_NEAR(ComputeTapMetrics(s).spectrum_resolution_hz, 10.0, 1e-6) << start;
+  }
 }
 
 }  // namespace
