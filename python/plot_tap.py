@@ -59,7 +59,7 @@ def main():
         ax.set_xlabel("time from contact onset [ms]")
     tap_panels.draw_motion(axes[1][0], s)
     tap_panels.draw_spectrum(axes[1][1], s)
-    axes[1][1].set_title("spectrum over the 100 ms collision window (10 Hz resolution)")
+    axes[1][1].set_title("spectrum, 100 ms from onset (10 Hz resolution)")
     name = os.path.splitext(os.path.basename(args.trace))[0]
     fig.suptitle(args.title or f"{name}, tap {args.tap}", fontsize=10)
     fig.tight_layout()

@@ -72,7 +72,7 @@ def main():
         tap_panels.draw_motion(axes[2][c], s, legend=first)
         axes[2][c].set_xlabel("time from contact onset [ms]")
         tap_panels.draw_spectrum(axes[3][c], s, legend=True)
-        axes[3][c].set_title("spectrum over the 100 ms collision window (10 Hz resolution)")
+        axes[3][c].set_title("spectrum, 100 ms from onset (10 Hz resolution)")
     fig.suptitle(f"tap {args.tap}: force the device displays (black) against its limit (red), "
                  "requested force dashed", fontsize=10)
     fig.tight_layout()

@@ -164,8 +164,12 @@ def draw_spectrum(ax, s, legend=True):
     ax.plot(f_d[1:], db(p_d[1:]), color="black", linewidth=1.2,
             label=f"displayed (peak {dom_d:.0f} Hz)")
     if any(x > 0 for x in p_t[1:]):
+        above = [p for f, p in zip(f_t[1:], p_t[1:]) if f >= BAND_EDGES_HZ[0]]
+        peak_to_mean = max(above) / (sum(above) / len(above))
+        # as the table: a peak less than twice the mean power is no dominant frequency
+        peak = f"{dom_t:.0f} Hz" if peak_to_mean >= 2.0 else "none, flat"
         ax.plot(f_t[1:], db(p_t[1:]), color="tab:orange", linewidth=1.0,
-                label=f"transient part (peak >= 40 Hz: {dom_t:.0f} Hz)")
+                label=f"transient part (peak >= 40 Hz: {peak})")
     else:
         ax.text(0.97, 0.95, "no transient part (no impulses)", transform=ax.transAxes,
                 ha="right", va="top", fontsize=7)
