@@ -445,7 +445,10 @@ void Register(CLI::App& root) {
   app->add_option("--taps", f->taps, "number of taps")->capture_default_str();
   app->add_option("--seed", f->seed, "random seed")->capture_default_str();
   app->add_option("--trace", f->trace, "write the trace CSV here");
-  app->add_option("--plot", f->plot, "draw one tap (penalty, impulsive, sum) to this PNG");
+  app->add_option(
+      "--plot", f->plot,
+      "draw tap 0 to this PNG: displayed force against the device limit, requested force and its "
+      "parts, penetration, velocity, spectra");
   app->add_flag("--compare-walls", f->compare_walls,
                 "run penalty and walls 0, 1, 2; write traces, a table and figures to --out-dir");
   app->add_option("--compare", f->compare,
