@@ -45,6 +45,12 @@ struct TapFlags {
   bool json = false;
 };
 
+// the method's walls fix the render parameters: a value the user wrote for one is refused
+const std::vector<std::string> kWallFixedFields = {"render.restitution", "render.t_collision_s",
+                                                   "render.frequency_hz"};
+constexpr const char* kWallFixedWhy =
+    "the method's walls (--wall, wall0/1/2 in --compare, --compare-walls) fix e, t_c and f";
+
 analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> wall,
                                          const analysis::RendererSpec* spec = nullptr) {
   std::optional<RenderParams> wall_params;
@@ -69,6 +75,7 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     if (spec->render) wall_params = spec->render;
   }
   if (wall_params) {
+    RefuseUnused(ResolveSettings(f.scene), kWallFixedFields, kWallFixedWhy);
     const RenderParams r = *wall_params;
     c.load.render.renderer = r.renderer;
     c.load.render.restitution = r.restitution;
@@ -371,6 +378,10 @@ void Run(const TapFlags& f) {
     }
     const std::vector<analysis::RendererSpec> specs =
         analysis::ParseRendererList(f.compare_walls ? analysis::kWallsSet : f.compare);
+    // refused before the first run, not when its wall comes
+    for (const analysis::RendererSpec& spec : specs) {
+      if (spec.render) RefuseUnused(ResolveSettings(f.scene), kWallFixedFields, kWallFixedWhy);
+    }
     Compare(f, specs, f.compare_walls ? "walls" : "compare");
     return;
   }

@@ -83,6 +83,12 @@ TEST(TapCliTest, CompareRunsAnySetOfRenderers) {
   EXPECT_NE(r.err.find("unknown material 'wood'"), std::string::npos) << r.err;
   r = RunCli("tap --compare penalty --compare-walls --out-dir " + (dir / "bad").string());
   EXPECT_EQ(r.exit_code, 2);
+  // a wall fixes f: a frequency the user wrote is refused, not dropped
+  r = RunCli("tap --compare train,wall1 --frequency 100 --out-dir " + (dir / "bad").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("render.frequency_hz (set by --frequency) has no effect here"),
+            std::string::npos)
+      << r.err;
   EXPECT_FALSE(fs::exists(dir / "bad"));
   fs::remove_all(dir);
 }
