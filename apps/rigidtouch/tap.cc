@@ -43,6 +43,7 @@ struct TapFlags {
   std::string compare;
   std::string out_dir = "out";
   bool json = false;
+  bool out_dir_given = false;  // --out-dir was written (it has a default)
 };
 
 // the method's walls fix the render parameters: a value the user wrote for one is refused
@@ -386,6 +387,11 @@ void Run(const TapFlags& f) {
     return;
   }
   if (f.wall && f.scene.renderer) throw Error("give either --wall or --renderer, not both");
+  if (f.out_dir_given) {
+    throw Error(
+        "--out-dir is the output folder of --compare and --compare-walls; one renderer "
+        "writes where --trace and --plot say");
+  }
   std::string trace = f.trace;
   bool temporary = false;
   if (trace.empty() && !f.plot.empty()) {
@@ -466,11 +472,15 @@ void Register(CLI::App& root) {
                   "run these renderers side by side, comma-separated: penalty, impulse, train "
                   "(with the flags' parameters), wall0, wall1, wall2 (the method's walls); "
                   "writes traces, compare.md and figures to --out-dir");
-  app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
-      ->capture_default_str();
+  CLI::Option* out_dir =
+      app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
+          ->capture_default_str();
   app->add_flag("--json", f->json, "print one JSON object");
   // an error about a parameter the user wrote says where it was written
-  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
+  app->callback([f, out_dir] {
+    f->out_dir_given = out_dir->count() > 0;
+    WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
+  });
 }
 
 const CommandRegistrar registrar(&Register);

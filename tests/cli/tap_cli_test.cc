@@ -160,6 +160,10 @@ TEST(TapCliTest, BadInputGetsAClearError) {
                        "'/proc/nope'"),
             std::string::npos)
       << r.err;
+  // --out-dir without a comparison would be ignored: refused
+  r = RunCli("tap --taps 1 --out-dir " + (dir / "o").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--out-dir is the output folder of --compare"), std::string::npos) << r.err;
   // a figure in a missing folder: the figure is named, not the temporary trace beside it
   const fs::path figure = dir / "no_such_folder" / "t.png";
   r = RunCli("tap --taps 1 --plot " + figure.string());
