@@ -116,7 +116,8 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   // extended: largest rate within the window after onset
   double max_rate_N_per_s = -std::numeric_limits<double>::infinity();
   for (std::size_t k = std::max<std::size_t>(onset, 1); k < s.size(); ++k) {
-    if (s[k].time_s - s[onset].time_s > options.extended_rate_hardness_window_s) break;
+    // the tolerance as for the collision window: tick onset + 10 is in, wherever the tap starts
+    if (s[k].time_s - s[onset].time_s > options.extended_rate_hardness_window_s + 1e-9) break;
     const double dt_s = s[k].time_s - s[k - 1].time_s;
     if (dt_s <= 0.0) continue;
     max_rate_N_per_s =

@@ -347,8 +347,9 @@ namespace {
 // The collision window is 100 ticks at 1 kHz wherever the tap starts, although times summed
 // sub-step by sub-step (as the simulated device's clock is) are rounded: 100 ticks after onset
 // may read 0.09999999999998899 s, and one sample more would make the window 101 ticks and its
-// resolution 9.9 Hz (onsets from tick 46 on do so without the tolerance)
-TEST(TapMetricsTest, CollisionWindowIsAWholeNumberOfTicksDespiteRoundedTimes) {
+// resolution 9.9 Hz (onsets from tick 46 on do so without the tolerance); likewise the extended
+// rate hardness's 10 ms must hold tick onset + 10 wherever the tap starts
+TEST(TapMetricsTest, WindowsAreWholeNumbersOfTicksDespiteRoundedTimes) {
   for (int start = 0; start < 200; start += 7) {
     std::vector<TraceSample> s = SyntheticTap(kOnset + 150);
     double t = 0.0;
@@ -359,9 +360,14 @@ TEST(TapMetricsTest, CollisionWindowIsAWholeNumberOfTicksDespiteRoundedTimes) {
     for (TraceSample& x : s) {
       x.time_s = t;
       x.device_force_N.z() = x.tool_contacts > 0 ? 1.0 + 0.1 * (x.step % 3) : 0.0;
+      // a 5 N step 10 ticks after onset: inside the extended rate hardness's 10 ms
+      if (x.step - s.front().step >= kOnset + 10) x.device_force_N.z() += 5.0;
       tick();
     }
-    EXPECT_NEAR(ComputeTapMetrics(s).spectrum_resolution_hz, 10.0, 1e-6) << start;
+    const TapMetrics m = ComputeTapMetrics(s);
+    EXPECT_NEAR(m.spectrum_resolution_hz, 10.0, 1e-6) << start;
+    // the step's rise, 5 N +- 0.2 N of ripple, over one tick and the approach speed
+    EXPECT_GT(m.extended_rate_hardness_N_per_m, 4.7 / (kTick * kSpeed)) << start;
   }
 }
 
