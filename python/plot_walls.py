@@ -56,26 +56,31 @@ def main():
     n = len(panels)
     plt.rcParams.update({"font.size": 8, "axes.titlesize": 9})
     fig, axes = plt.subplots(4, n, figsize=(3.4 * n + 0.6, 10.5), squeeze=False)
+    legend = {}  # one legend for the whole figure: label -> handle
     for c, (label, s) in enumerate(zip(labels, panels)):
-        first = c == 0
         s["label"] = label
         ax = axes[0][c]
         draw = tap_panels.draw_force
-        draw(ax, s, args.limit, legend=first)
+        draw(ax, s, args.limit, legend=False)
         ax.set_title(f"{label}\n{len(s['impulse_ms'])} impulse instants shown, "
                      f"displayed peak {s['displayed_peak_N']:.2f} N")
         ax.set_xlabel("time from contact onset [ms]")
         ax = axes[1][c]
-        draw(ax, s, args.limit, zoom_ms=args.zoom_ms, legend=first)
+        draw(ax, s, args.limit, zoom_ms=args.zoom_ms, legend=False)
         ax.set_title(f"first {args.zoom_ms:g} ms")
         ax.set_xlabel("time from contact onset [ms]")
-        tap_panels.draw_motion(axes[2][c], s, legend=first)
+        right = tap_panels.draw_motion(axes[2][c], s, legend=False)
         axes[2][c].set_xlabel("time from contact onset [ms]")
+        for a in (axes[0][c], axes[1][c], axes[2][c], right):
+            for handle, text in zip(*a.get_legend_handles_labels()):
+                legend.setdefault(text, handle)
         tap_panels.draw_spectrum(axes[3][c], s, legend=True)
         axes[3][c].set_title("spectrum, 100 ms from onset (10 Hz resolution)")
-    fig.suptitle(f"tap {args.tap}: force the device displays (black) against its limit (red), "
-                 "requested force dashed", fontsize=10)
-    fig.tight_layout()
+    fig.suptitle(f"tap {args.tap}: the force the device displays against its limit, per renderer",
+                 fontsize=10)
+    fig.legend(list(legend.values()), list(legend.keys()), loc="upper center",
+               bbox_to_anchor=(0.5, 0.975), ncol=min(len(legend), 7), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.955))
     try:
         fig.savefig(args.out, dpi=args.dpi)
     except OSError as error:
