@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
-"""Force against time for one tap of a rigidtouch trace: the penalty part, the impulsive part
-(Eq. 9) and their sum, all along the wall normal, with the impulse instants marked.
+"""One tap of a rigidtouch trace: the force the device displayed against its force limit, the
+requested force and its penalty and impulsive (Eq. 9) parts, a zoom on the first 40 ms with the
+impulse instants, penetration and velocity, and the spectrum of the displayed force and of its
+transient part over the collision window.
 
-Usage: plot_tap.py TRACE.csv --out FIG.png [--tap K] [--before-ms 5] [--after-ms 150] [--full]
+Usage: plot_tap.py TRACE.csv --out FIG.png [--tap K] [--limit N] [--title T] [--before-ms 5]
+                   [--after-ms 150] [--full] [--dump PLOTTED.json]
 Exit codes: 0 figure written, 2 bad arguments or trace, 3 matplotlib missing.
 """
 
@@ -19,60 +22,59 @@ def main():
     parser.add_argument("trace", help="trace CSV written by rigidtouch")
     parser.add_argument("--out", required=True, help="output image (PNG, PDF or SVG)")
     parser.add_argument("--tap", type=int, default=0, help="scripted tap index (default 0)")
+    parser.add_argument("--limit", type=float, default=0.0,
+                        help="the device's force limit [N], drawn as a line (0: no limit)")
     parser.add_argument("--before-ms", type=float, default=5.0,
                         help="time shown before contact onset [ms]")
     parser.add_argument("--after-ms", type=float, default=150.0,
                         help="time shown after contact onset [ms]")
+    parser.add_argument("--zoom-ms", type=float, default=40.0)
     parser.add_argument("--full", action="store_true", help="show the whole tap")
-    parser.add_argument("--title", default=None)
+    parser.add_argument("--title", default=None,
+                        help="figure title (default: the trace's file name and the tap)")
+    parser.add_argument("--dump", default=None, help="also write what is plotted as JSON")
     args = parser.parse_args()
 
     plt = trace_io.import_pyplot()
+    import tap_panels
     try:
         columns = trace_io.read_trace(args.trace)
-        rows = trace_io.tap_rows(columns, args.tap)
+        after = float("inf") if args.full else args.after_ms
+        before = float("inf") if args.full else args.before_ms
+        s = tap_panels.tap_series(columns, args.tap, before, after)
     except SystemExit as error:
         print(error, file=sys.stderr)
         return 2
 
-    time_s = columns["time_s"]
-    penalty = trace_io.normal_component(columns, "penalty_f", "N")
-    impulsive = trace_io.normal_component(columns, "impulsive_f", "N")
-    device = trace_io.normal_component(columns, "device_f", "N")
-    onset = next((i for i in rows if columns["tool_contacts"][i] > 0), rows[0])
-    t0 = time_s[onset]
-    if not args.full:
-        rows = [i for i in rows
-                if -args.before_ms <= (time_s[i] - t0) * 1e3 <= args.after_ms]
-    t_ms = [(time_s[i] - t0) * 1e3 for i in rows]
-    total = [penalty[i] + impulsive[i] for i in rows]
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    # forces are held over each tick (zero-order hold): draw them as steps
-    # the sum first, wide and grey, so the parts stay visible on top of it
-    ax.step(t_ms, total, where="post", label="sum", color="0.55", linewidth=2.4)
-    ax.step(t_ms, [penalty[i] for i in rows], where="post", label="penalty", color="tab:blue",
-            linewidth=1.1)
-    ax.step(t_ms, [impulsive[i] for i in rows], where="post", label="impulsive (Eq. 9)",
-            color="tab:orange", linewidth=1.1)
-    if any(abs(device[i] - (penalty[i] + impulsive[i])) > 1e-9 for i in rows):
-        ax.step(t_ms, [device[i] for i in rows], where="post", label="displayed (after limits)",
-                color="tab:red", linestyle="--")
-    impulse_rows = [i for i in rows if columns["impulses"][i] > 0]
-    for n, i in enumerate(impulse_rows):
-        ax.axvline((time_s[i] - t0) * 1e3, color="tab:gray", linestyle=":", linewidth=0.8,
-                   label="impulse" if n == 0 else None)
-    ax.set_xlabel("time from contact onset [ms]")
-    ax.set_ylabel("force along wall normal [N]")
-    ax.set_title(args.title or f"tap {args.tap}: {len(impulse_rows)} impulse(s)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
+    plt.rcParams.update({"font.size": 8, "axes.titlesize": 9})
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7))
+    tap_panels.draw_force(axes[0][0], s, args.limit, parts=True)
+    axes[0][0].set_title(f"displayed peak {s['displayed_peak_N']:.2f} N, requested peak "
+                         f"{s['requested_peak_N']:.2f} N")
+    tap_panels.draw_force(axes[0][1], s, args.limit, parts=True, zoom_ms=args.zoom_ms,
+                          legend=False)
+    axes[0][1].set_title(f"first {args.zoom_ms:g} ms ({len(s['impulse_ms'])} impulse instants "
+                         "in the tap shown)")
+    for ax in (axes[0][0], axes[0][1], axes[1][0]):
+        ax.set_xlabel("time from contact onset [ms]")
+    tap_panels.draw_motion(axes[1][0], s)
+    tap_panels.draw_spectrum(axes[1][1], s)
+    axes[1][1].set_title("spectrum, 100 ms from onset (10 Hz resolution)")
+    name = os.path.splitext(os.path.basename(args.trace))[0]
+    fig.suptitle(args.title or f"{name}, tap {args.tap}", fontsize=10)
     fig.tight_layout()
     try:
         fig.savefig(args.out, dpi=150)
     except OSError as error:
         print(f"error: cannot write figure '{args.out}': {error.strerror}", file=sys.stderr)
         return 2
+    if args.dump:
+        s["label"] = args.title or f"{name}, tap {args.tap}"
+        try:
+            tap_panels.dump(args.dump, [s], args.limit)
+        except OSError as error:
+            print(f"error: cannot write '{args.dump}': {error.strerror}", file=sys.stderr)
+            return 2
     return 0
 
 

@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
-"""The three walls of the perception study side by side (one tap each): wall 0 single impulse,
-wall 1 impulse train at 250 Hz, wall 2 impulse train at 50 Hz. Each panel shows the penalty
-force, the impulsive force and their sum along the wall normal, impulses marked.
+"""Renderers side by side, one column each (one tap): the force the device displayed against its
+force limit (with the requested force), a zoom on the first 40 ms, penetration and velocity, and
+the spectrum of the displayed force and of its transient part over the collision window. Each
+panel has its own force axis, so a train's small impulses are not flattened by a clipped one.
 
-Usage: plot_walls.py WALL0.csv WALL1.csv WALL2.csv --out FIG.png [--tap K] [--labels A B C]
+Usage: plot_walls.py TRACE.csv... --out FIG.png [--labels A B ...] [--limit N] [--tap K]
+                     [--dump PLOTTED.json]
 Exit codes: 0 figure written, 2 bad arguments or trace, 3 matplotlib missing.
 """
 
@@ -19,55 +21,77 @@ DEFAULT_LABELS = ["wall 0: single impulse", "wall 1: train 250 Hz", "wall 2: tra
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("traces", nargs=3, help="trace CSV of wall 0, wall 1 and wall 2")
+    parser.add_argument("traces", nargs="+", help="trace CSV of each renderer")
     parser.add_argument("--out", required=True, help="output image (PNG, PDF or SVG)")
     parser.add_argument("--tap", type=int, default=0, help="scripted tap index (default 0)")
-    parser.add_argument("--labels", nargs=3, default=DEFAULT_LABELS, help="panel titles")
+    parser.add_argument("--labels", nargs="+", default=None,
+                        help="column titles, one per trace (default: the file names)")
+    parser.add_argument("--limit", type=float, default=0.0,
+                        help="the device's force limit [N], drawn as a line (0: no limit)")
     parser.add_argument("--before-ms", type=float, default=5.0)
     parser.add_argument("--after-ms", type=float, default=150.0)
+    parser.add_argument("--zoom-ms", type=float, default=40.0)
+    parser.add_argument("--dpi", type=float, default=150.0)
+    parser.add_argument("--dump", default=None, help="also write what is plotted as JSON")
     args = parser.parse_args()
+    labels = args.labels
+    if labels is None:
+        labels = (DEFAULT_LABELS if len(args.traces) == 3
+                  else [os.path.splitext(os.path.basename(p))[0] for p in args.traces])
+    if len(labels) != len(args.traces):
+        print(f"error: {len(args.traces)} traces but {len(labels)} labels", file=sys.stderr)
+        return 2
 
     plt = trace_io.import_pyplot()
+    import tap_panels
     panels = []
     try:
         for path in args.traces:
             columns = trace_io.read_trace(path)
-            panels.append((columns, trace_io.tap_rows(columns, args.tap)))
+            panels.append(tap_panels.tap_series(columns, args.tap, args.before_ms, args.after_ms))
     except SystemExit as error:
         print(error, file=sys.stderr)
         return 2
 
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
-    for ax, label, (columns, rows) in zip(axes, args.labels, panels):
-        time_s = columns["time_s"]
-        penalty = trace_io.normal_component(columns, "penalty_f", "N")
-        impulsive = trace_io.normal_component(columns, "impulsive_f", "N")
-        onset = next((i for i in rows if columns["tool_contacts"][i] > 0), rows[0])
-        t0 = time_s[onset]
-        rows = [i for i in rows if -args.before_ms <= (time_s[i] - t0) * 1e3 <= args.after_ms]
-        t_ms = [(time_s[i] - t0) * 1e3 for i in rows]
-        # the sum first, wide and grey, so the parts stay visible on top of it
-        ax.step(t_ms, [penalty[i] + impulsive[i] for i in rows], where="post", label="sum",
-                color="0.55", linewidth=2.4)
-        ax.step(t_ms, [penalty[i] for i in rows], where="post", label="penalty",
-                color="tab:blue", linewidth=1.1)
-        ax.step(t_ms, [impulsive[i] for i in rows], where="post", label="impulsive (Eq. 9)",
-                color="tab:orange", linewidth=1.1)
-        impulse_rows = [i for i in rows if columns["impulses"][i] > 0]
-        for n, i in enumerate(impulse_rows):
-            ax.axvline((time_s[i] - t0) * 1e3, color="tab:gray", linestyle=":", linewidth=0.8,
-                       label="impulse" if n == 0 else None)
-        ax.set_title(f"{label} ({len(impulse_rows)} impulses)")
+    n = len(panels)
+    plt.rcParams.update({"font.size": 8, "axes.titlesize": 9})
+    fig, axes = plt.subplots(4, n, figsize=(3.4 * n + 0.6, 10.5), squeeze=False)
+    legend = {}  # one legend for the whole figure: label -> handle
+    for c, (label, s) in enumerate(zip(labels, panels)):
+        s["label"] = label
+        ax = axes[0][c]
+        draw = tap_panels.draw_force
+        draw(ax, s, args.limit, legend=False)
+        ax.set_title(f"{label}\n{len(s['impulse_ms'])} impulse instants shown, "
+                     f"displayed peak {s['displayed_peak_N']:.2f} N")
         ax.set_xlabel("time from contact onset [ms]")
-        ax.grid(True, alpha=0.3)
-    axes[0].set_ylabel("force along wall normal [N]")
-    axes[0].legend(loc="best")
-    fig.tight_layout()
+        ax = axes[1][c]
+        draw(ax, s, args.limit, zoom_ms=args.zoom_ms, legend=False)
+        ax.set_title(f"first {args.zoom_ms:g} ms")
+        ax.set_xlabel("time from contact onset [ms]")
+        right = tap_panels.draw_motion(axes[2][c], s, legend=False)
+        axes[2][c].set_xlabel("time from contact onset [ms]")
+        for a in (axes[0][c], axes[1][c], axes[2][c], right):
+            for handle, text in zip(*a.get_legend_handles_labels()):
+                legend.setdefault(text, handle)
+        tap_panels.draw_spectrum(axes[3][c], s, legend=True)
+        axes[3][c].set_title("spectrum, 100 ms from onset (10 Hz resolution)")
+    fig.suptitle(f"tap {args.tap}: the force the device displays against its limit, per renderer",
+                 fontsize=10)
+    fig.legend(list(legend.values()), list(legend.keys()), loc="upper center",
+               bbox_to_anchor=(0.5, 0.975), ncol=min(len(legend), 7), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.955))
     try:
-        fig.savefig(args.out, dpi=150)
+        fig.savefig(args.out, dpi=args.dpi)
     except OSError as error:
         print(f"error: cannot write figure '{args.out}': {error.strerror}", file=sys.stderr)
         return 2
+    if args.dump:
+        try:
+            tap_panels.dump(args.dump, panels, args.limit)
+        except OSError as error:
+            print(f"error: cannot write '{args.dump}': {error.strerror}", file=sys.stderr)
+            return 2
     return 0
 
 

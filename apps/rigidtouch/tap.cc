@@ -1,5 +1,8 @@
 // `rigidtouch tap`: the tap experiment on the simulated hand and device, with metrics, trace and
-// figures; `--compare-walls` runs the method's three walls side by side (the main job).
+// figures; `--compare LIST` runs renderers side by side, `--compare-walls` the method's three
+// walls and pure penalty (the main job).
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -8,11 +11,13 @@
 #include <vector>
 
 #include "analysis/figures.h"
+#include "analysis/renderer_spec.h"
 #include "analysis/tap_experiment.h"
 #include "command.h"
 #include "io/config.h"
 #include "io/output_file.h"
 #include "io/resources.h"
+#include "io/text.h"
 #include "io/trace_csv.h"
 #include "scene_flags.h"
 #include "simulate_nonfinite.h"
@@ -35,11 +40,22 @@ struct TapFlags {
   std::string trace;
   std::string plot;
   bool compare_walls = false;
+  std::string compare;
   std::string out_dir = "out";
   bool json = false;
+  bool out_dir_given = false;  // --out-dir was written (it has a default)
 };
 
-analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> wall) {
+// the method's walls fix the render parameters: a value the user wrote for one is refused
+const std::vector<std::string> kWallFixedFields = {"render.restitution", "render.t_collision_s",
+                                                   "render.frequency_hz"};
+constexpr const char* kWallFixedWhy =
+    "the method's walls (--wall, wall0/1/2 in --compare, --compare-walls) fix e, t_c and f";
+
+analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> wall,
+                                         const analysis::RendererSpec* spec = nullptr) {
+  std::optional<RenderParams> wall_params;
+  if (wall) wall_params = analysis::WallRenderParams(*wall);
   if (!(f.speed_mps > 0.0 && f.speed_mps <= 2.0)) {
     throw Error("--speed " + std::to_string(f.speed_mps) + " m/s is out of range: valid (0, 2]");
   }
@@ -55,8 +71,13 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     c.wall_point_m = Vec3(f.wall_point[0], f.wall_point[1], f.wall_point[2]);
     c.wall_normal = Vec3(f.wall_normal[0], f.wall_normal[1], f.wall_normal[2]);
   }
-  if (wall) {
-    const RenderParams r = analysis::WallRenderParams(*wall);
+  if (spec) {
+    c.load.render.renderer = spec->renderer;
+    if (spec->render) wall_params = spec->render;
+  }
+  if (wall_params) {
+    RefuseUnused(ResolveSettings(f.scene), kWallFixedFields, kWallFixedWhy);
+    const RenderParams r = *wall_params;
     c.load.render.renderer = r.renderer;
     c.load.render.restitution = r.restitution;
     c.load.render.t_collision_s = r.t_collision_s;
@@ -100,6 +121,7 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
     nlohmann::json impulses = nlohmann::json::array();
     for (const auto& e : t.impulses) {
       impulses.push_back({{"time_s", e.time_s},
+                          {"requested_force_N", e.requested_force_N},
                           {"kinetic_energy_before_J", e.kinetic_energy_before_J},
                           {"kinetic_energy_after_J", e.kinetic_energy_after_J}});
     }
@@ -108,6 +130,7 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"approach_speed_mps", t.approach_speed_mps},
                     {"impulses", impulses},
                     {"peak_force_N", t.peak_force_N},
+                    {"peak_requested_force_N", t.peak_requested_force_N},
                     {"rate_hardness_N_per_m", t.rate_hardness_N_per_m},
                     {"extended_rate_hardness_N_per_m", t.extended_rate_hardness_N_per_m},
                     {"max_penetration_m", t.max_penetration_m},
@@ -116,6 +139,11 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"energy_to_user_J", t.energy_to_user_J},
                     {"dominant_frequency_hz", t.dominant_frequency_hz},
                     {"band_energy_fraction", t.band_energy_fraction},
+                    {"spectrum_resolution_hz", t.spectrum_resolution_hz},
+                    {"transient_dominant_frequency_hz", t.transient_dominant_frequency_hz},
+                    {"transient_peak_to_mean", t.transient_peak_to_mean},
+                    {"transient_band_energy_fraction", t.transient_band_energy_fraction},
+                    {"transient_power_ratio", t.transient_power_ratio},
                     {"force_clipped", t.force_clipped}});
   }
   const bool train = m.render.renderer == RendererKind::kTrain;
@@ -154,140 +182,226 @@ void Plot(const std::string& script, const std::vector<std::string>& args, bool 
   throw Error("drawing " + script + " failed: " + r.message);
 }
 
-std::string Row(const std::string& name, const analysis::TapRun& run) {
-  double peak = 0, rh = 0, erh = 0, pen = 0, energy = 0;
-  int impulses = 0, bounces = 0;
-  for (const auto& t : run.taps) {
-    peak += t.peak_force_N;
-    rh += t.rate_hardness_N_per_m;
-    erh += t.extended_rate_hardness_N_per_m;
-    pen += t.max_penetration_m;
-    energy += t.energy_to_user_J;
-    impulses += static_cast<int>(t.impulses.size());
-    bounces += t.bounces;
+// mean over the taps of the finite values of `value`; NaN when none is finite
+template <typename F>
+double MeanPerTap(const analysis::TapRun& run, F value) {
+  double sum = 0.0;
+  int n = 0;
+  for (const analysis::TapMetrics& t : run.taps) {
+    const double v = value(t);
+    if (!std::isfinite(v)) continue;
+    sum += v;
+    ++n;
   }
-  const double n = std::max<std::size_t>(1, run.taps.size());
+  return n > 0 ? sum / n : std::nan("");
+}
+
+std::string Fixed(double v, int digits) {
+  if (!std::isfinite(v)) return "-";
   std::ostringstream s;
-  s << "| " << name << " | " << std::fixed << std::setprecision(2) << peak / n << " | "
-    << std::setprecision(0) << rh / n << " | " << erh / n << " | " << std::setprecision(2)
-    << 1000.0 * pen / n << " | " << std::setprecision(1) << impulses / n << " | " << bounces
-    << " | " << std::scientific << std::setprecision(2) << energy << " |";
+  s << std::fixed << std::setprecision(digits) << v;
   return s.str();
 }
 
-const char* kTableHeader =
-    "| wall | peak force [N] | rate hardness [N/m] | extended rate hardness [N/m] | "
-    "max penetration [mm] | impulses per tap | bounces | energy to user [J] |\n"
-    "|---|---|---|---|---|---|---|---|";
+// below this peak-to-mean power ratio the transient's spectrum is called flat in the table
+constexpr double kFlatPeakToMean = 2.0;
 
-const char* kWallKeys[] = {"penalty", "wall0", "wall1", "wall2"};
+// one row of the table; the header says which statistic over the taps each column is
+std::string Row(const std::string& name, const analysis::TapRun& run) {
+  using M = analysis::TapMetrics;
+  int bounces = 0;
+  double energy_J = 0.0;
+  for (const M& t : run.taps) {
+    bounces += t.bounces;
+    energy_J += t.energy_to_user_J;
+  }
+  const auto mean = [&run](auto f) { return MeanPerTap(run, f); };
+  const double nonzero = mean([](const M& t) {
+    return static_cast<double>(
+        std::count_if(t.impulses.begin(), t.impulses.end(),
+                      [](const auto& e) { return e.requested_force_N > 0; }));
+  });
+  std::ostringstream energy;
+  energy << std::scientific << std::setprecision(2) << energy_J;
+  const double transient_hz = mean([](const M& t) { return t.transient_dominant_frequency_hz; });
+  const double peak_to_mean = mean([](const M& t) { return t.transient_peak_to_mean; });
+  // a peak less than twice the mean power stands out of nothing: a flat (broadband) transient
+  std::string transient = "-";
+  if (std::isfinite(transient_hz)) {
+    transient = (peak_to_mean < kFlatPeakToMean ? std::string("flat") : Fixed(transient_hz, 0)) +
+                " (" + Fixed(peak_to_mean, 1) + ")";
+  }
+  std::ostringstream s;
+  s << "| " << name << " | " << Fixed(mean([](const M& t) { return t.peak_requested_force_N; }), 2)
+    << " | " << Fixed(mean([](const M& t) { return t.peak_force_N; }), 2) << " | "
+    << Fixed(mean([](const M& t) { return t.rate_hardness_N_per_m; }), 0) << " | "
+    << Fixed(mean([](const M& t) { return t.extended_rate_hardness_N_per_m; }), 0) << " | "
+    << Fixed(mean([](const M& t) { return 1e3 * t.max_penetration_m; }), 2) << " | "
+    << Fixed(mean([](const M& t) { return 1e3 * t.time_to_stop_s; }), 1) << " | "
+    << Fixed(mean([](const M& t) { return static_cast<double>(t.impulses.size()); }), 1) << " / "
+    << Fixed(nonzero, 1) << " | " << bounces << " | " << energy.str() << " | "
+    << Fixed(mean([](const M& t) { return t.dominant_frequency_hz; }), 1) << " / "
+    << Fixed(mean([](const M& t) { return 100.0 * t.band_energy_fraction[0]; }), 0) << " | "
+    << transient << " | "
+    << Fixed(mean([](const M& t) { return 100.0 * t.transient_band_energy_fraction[2]; }), 0)
+    << " | " << Fixed(mean([](const M& t) { return 100.0 * t.transient_power_ratio; }), 1) << " |";
+  return s.str();
+}
+
+// every column: quantity [unit], statistic over the taps
+const char* kTableHeader =
+    "| renderer | requested peak force [N], mean/tap | displayed peak force [N], mean/tap | "
+    "rate hardness [N/m], mean/tap | extended rate hardness [N/m], mean/tap | "
+    "max penetration [mm], mean/tap | time to stop [ms], mean/tap | "
+    "impulses scheduled / non-zero, mean/tap | bounces, sum over taps | "
+    "energy to user [J], sum over taps | displayed force: dominant frequency [Hz] / power "
+    "below 40 Hz [%], mean/tap | transient: dominant frequency >= 40 Hz [Hz] (peak/mean "
+    "power), mean/tap | transient: power 100-400 Hz [%], mean/tap | transient / displayed "
+    "power [%], mean/tap |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 std::string OutPath(const TapFlags& f, const std::string& name) {
   return (std::filesystem::path(f.out_dir) / name).string();
 }
 
-// every file --compare-walls writes, checked before the four runs
-void CheckCompareWallsOutputs(const TapFlags& f) {
+// a spec's file name: its name with ':' (name:material) made safe for every file system
+std::string FileStem(const analysis::RendererSpec& spec) {
+  std::string stem = spec.name;
+  std::replace(stem.begin(), stem.end(), ':', '_');
+  return stem;
+}
+
+// every file a comparison writes, checked before the runs
+void CheckCompareOutputs(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs,
+                         const std::string& set) {
   io::CheckOutputDir(f.out_dir, "output folder (--out-dir)");
   std::error_code ec;
   if (!std::filesystem::exists(f.out_dir, ec)) return;
-  for (const char* key : kWallKeys) {
-    io::CheckOutputPath(OutPath(f, std::string(key) + ".csv"), "trace file");
+  for (const analysis::RendererSpec& spec : specs) {
+    io::CheckOutputPath(OutPath(f, FileStem(spec) + ".csv"), "trace file");
+    io::CheckOutputPath(OutPath(f, FileStem(spec) + "_tap.png"), "figure");
   }
-  io::CheckOutputPath(OutPath(f, "walls.md"), "table");
-  io::CheckOutputPath(OutPath(f, "walls.png"), "figure");
-  for (int w = 0; w <= 2; ++w) {
-    io::CheckOutputPath(OutPath(f, "wall" + std::to_string(w) + "_tap.png"), "figure");
-  }
+  io::CheckOutputPath(OutPath(f, set + ".md"), "table");
+  io::CheckOutputPath(OutPath(f, set + ".png"), "figure");
 }
 
-void CompareWalls(const TapFlags& f) {
-  CheckCompareWallsOutputs(f);
+// runs every renderer of `specs` on the same taps; `set` names the table and the figure
+void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs,
+             const std::string& set) {
+  CheckCompareOutputs(f, specs, set);
   std::error_code created;
   std::filesystem::create_directories(f.out_dir, created);
   if (created) {
     throw Error("cannot create the output folder (--out-dir) '" + f.out_dir +
                 "': " + created.message());
   }
-  const char* names[] = {"penalty (no impulses)", "wall 0: single impulse", "wall 1: train 250 Hz",
-                         "wall 2: train 50 Hz"};
-  std::vector<std::string> traces;
-  nlohmann::json results = nlohmann::json::object();
+  std::vector<std::string> traces, labels;
+  nlohmann::json renderers = nlohmann::json::array();
   std::ostringstream table;
   table << kTableHeader << "\n";
   std::string coupling = "direct";
+  double max_force_N = 0.0;
   NonFiniteReport non_finite;
-  std::string non_finite_wall;
-  for (int w = -1; w <= 2; ++w) {
-    TapFlags g = f;
-    std::optional<int> wall;
-    if (w < 0) {
-      g.scene.renderer = "penalty";
-    } else {
-      wall = w;
-    }
-    const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(g, wall));
-    if (w < 0) PrintLoadWarnings(run.model);  // the same scene for every wall: once
-    const std::string key = kWallKeys[w + 1];
-    const std::string trace = OutPath(f, key + ".csv");
+  std::string non_finite_name;
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const analysis::RendererSpec& spec = specs[i];
+    const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, std::nullopt, &spec));
+    if (i == 0) PrintLoadWarnings(run.model);  // the same scene for every renderer: once
+    const std::string trace = OutPath(f, FileStem(spec) + ".csv");
     io::WriteTraceCsv(trace, run.trace);
-    if (w >= 0) traces.push_back(trace);
+    traces.push_back(trace);
+    labels.push_back(spec.label);
+    max_force_N = run.device.max_force_N;
     coupling = io::CouplingName(run.model.device.coupling);
-    results[key] = RunJson(run, coupling.c_str());
-    results[key]["trace"] = trace;
-    table << Row(names[w + 1], run) << "\n";
+    nlohmann::json entry = {{"name", spec.name}, {"label", spec.label}};
+    entry.update(RunJson(run, coupling.c_str()));
+    entry["trace"] = trace;
+    renderers.push_back(entry);
+    table << Row(spec.label, run) << "\n";
     if (non_finite.count == 0 && NonFinite(run).count > 0) {
       non_finite = NonFinite(run);
-      non_finite_wall = names[w + 1];
+      non_finite_name = spec.label;
     }
   }
-  const std::string table_path = OutPath(f, "walls.md");
+  const std::string table_path = OutPath(f, set + ".md");
   {
     std::ostringstream out;
-    out << "Means over " << f.taps << " taps at " << f.speed_mps << " m/s on the " << f.device
-        << " preset (" << coupling << " coupling, " << f.rate_hz << " Hz)\n\n"
+    out << f.taps << " taps per renderer at " << f.speed_mps << " m/s on the " << f.device
+        << " preset (" << coupling << " coupling, " << f.rate_hz
+        << " Hz); each column names its statistic over the taps\n\n"
         << table.str();
     io::WriteFileAtomically(table_path, out.str(), "table");
   }
-  const std::string fig = OutPath(f, "walls.png");
+  const std::string fig = OutPath(f, set + ".png");
   std::vector<std::string> args = traces;
-  args.insert(args.end(), {"--out", fig});
+  args.push_back("--labels");
+  args.insert(args.end(), labels.begin(), labels.end());
+  args.insert(args.end(), {"--limit", io::FormatNumber(max_force_N), "--out", fig});
   Plot("python/plot_walls.py", args, f.json);
-  for (int w = 0; w <= 2; ++w) {
-    const std::string tap_fig = OutPath(f, "wall" + std::to_string(w) + "_tap.png");
-    Plot("python/plot_tap.py", {traces[w], "--out", tap_fig}, f.json);
+  std::vector<std::string> figures = {fig};
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const std::string tap_fig = OutPath(f, FileStem(specs[i]) + "_tap.png");
+    Plot("python/plot_tap.py",
+         {traces[i], "--out", tap_fig, "--limit", io::FormatNumber(max_force_N), "--title",
+          specs[i].label + ", tap 0"},
+         f.json);
+    figures.push_back(tap_fig);
   }
-  results["table"] = table_path;
-  results["figures"] = {fig};
-  auto check = [&non_finite, &non_finite_wall] {
-    if (non_finite.count > 0) throw Error(non_finite_wall + ": " + NonFiniteMessage(non_finite));
+  auto check = [&non_finite, &non_finite_name] {
+    if (non_finite.count > 0) throw Error(non_finite_name + ": " + NonFiniteMessage(non_finite));
   };
   if (f.json) {
+    const nlohmann::json results = {
+        {"renderers", renderers}, {"table", table_path}, {"figures", figures}};
     std::cout << results.dump() << "\n";
     check();
     return;
   }
   std::cout << table.str() << "\ntable: " << table_path << "\nfigures: " << fig << " and "
-            << f.out_dir << "/wall{0,1,2}_tap.png\ntraces: " << f.out_dir
-            << "/{penalty,wall0,wall1,wall2}.csv\n";
+            << f.out_dir << "/<renderer>_tap.png\ntraces: " << f.out_dir << "/<renderer>.csv\n";
   check();
 }
 
 void Run(const TapFlags& f) {
-  if (f.compare_walls) {
-    CompareWalls(f);
+  if (f.compare_walls || !f.compare.empty()) {
+    if (f.wall) throw Error("give either --wall or --compare/--compare-walls, not both");
+    if (f.scene.renderer) {
+      throw Error("give either --renderer or --compare/--compare-walls, not both");
+    }
+    if (f.compare_walls && !f.compare.empty()) {
+      throw Error("give either --compare or --compare-walls (the set " +
+                  std::string(analysis::kWallsSet) + "), not both");
+    }
+    if (!f.trace.empty() || !f.plot.empty()) {
+      throw Error(
+          "--trace and --plot are for one renderer; a comparison writes its traces and "
+          "figures to --out-dir");
+    }
+    const std::vector<analysis::RendererSpec> specs =
+        analysis::ParseRendererList(f.compare_walls ? analysis::kWallsSet : f.compare);
+    // refused before the first run, not when its wall comes
+    for (const analysis::RendererSpec& spec : specs) {
+      if (spec.render) RefuseUnused(ResolveSettings(f.scene), kWallFixedFields, kWallFixedWhy);
+    }
+    Compare(f, specs, f.compare_walls ? "walls" : "compare");
     return;
   }
   if (f.wall && f.scene.renderer) throw Error("give either --wall or --renderer, not both");
+  if (f.out_dir_given) {
+    throw Error(
+        "--out-dir is the output folder of --compare and --compare-walls; one renderer "
+        "writes where --trace and --plot say");
+  }
   std::string trace = f.trace;
   bool temporary = false;
   if (trace.empty() && !f.plot.empty()) {
     trace = f.plot + ".trace.csv";
     temporary = true;
   }
-  // a bad output path fails now, not after the run
-  if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
+  // a bad output path fails now, not after the run; the figure first, so a missing folder is
+  // blamed on the path the user wrote, not on the temporary trace beside it
   if (!f.plot.empty()) io::CheckOutputPath(f.plot, "figure");
+  if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
   const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, f.wall));
   PrintLoadWarnings(run.model);
   if (!trace.empty()) io::WriteTraceCsv(trace, run.trace);
@@ -295,7 +409,10 @@ void Run(const TapFlags& f) {
     // the temporary trace goes whether or not the figure could be drawn
     std::error_code ignored;
     try {
-      Plot("python/plot_tap.py", {trace, "--out", f.plot}, f.json);
+      Plot("python/plot_tap.py",
+           {trace, "--out", f.plot, "--limit", io::FormatNumber(run.device.max_force_N), "--title",
+            std::string(io::RendererName(run.model.render.renderer)) + ", tap 0"},
+           f.json);
     } catch (...) {
       if (temporary) std::filesystem::remove(trace, ignored);
       throw;
@@ -345,14 +462,25 @@ void Register(CLI::App& root) {
   app->add_option("--taps", f->taps, "number of taps")->capture_default_str();
   app->add_option("--seed", f->seed, "random seed")->capture_default_str();
   app->add_option("--trace", f->trace, "write the trace CSV here");
-  app->add_option("--plot", f->plot, "draw one tap (penalty, impulsive, sum) to this PNG");
+  app->add_option(
+      "--plot", f->plot,
+      "draw tap 0 to this PNG: displayed force against the device limit, requested force and its "
+      "parts, penetration, velocity, spectra");
   app->add_flag("--compare-walls", f->compare_walls,
                 "run penalty and walls 0, 1, 2; write traces, a table and figures to --out-dir");
-  app->add_option("--out-dir", f->out_dir, "output folder of --compare-walls")
-      ->capture_default_str();
+  app->add_option("--compare", f->compare,
+                  "run these renderers side by side, comma-separated: penalty, impulse, train "
+                  "(with the flags' parameters), wall0, wall1, wall2 (the method's walls); "
+                  "writes traces, compare.md and figures to --out-dir");
+  CLI::Option* out_dir =
+      app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
+          ->capture_default_str();
   app->add_flag("--json", f->json, "print one JSON object");
   // an error about a parameter the user wrote says where it was written
-  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
+  app->callback([f, out_dir] {
+    f->out_dir_given = out_dir->count() > 0;
+    WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
+  });
 }
 
 const CommandRegistrar registrar(&Register);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <mutex>
 #include <numbers>
 
@@ -92,6 +93,43 @@ double DominantFrequencyHz(const Spectrum& spectrum) {
     }
   }
   return static_cast<double>(best) * spectrum.bin_hz;
+}
+
+double DominantFrequencyHz(const Spectrum& spectrum, double min_hz) {
+  std::size_t best = 0;
+  double best_power = 0.0;
+  for (std::size_t k = 1; k < spectrum.power.size(); ++k) {
+    if (static_cast<double>(k) * spectrum.bin_hz < min_hz) continue;
+    if (spectrum.power[k] > best_power) {
+      best_power = spectrum.power[k];
+      best = k;
+    }
+  }
+  return best == 0 ? std::numeric_limits<double>::quiet_NaN()
+                   : static_cast<double>(best) * spectrum.bin_hz;
+}
+
+double PeakToMeanPower(const Spectrum& spectrum, double min_hz) {
+  double peak = 0.0, sum = 0.0;
+  int bins = 0;
+  for (std::size_t k = 1; k < spectrum.power.size(); ++k) {
+    if (static_cast<double>(k) * spectrum.bin_hz < min_hz) continue;
+    peak = std::max(peak, spectrum.power[k]);
+    sum += spectrum.power[k];
+    ++bins;
+  }
+  if (!(sum > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return peak / (sum / bins);
+}
+
+double PowerAboveDc(const Spectrum& spectrum) {
+  double sum = 0.0;
+  for (std::size_t k = 1; k < spectrum.power.size(); ++k) sum += spectrum.power[k];
+  return sum;
+}
+
+double ResolutionHz(int samples, double sample_rate_hz) {
+  return samples > 0 && sample_rate_hz > 0.0 ? sample_rate_hz / samples : 0.0;
 }
 
 std::array<double, 4> BandEnergyFractions(const Spectrum& spectrum,

@@ -40,6 +40,23 @@ Spectrum PowerSpectrum(std::span<const double> signal, double sample_rate_hz,
 /// Frequency of the largest power bin, excluding DC (bin 0) [Hz]; 0 when every bin above DC is 0.
 double DominantFrequencyHz(const Spectrum& spectrum);
 
+/// Frequency of the largest power bin at or above `min_hz` (and above DC) [Hz]; NaN when every
+/// such bin is 0. Used for a transient's vibration, whose envelope below `min_hz` is felt as part
+/// of the press rather than as vibration.
+double DominantFrequencyHz(const Spectrum& spectrum, double min_hz);
+
+/// Power of the largest bin at or above `min_hz` (and above DC) over the mean power of those
+/// bins: about 1 for a flat (broadband) spectrum such as one short pulse, much larger for a line
+/// such as a periodic train. NaN when every such bin is 0.
+double PeakToMeanPower(const Spectrum& spectrum, double min_hz);
+
+/// Sum of the power above DC [N^2].
+double PowerAboveDc(const Spectrum& spectrum);
+
+/// Frequency resolution of a spectrum of `samples` samples at `sample_rate_hz`: the inverse of
+/// the signal's duration [Hz]. Zero padding interpolates between such bins; it adds none.
+double ResolutionHz(int samples, double sample_rate_hz);
+
 /// Edges between the four reported bands [Hz]: below 40, 40-100, 100-400, above 400.
 inline constexpr std::array<double, 3> kDefaultBandEdgesHz = {40.0, 100.0, 400.0};
 

@@ -10,6 +10,11 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// requested force: what the renderer asked for before the device limit
+Vec3 RequestedForceN(const TraceSample& s) {
+  return s.penalty_force_N + s.impulsive_force_N;
+}
+
 }  // namespace
 
 std::vector<std::span<const TraceSample>> SplitTaps(std::span<const TraceSample> samples) {
@@ -54,10 +59,6 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   for (const TraceSample& sample : s) {
     m.max_penetration_m = std::max(m.max_penetration_m, sample.penetration_m);
     m.force_clipped = m.force_clipped || sample.clipped;
-    if (sample.impulses > 0) {
-      m.impulses.push_back(
-          {sample.time_s, sample.kinetic_energy_before_J, sample.kinetic_energy_after_J});
-    }
   }
 
   std::size_t onset = 0;
@@ -70,8 +71,19 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
     m.time_to_stop_s = kNaN;
     m.dominant_frequency_hz = kNaN;
     m.band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+    m.spectrum_resolution_hz = kNaN;
+    m.transient_dominant_frequency_hz = kNaN;
+    m.transient_peak_to_mean = kNaN;
+    m.transient_band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+    m.transient_power_ratio = kNaN;
     for (const TraceSample& sample : s) {
       m.peak_force_N = std::max(m.peak_force_N, sample.device_force_N.dot(sample.wall_normal));
+      m.peak_requested_force_N =
+          std::max(m.peak_requested_force_N, RequestedForceN(sample).dot(sample.wall_normal));
+      if (sample.impulses > 0) {
+        m.impulses.push_back({sample.time_s, sample.impulsive_force_N.dot(sample.wall_normal),
+                              sample.kinetic_energy_before_J, sample.kinetic_energy_after_J});
+      }
     }
     return m;
   }
@@ -84,8 +96,14 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   const std::size_t before = onset > 0 ? onset - 1 : onset;
   m.approach_speed_mps = approach_speed_mps(before);
 
-  for (std::size_t k = 0; k < s.size(); ++k)
+  for (std::size_t k = 0; k < s.size(); ++k) {
     m.peak_force_N = std::max(m.peak_force_N, normal_force_N(k));
+    m.peak_requested_force_N = std::max(m.peak_requested_force_N, RequestedForceN(s[k]).dot(n));
+    if (s[k].impulses > 0) {
+      m.impulses.push_back({s[k].time_s, s[k].impulsive_force_N.dot(n),
+                            s[k].kinetic_energy_before_J, s[k].kinetic_energy_after_J});
+    }
+  }
 
   // rate hardness (Lawrence et al. 2000): first tick of contact
   if (onset > 0 && s[onset].time_s > s[before].time_s) {
@@ -98,7 +116,8 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   // extended: largest rate within the window after onset
   double max_rate_N_per_s = -std::numeric_limits<double>::infinity();
   for (std::size_t k = std::max<std::size_t>(onset, 1); k < s.size(); ++k) {
-    if (s[k].time_s - s[onset].time_s > options.extended_rate_hardness_window_s) break;
+    // the tolerance as for the collision window: tick onset + 10 is in, wherever the tap starts
+    if (s[k].time_s - s[onset].time_s > options.extended_rate_hardness_window_s + 1e-9) break;
     const double dt_s = s[k].time_s - s[k - 1].time_s;
     if (dt_s <= 0.0) continue;
     max_rate_N_per_s =
@@ -123,11 +142,14 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   }
   m.bounces = std::max(0, intervals - 1);
 
-  // spectrum of the normal force over the collision window from onset
-  std::vector<double> force_N;
+  // spectra over the collision window from onset: the displayed normal force, and its transient
+  // part (displayed minus penalty: what the impulses add after the device limit)
+  std::vector<double> force_N, transient_N;
   for (std::size_t k = onset; k < s.size(); ++k) {
-    if (s[k].time_s - s[onset].time_s >= options.collision_window_s) break;
+    // the tolerance keeps trace times' rounding from adding a sample: 100 ms is 100 ticks
+    if (s[k].time_s - s[onset].time_s >= options.collision_window_s - 1e-9) break;
     force_N.push_back(normal_force_N(k));
+    transient_N.push_back(normal_force_N(k) - s[k].penalty_force_N.dot(n));
   }
   double sample_rate_hz = 0.0;
   const std::size_t last = onset + force_N.size() - 1;
@@ -138,12 +160,30 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   SpectrumOptions spectrum_options = options.spectrum;
   spectrum_options.window = SpectrumOptions::Window::kTaperedEnd;
   const Spectrum spectrum = PowerSpectrum(force_N, sample_rate_hz, spectrum_options);
+  const Spectrum transient = PowerSpectrum(transient_N, sample_rate_hz, spectrum_options);
   if (spectrum.power.empty()) {
     m.dominant_frequency_hz = kNaN;
     m.band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+    m.spectrum_resolution_hz = kNaN;
+    m.transient_dominant_frequency_hz = kNaN;
+    m.transient_peak_to_mean = kNaN;
+    m.transient_band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+    m.transient_power_ratio = kNaN;
   } else {
     m.dominant_frequency_hz = DominantFrequencyHz(spectrum);
     m.band_energy_fraction = BandEnergyFractions(spectrum, options.band_edges_hz);
+    m.spectrum_resolution_hz = ResolutionHz(static_cast<int>(force_N.size()), sample_rate_hz);
+    const double vibration_hz = options.band_edges_hz[0];
+    m.transient_dominant_frequency_hz = DominantFrequencyHz(transient, vibration_hz);
+    m.transient_peak_to_mean = PeakToMeanPower(transient, vibration_hz);
+    const double transient_power = PowerAboveDc(transient);
+    if (transient_power > 0.0) {
+      m.transient_band_energy_fraction = BandEnergyFractions(transient, options.band_edges_hz);
+    } else {
+      m.transient_band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+    }
+    const double displayed_power = PowerAboveDc(spectrum);
+    m.transient_power_ratio = displayed_power > 0.0 ? transient_power / displayed_power : kNaN;
   }
   return m;
 }

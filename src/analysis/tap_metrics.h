@@ -38,6 +38,9 @@ struct TapMetricsOptions {
 /// One collision impulse seen in the trace (a sample with impulses > 0).
 struct ImpulseEvent {
   double time_s = 0.0;
+  /// Eq. 9 force requested for it along the onset normal [N] (before the device limit); 0 when
+  /// the impulse came out zero (the contact was already receding).
+  double requested_force_N = 0.0;
   double kinetic_energy_before_J = 0.0;
   double kinetic_energy_after_J = 0.0;
 };
@@ -49,8 +52,11 @@ struct TapMetrics {
   double contact_onset_time_s = 0.0;  // time of the first contact sample (NaN without contact)
   /// Approach speed at onset: -n . tool_velocity at the last sample before onset [m/s].
   double approach_speed_mps = 0.0;
-  /// Largest normal force over the tap [N].
+  /// Largest normal force the device displayed over the tap (after its limit) [N].
   double peak_force_N = 0.0;
+  /// Largest normal force the renderer requested over the tap (penalty + Eq. 9, before the
+  /// device limit) [N].
+  double peak_requested_force_N = 0.0;
   /// Lawrence et al. 2000: (F_n[onset] - F_n[onset - 1]) / (t[onset] - t[onset - 1]) divided by
   /// the approach speed, i.e. over the first tick of contact [N/m].
   double rate_hardness_N_per_m = 0.0;
@@ -71,11 +77,27 @@ struct TapMetrics {
   double energy_to_user_J = 0.0;
   /// Every impulse in the tap, in time order.
   std::vector<ImpulseEvent> impulses;
-  /// Dominant frequency of the normal force over the collision window, DC excluded [Hz].
+  /// Dominant frequency of the displayed normal force over the collision window, DC excluded
+  /// [Hz]. A value below spectrum_resolution_hz means the slow press (the penalty hump)
+  /// dominates: no vibration stands out of it.
   double dominant_frequency_hz = 0.0;
-  /// Fraction of the normal force's power over the collision window below 40 Hz, 40-100,
-  /// 100-400 and above 400 Hz (with the default edges).
+  /// Fraction of the displayed normal force's power over the collision window below 40 Hz,
+  /// 40-100, 100-400 and above 400 Hz (with the default edges).
   std::array<double, 4> band_energy_fraction = {0.0, 0.0, 0.0, 0.0};
+  /// Inverse of the analysed window's duration: spectra resolve nothing finer [Hz].
+  double spectrum_resolution_hz = 0.0;
+  /// The transient part: displayed normal force minus the penalty (or coupling) force, i.e. what
+  /// the impulses add to what the device displays, after its limit; zero without impulses.
+  /// Its dominant frequency at or above the lowest band edge (40 Hz: below it the transient's
+  /// envelope is felt as part of the press) [Hz]; NaN when the transient is zero.
+  double transient_dominant_frequency_hz = 0.0;
+  /// Peak power over mean power of the transient's bins at or above 40 Hz: about 1 for a flat
+  /// spectrum (one short pulse: no dominant frequency), large for a line (a periodic train).
+  double transient_peak_to_mean = 0.0;
+  /// Band fractions of the transient part's power (as band_energy_fraction).
+  std::array<double, 4> transient_band_energy_fraction = {0.0, 0.0, 0.0, 0.0};
+  /// Transient power above DC over the displayed force's power above DC (same window).
+  double transient_power_ratio = 0.0;
   /// Some sample of the tap had its device force clipped by the device limit.
   bool force_clipped = false;
 };

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <ctime>
 #include <limits>
+#include <string>
 
 #include "rigidtouch/types.h"
 
@@ -207,6 +208,15 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
   stats.period_error_max_s = period_error_.max_s();
   stats.period_error_mean_s = period_error_.mean_s();
   stats.wakeup_latency_max_s = static_cast<double>(max_latency_ns) * 1e-9;
+  if (stats.overruns > 0) {
+    // after the run, never inside it: the loop only counts
+    stats.warnings.push_back(std::to_string(stats.overruns) + " of " + std::to_string(stats.ticks) +
+                             " ticks ended after the next deadline and " +
+                             std::to_string(stats.skipped_periods) +
+                             " whole periods were skipped: the loop did not keep " +
+                             std::to_string(static_cast<long long>(std::lround(options_.rate_hz))) +
+                             " Hz here (a lower --rate, --realtime or a less loaded machine)");
+  }
   return stats;
 }
 

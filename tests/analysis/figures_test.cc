@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "io/trace_csv.h"
 
 namespace rigidtouch::analysis {
@@ -30,7 +32,9 @@ class FiguresTest : public ::testing::Test {
 
   // one tap at 1 kHz: penalty ramp plus an impulse train of `impulses` impulses every
   // `spacing` ticks from contact onset
-  std::string WriteTrace(const std::string& name, int impulses, int spacing) const {
+  // (device force clipped to `limit_N` when positive)
+  std::string WriteTrace(const std::string& name, int impulses, int spacing,
+                         double limit_N = 0.0) const {
     std::vector<TraceSample> samples(200);
     for (int k = 0; k < 200; ++k) {
       TraceSample& s = samples[static_cast<std::size_t>(k)];
@@ -48,6 +52,10 @@ class FiguresTest : public ::testing::Test {
         }
       }
       s.device_force_N = s.penalty_force_N + s.impulsive_force_N;
+      if (limit_N > 0.0 && s.device_force_N.z() > limit_N) {
+        s.device_force_N.z() = limit_N;
+        s.clipped = true;
+      }
     }
     const std::string path = (dir_ / name).string();
     io::WriteTraceCsv(path, samples);
@@ -82,6 +90,37 @@ TEST_F(FiguresTest, PlotWallsWritesAPng) {
   const FigureResult r = RunPlotScript(kPython + "plot_walls.py", {w0, w1, w2, "--out", out});
   ASSERT_EQ(r.status, FigureStatus::kOk) << r.message << "\n" << r.output;
   EXPECT_TRUE(IsPng(out));
+}
+
+// What the figures draw as "displayed" is the device's force after its limit, not the requested
+// one: the scripts dump what they plotted, and on a trace whose 3 N impulse the 2.5 N limit
+// clips, the dumped displayed force is the trace's device force (2.5 N at onset), the requested
+// force 3 N, and the limit line is the one given.
+TEST_F(FiguresTest, FiguresDrawTheDisplayedForceAndTheLimit) {
+  const std::string trace = WriteTrace("clipped.csv", 1, 1, 2.5);
+  const std::vector<TraceSample> samples = io::ReadTraceCsv(trace);
+  for (const char* script : {"plot_walls.py", "plot_tap.py"}) {
+    const std::string out = (dir_ / "f.png").string(), dump = (dir_ / "f.json").string();
+    const FigureResult r =
+        RunPlotScript(kPython + script, {trace, "--out", out, "--limit", "2.5", "--dump", dump});
+    ASSERT_EQ(r.status, FigureStatus::kOk) << script << r.message << "\n" << r.output;
+    std::ifstream in(dump);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["limit_N"], 2.5) << script;
+    ASSERT_EQ(j["panels"].size(), 1u) << script;
+    const nlohmann::json& p = j["panels"][0];
+    // the panel's rows: 5 ms before onset (tick 20) to 150 ms after: ticks 15..170
+    const auto displayed = p["displayed_N"].get<std::vector<double>>();
+    const auto requested = p["requested_N"].get<std::vector<double>>();
+    ASSERT_EQ(displayed.size(), 156u) << script;
+    for (std::size_t i = 0; i < displayed.size(); ++i) {
+      EXPECT_DOUBLE_EQ(displayed[i], samples[15 + i].device_force_N.z()) << script << " " << i;
+    }
+    EXPECT_DOUBLE_EQ(displayed[5], 2.5) << script;  // onset: clipped
+    EXPECT_DOUBLE_EQ(requested[5], 3.0) << script;
+    EXPECT_DOUBLE_EQ(p["displayed_peak_N"], 2.5) << script;
+    EXPECT_EQ(p["limit_line_N"], 2.5) << script;  // the line drawn
+  }
 }
 
 TEST_F(FiguresTest, MissingMatplotlibIsReportedDistinctly) {

@@ -129,3 +129,39 @@ TEST(SpectrumTest, TaperedEndWindowKeepsAnImpulseAtTheFirstSample) {
 
 }  // namespace
 }  // namespace rigidtouch::analysis
+
+namespace rigidtouch::analysis {
+namespace {
+
+// Closed forms for the peak measures: a unit pulse at the first sample has |X(f)| = 1 at every
+// frequency (flat: peak over mean power 1), a comb of period 4 samples at 1 kHz has lines at 0,
+// 250 and 500 Hz only (the one-sided 250 Hz line twice the 500 Hz one)
+TEST(SpectrumTest, PeakAboveAFrequencyAndItsProminence) {
+  SpectrumOptions tapered;
+  tapered.remove_mean = false;
+  tapered.window = SpectrumOptions::Window::kTaperedEnd;
+  std::vector<double> pulse(100, 0.0);
+  pulse[0] = 1.0;
+  const Spectrum flat = PowerSpectrum(pulse, 1000.0, tapered);
+  // every bin exactly 1 (2 one-sided) but DC and Nyquist: the ratio is 1 to rounding
+  EXPECT_NEAR(PeakToMeanPower(flat, 40.0), 1.0, 0.01);
+
+  std::vector<double> comb(128, 0.0);
+  for (std::size_t k = 0; k < comb.size(); k += 4) comb[k] = 1.0;
+  SpectrumOptions plain;
+  plain.remove_mean = false;
+  plain.window = SpectrumOptions::Window::kTaperedEnd;
+  plain.min_fft_length = 128;
+  // no taper would leave exact lines; the taper spreads each line over a few 7.8 Hz bins
+  const Spectrum lines = PowerSpectrum(comb, 1000.0, plain);
+  EXPECT_EQ(DominantFrequencyHz(lines, 40.0), 250.0);
+  EXPECT_GT(PeakToMeanPower(lines, 40.0), 10.0);
+  // nothing above 600 Hz in a 1 kHz spectrum: NaN, not 0
+  EXPECT_TRUE(std::isnan(DominantFrequencyHz(lines, 600.0)));
+  EXPECT_TRUE(
+      std::isnan(PeakToMeanPower(PowerSpectrum(std::vector<double>(100, 0.0), 1000.0), 40.0)));
+  EXPECT_DOUBLE_EQ(ResolutionHz(100, 1000.0), 10.0);
+}
+
+}  // namespace
+}  // namespace rigidtouch::analysis

@@ -258,3 +258,118 @@ TEST(TapMetricsTest, SimulatedTapsOnAPassivePenaltyWall) {
 
 }  // namespace
 }  // namespace rigidtouch::analysis
+
+namespace rigidtouch::analysis {
+namespace {
+
+// The spectrum claims of docs/tap.md on a signal of known content: a slow press (a 40 ms
+// half-sine of 5 N, all of its power below 40 Hz but its leakage) with a 250 Hz train of 2 N
+// one-tick impulses on top (every 4th tick at 1 kHz). The displayed force is dominated by the
+// press; its transient part (displayed minus penalty) is the train, whose spectrum has its line
+// at 250 Hz exactly (bin 32 of the 128-point transform).
+TEST(TapMetricsTest, TrainOnASlowPressSeparatesDisplayedAndTransientSpectra) {
+  const int n = kOnset + 150;
+  std::vector<TraceSample> s = SyntheticTap(n);
+  for (int k = kOnset; k < n; ++k) {
+    const double t = s[k].time_s - s[kOnset].time_s;
+    const double press = t < 0.04 ? 5.0 * std::sin(std::numbers::pi * t / 0.04) : 0.0;
+    s[k].penalty_force_N.z() = press;
+    s[k].impulsive_force_N.z() = (k - kOnset) % 4 == 0 && t < 0.1 ? 2.0 : 0.0;
+    s[k].impulses = s[k].impulsive_force_N.z() > 0 ? 1 : 0;
+    s[k].device_force_N = s[k].penalty_force_N + s[k].impulsive_force_N;
+  }
+  TapMetrics m = ComputeTapMetrics(s);
+  // the press: the first bin above DC (7.8 Hz), below the 10 Hz resolution of 100 ms (exactly
+  // 100 samples, although the trace's times 1.0 + k * 0.001 are rounded)
+  EXPECT_NEAR(m.spectrum_resolution_hz, 1000.0 / 100.0, 1e-9);
+  EXPECT_LT(m.dominant_frequency_hz, m.spectrum_resolution_hz);
+  EXPECT_GT(m.band_energy_fraction[0], 0.5);
+  // the train: 250 Hz to the bin (7.8 Hz), a line far above the mean (> 10), most of its power
+  // in 100-400 Hz and above 400 (the 500 Hz line of one-tick pulses), little below 40 Hz
+  EXPECT_NEAR(m.transient_dominant_frequency_hz, 250.0, 1000.0 / 128.0);
+  EXPECT_GT(m.transient_peak_to_mean, 10.0);
+  EXPECT_GT(m.transient_band_energy_fraction[2], 0.5);
+  EXPECT_LT(m.transient_band_energy_fraction[0], 0.1);
+  EXPECT_GT(m.transient_power_ratio, 0.0);
+  // pure penalty: no transient part at all (NaN, not a frequency)
+  for (TraceSample& x : s) x.device_force_N = x.penalty_force_N;
+  m = ComputeTapMetrics(s);
+  EXPECT_TRUE(std::isnan(m.transient_dominant_frequency_hz));
+  EXPECT_EQ(m.transient_power_ratio, 0.0);
+}
+
+// one clipped onset pulse: a flat transient (peak over mean power 1 within 0.1: the mean removal
+// perturbs the lowest bins only), the requested peak the unclipped one
+TEST(TapMetricsTest, ClippedSinglePulseIsAFlatTransient) {
+  std::vector<TraceSample> s = SyntheticTap(kOnset + 150);
+  s[kOnset].impulsive_force_N.z() = 60.0;
+  s[kOnset].penalty_force_N.z() = 1.0;
+  s[kOnset].device_force_N.z() = 12.0;
+  s[kOnset].clipped = true;
+  s[kOnset].impulses = 1;
+  const TapMetrics m = ComputeTapMetrics(s);
+  EXPECT_EQ(m.peak_requested_force_N, 61.0);
+  EXPECT_EQ(m.peak_force_N, 12.0);
+  ASSERT_EQ(m.impulses.size(), 1u);
+  EXPECT_EQ(m.impulses[0].requested_force_N, 60.0);
+  EXPECT_NEAR(m.transient_peak_to_mean, 1.0, 0.1);
+}
+
+// Extended rate hardness against rate hardness on a train: the first tick rises by the first
+// impulse a, the second impulse (4 ticks later) rises by b > a on top of a penalty ramp of r per
+// tick; rate hardness = a / (h v), extended = (b + r) / (h v); with b < a both are a / (h v)
+TEST(TapMetricsTest, ExtendedRateHardnessSeesALaterLargerRise) {
+  const double a = 2.0, b = 3.0, r = 0.1;
+  auto train = [&](double second) {
+    std::vector<TraceSample> s = SyntheticTap(60);
+    for (int k = kOnset; k < 60; ++k) {
+      const int since = k - kOnset;
+      s[k].penalty_force_N.z() = r * since;
+      s[k].impulsive_force_N.z() = since == 0 ? a : since == 4 ? second : 0.0;
+      s[k].device_force_N = s[k].penalty_force_N + s[k].impulsive_force_N;
+    }
+    return ComputeTapMetrics(s);
+  };
+  const double hv = kTick * kSpeed;
+  TapMetrics m = train(b);
+  EXPECT_NEAR(m.rate_hardness_N_per_m, a / hv, 1e-9 * a / hv);
+  EXPECT_NEAR(m.extended_rate_hardness_N_per_m, (b + r) / hv, 1e-9 * b / hv);
+  m = train(1.0);
+  EXPECT_NEAR(m.extended_rate_hardness_N_per_m, m.rate_hardness_N_per_m, 1e-9 * a / hv);
+}
+
+}  // namespace
+}  // namespace rigidtouch::analysis
+
+namespace rigidtouch::analysis {
+namespace {
+
+// The collision window is 100 ticks at 1 kHz wherever the tap starts, although times summed
+// sub-step by sub-step (as the simulated device's clock is) are rounded: 100 ticks after onset
+// may read 0.09999999999998899 s, and one sample more would make the window 101 ticks and its
+// resolution 9.9 Hz (onsets from tick 46 on do so without the tolerance); likewise the extended
+// rate hardness's 10 ms must hold tick onset + 10 wherever the tap starts
+TEST(TapMetricsTest, WindowsAreWholeNumbersOfTicksDespiteRoundedTimes) {
+  for (int start = 0; start < 200; start += 7) {
+    std::vector<TraceSample> s = SyntheticTap(kOnset + 150);
+    double t = 0.0;
+    const auto tick = [&t] {
+      for (int j = 0; j < 10; ++j) t += kTick / 10;
+    };
+    for (int k = 0; k < start; ++k) tick();
+    for (TraceSample& x : s) {
+      x.time_s = t;
+      x.device_force_N.z() = x.tool_contacts > 0 ? 1.0 + 0.1 * (x.step % 3) : 0.0;
+      // a 5 N step 10 ticks after onset: inside the extended rate hardness's 10 ms
+      if (x.step - s.front().step >= kOnset + 10) x.device_force_N.z() += 5.0;
+      tick();
+    }
+    const TapMetrics m = ComputeTapMetrics(s);
+    EXPECT_NEAR(m.spectrum_resolution_hz, 10.0, 1e-6) << start;
+    // the step's rise, 5 N +- 0.2 N of ripple, over one tick and the approach speed
+    EXPECT_GT(m.extended_rate_hardness_N_per_m, 4.7 / (kTick * kSpeed)) << start;
+  }
+}
+
+}  // namespace
+}  // namespace rigidtouch::analysis

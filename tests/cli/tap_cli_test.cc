@@ -15,25 +15,81 @@ TEST(TapCliTest, CompareWallsWritesTableTracesAndFigures) {
   const CliResult r = RunCli("tap --compare-walls --taps 1 --json --out-dir " + dir.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  for (const char* key : {"penalty", "wall0", "wall1", "wall2"}) {
-    ASSERT_TRUE(j.contains(key)) << key;
-    EXPECT_EQ(j[key]["taps"].size(), 1u);
-    EXPECT_GT(fs::file_size(j[key]["trace"].get<std::string>()), 0u);
+  // --compare-walls is the set penalty,wall0,wall1,wall2
+  ASSERT_EQ(j["renderers"].size(), 4u);
+  const char* names[] = {"penalty", "wall0", "wall1", "wall2"};
+  for (int i = 0; i < 4; ++i) {
+    const auto& e = j["renderers"][i];
+    EXPECT_EQ(e["name"], names[i]);
+    EXPECT_EQ(e["taps"].size(), 1u);
+    EXPECT_GT(fs::file_size(e["trace"].get<std::string>()), 0u);
   }
   // impulse counts are checked on an ideal device in tap_experiment_test; here the Touch clips
   // and its encoder makes taps bounce, so only the structure is fixed
-  EXPECT_GE(j["wall1"]["taps"][0]["impulses"].size(), 1u);
-  EXPECT_EQ(j["wall1"]["frequency_hz"], 250.0);
-  EXPECT_EQ(j["wall1"]["impulses_per_window"], 25);
-  EXPECT_EQ(j["wall2"]["impulses_per_window"], 5);
-  EXPECT_EQ(j["penalty"]["taps"][0]["impulses"].size(), 0u);
-  EXPECT_GT(fs::file_size(dir / "walls.md"), 0u);
-  // the figures: non-empty PNGs (the signature's first bytes)
-  for (const char* png : {"walls.png", "wall0_tap.png", "wall1_tap.png", "wall2_tap.png"}) {
+  const auto& wall1 = j["renderers"][2];
+  EXPECT_GE(wall1["taps"][0]["impulses"].size(), 1u);
+  EXPECT_EQ(wall1["frequency_hz"], 250.0);
+  EXPECT_EQ(wall1["impulses_per_window"], 25);
+  EXPECT_EQ(j["renderers"][3]["impulses_per_window"], 5);
+  EXPECT_EQ(j["renderers"][0]["taps"][0]["impulses"].size(), 0u);
+  // the table labels each column with its statistic over the taps
+  const std::string table = ReadAll(dir / "walls.md");
+  EXPECT_NE(table.find("bounces, sum over taps"), std::string::npos) << table;
+  EXPECT_NE(table.find("rate hardness [N/m], mean/tap"), std::string::npos) << table;
+  EXPECT_EQ(table.find("Means over"), std::string::npos) << table;
+  // the figures: non-empty PNGs (the signature's first bytes), one per renderer and the set's
+  for (const char* png :
+       {"walls.png", "penalty_tap.png", "wall0_tap.png", "wall1_tap.png", "wall2_tap.png"}) {
     ASSERT_TRUE(fs::exists(dir / png)) << png << "\n" << r.err;
     EXPECT_GT(fs::file_size(dir / png), 1000u) << png;
     EXPECT_EQ(ReadAll(dir / png).substr(1, 3), "PNG") << png;
   }
+  fs::remove_all(dir);
+}
+
+// --compare LIST: one entry per spec, in order, with the per-tap fields of `tap --json`; the
+// renderers keep the flags' parameters (here the train's frequency)
+TEST(TapCliTest, CompareRunsAnySetOfRenderers) {
+  const fs::path dir = TempDir("compare");
+  const CliResult one = RunCli("tap --renderer train --frequency 100 --taps 1 --json");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const auto single = nlohmann::json::parse(one.out);
+  CliResult r = RunCli("tap --compare impulse,train --frequency 100 --taps 1 --json --out-dir " +
+                       dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["renderers"].size(), 2u);
+  EXPECT_EQ(j["renderers"][0]["name"], "impulse");
+  EXPECT_EQ(j["renderers"][0]["renderer"], "impulse");
+  const auto& train = j["renderers"][1];
+  EXPECT_EQ(train["name"], "train");
+  EXPECT_EQ(train["frequency_hz"], 100.0);
+  // the same metrics as the single run, key for key and value for value
+  ASSERT_EQ(train["taps"].size(), 1u);
+  for (const auto& [key, value] : single["taps"][0].items()) {
+    EXPECT_EQ(train["taps"][0][key], value) << key;
+  }
+  EXPECT_TRUE(fs::exists(dir / "compare.md"));
+  EXPECT_TRUE(fs::exists(dir / "compare.png"));
+  EXPECT_TRUE(fs::exists(dir / "train.csv"));
+  EXPECT_TRUE(fs::exists(dir / "impulse_tap.png"));
+  // bad specs: exit 2 with the reason, before any run
+  r = RunCli("tap --compare penalty,springy --out-dir " + (dir / "bad").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("rigidtouch: error: unknown renderer 'springy'"), std::string::npos)
+      << r.err;
+  r = RunCli("tap --compare penalty,train:wood --out-dir " + (dir / "bad").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown material 'wood'"), std::string::npos) << r.err;
+  r = RunCli("tap --compare penalty --compare-walls --out-dir " + (dir / "bad").string());
+  EXPECT_EQ(r.exit_code, 2);
+  // a wall fixes f: a frequency the user wrote is refused, not dropped
+  r = RunCli("tap --compare train,wall1 --frequency 100 --out-dir " + (dir / "bad").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("render.frequency_hz (set by --frequency) has no effect here"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
   fs::remove_all(dir);
 }
 
@@ -47,9 +103,11 @@ TEST(TapCliTest, JsonHasThePerTapFields) {
   EXPECT_EQ(j["device"], "omni");
   ASSERT_EQ(j["taps"].size(), 2u);
   for (const char* key :
-       {"impulses", "peak_force_N", "rate_hardness_N_per_m", "extended_rate_hardness_N_per_m",
-        "max_penetration_m", "bounces", "energy_to_user_J", "dominant_frequency_hz",
-        "band_energy_fraction", "force_clipped"}) {
+       {"impulses", "peak_force_N", "peak_requested_force_N", "rate_hardness_N_per_m",
+        "extended_rate_hardness_N_per_m", "max_penetration_m", "bounces", "energy_to_user_J",
+        "dominant_frequency_hz", "band_energy_fraction", "spectrum_resolution_hz",
+        "transient_dominant_frequency_hz", "transient_peak_to_mean",
+        "transient_band_energy_fraction", "transient_power_ratio", "force_clipped"}) {
     EXPECT_TRUE(j["taps"][0].contains(key)) << key;
   }
   EXPECT_GE(j["taps"][0]["impulses"].size(), 1u);
@@ -94,6 +152,26 @@ TEST(TapCliTest, BadInputGetsAClearError) {
   r = RunCli("tap --taps 1 --trace " + bad.string());
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find(bad.string()), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::is_empty(dir));
+  // an output folder that cannot be created (in /proc) is an error naming it, not an internal one
+  r = RunCli("tap --compare-walls --taps 1 --out-dir /proc/nope");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("rigidtouch: error: cannot create the output folder (--out-dir) "
+                       "'/proc/nope'"),
+            std::string::npos)
+      << r.err;
+  // --out-dir without a comparison would be ignored: refused
+  r = RunCli("tap --taps 1 --out-dir " + (dir / "o").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--out-dir is the output folder of --compare"), std::string::npos) << r.err;
+  // a figure in a missing folder: the figure is named, not the temporary trace beside it
+  const fs::path figure = dir / "no_such_folder" / "t.png";
+  r = RunCli("tap --taps 1 --plot " + figure.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("rigidtouch: error: cannot write figure '" + figure.string() + "'"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find(".trace.csv"), std::string::npos) << r.err;
   EXPECT_TRUE(fs::is_empty(dir));
   fs::remove_all(dir);
 }
