@@ -123,6 +123,7 @@ TEST(SimulateTest, SwappedLabelsAreFlaggedBelowChance) {
   config.seed = 3;
   config.observer.label_swap_probability = 1.0;
   config.observer.lapse_rate = 0.0;
+  config.observer.label_loss_per_series = 0.0;  // held swapped for the whole test
   std::vector<LogInput> logs;
   for (const auto& run : SimulateCohort(protocol, source, config)) {
     logs.push_back({run.id, run.records});
