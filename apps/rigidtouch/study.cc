@@ -220,7 +220,10 @@ void Predict(const PredictOptions& o) {
                        {"label_interference", p.label_interference},
                        {"cohort_percent_correct", ShareJson(p.cohort_percent_correct)},
                        {"share_at_least_90", ShareJson(p.at_least_90)},
-                       {"share_at_most_50", ShareJson(p.at_most_50)}});
+                       {"share_at_most_50", ShareJson(p.at_most_50)},
+                       {"cohorts_below_previous_test", std::isnan(p.cohorts_below_previous)
+                                                           ? json(nullptr)
+                                                           : json(p.cohorts_below_previous)}});
     }
     std::cout << json{{"tests", tests},
                       {"observer", observer.ToJson()},
@@ -246,6 +249,10 @@ void Predict(const PredictOptions& o) {
                 << percent(p.at_least_90.low) << ", " << percent(p.at_least_90.high)
                 << "]; at <= 50%: " << percent(p.at_most_50.expected) << " ["
                 << percent(p.at_most_50.low) << ", " << percent(p.at_most_50.high) << "]\n";
+      if (!std::isnan(p.cohorts_below_previous)) {
+        std::cout << "    cohorts whose mean is below the previous test's: "
+                  << percent(p.cohorts_below_previous) << "\n";
+      }
     }
   }
 }

@@ -215,6 +215,11 @@ std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSo
     }
   }
   for (std::size_t t = 0; t < tests; ++t) {
+    double below = 0.0;
+    for (int k = 0; k < config.cohorts; ++k) {
+      if (t > 0 && pc[t][k] < pc[t - 1][k]) below += 1.0 / config.cohorts;
+    }
+    predictions[t].cohorts_below_previous = t > 0 ? below : std::nan("");
     predictions[t].cohort_percent_correct = Summarise(pc[t], sum_pc[t]);
     predictions[t].at_least_90 = Summarise(at_90[t], n_90[t]);
     predictions[t].at_most_50 = Summarise(at_50[t], n_50[t]);

@@ -76,6 +76,9 @@ struct TestPrediction {
   CohortShare cohort_percent_correct;
   CohortShare at_least_90;  ///< share of participants at >= 90% correct
   CohortShare at_most_50;   ///< share of participants at <= 50% correct
+  /// Share of simulated cohorts whose mean percent correct in this test is below their mean in
+  /// the previous test of the protocol (NaN for the first test).
+  double cohorts_below_previous = 0.0;
 };
 
 /// How PredictProtocol samples.
