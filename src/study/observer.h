@@ -7,11 +7,14 @@
 //   P level   sensation level of the Pacinian channel (dB above threshold) / intensity JND
 //   NP level  sensation level of the non-Pacinian (NP I) channel / intensity JND
 //   pitch     salience * ln(dominant frequency / P best frequency) / ln(1 + Weber fraction)
-// Internal noise adds an independent unit normal to every axis of every tap. The observer keeps a
-// memory template of each wall from the familiarization taps (averaged, plus encoding noise, plus
-// a random-walk drift per series: trace memory, Durlach & Braida 1969), averages the taps of a
-// series and names the wall whose template is nearer. It lapses (guesses) with a small
-// probability and can hold the labels swapped.
+// Internal noise adds an independent unit normal to every axis of every tap. Each participant has
+// its own JND scale and detection threshold. The observer keeps a memory template of each wall
+// from the familiarization taps (averaged, plus encoding noise, plus a random-walk drift per
+// series: trace memory, Durlach & Braida 1969), averages the taps of a series and takes the wall
+// whose template is nearer (discrimination). Naming it rests on a separate label memory: the
+// association of labels and templates can be lost before any series (more often when walls of
+// earlier tests felt alike) and is then re-derived from a coarse coded memory, possibly swapped
+// (identification). It lapses (guesses) with a small probability.
 #pragma once
 
 #include <array>
