@@ -291,6 +291,40 @@ TEST(SimulateTest, PredictedSharesOfGuessingCohortsAreBinomial) {
   EXPECT_EQ(p.at_least_90.low, 0.0);
 }
 
+TEST(SimulateTest, PredictedSharesOfLapsingPerfectObserversAreBinomial) {
+  // walls far apart, exact memory, no label loss: right on every series except the lapses, which
+  // guess; so each answer is right with probability 1 - lapse / 2 = 0.8, independently, and a
+  // participant's score is Binomial(20, 0.8): P(>= 90%) = P(X >= 18), P(<= 50%) = P(X <= 10)
+  const Protocol protocol = Cohort(kPenalty1000, kTrain250);
+  ToyStimulusSource source(/*speed_log_sd=*/0.0);
+  ObserverParams observer;
+  observer.individual_jnd_log_sd = 0.0;
+  observer.individual_threshold_sd_dB = 0.0;
+  observer.memory_encoding_sd_jnd = 0.0;
+  observer.memory_drift_sd_jnd_per_series = 0.0;
+  observer.label_loss_per_series = 0.0;
+  observer.lapse_rate = 0.0;
+  PredictionConfig config;
+  config.sample_taps = 1;
+  config.cohorts = 0;
+  ASSERT_GT(PredictProtocol(protocol, source, observer, config)[0].percent_correct, 99.999);
+  observer.lapse_rate = 0.4;
+  config.cohorts = 1000;
+  const TestPrediction p = PredictProtocol(protocol, source, observer, config)[0];
+  double at_least_18 = 0.0;
+  double at_most_10 = 0.0;
+  for (int k = 0; k <= 20; ++k) {
+    if (k >= 18) at_least_18 += BinomialPmf(k, 20, 0.8);
+    if (k <= 10) at_most_10 += BinomialPmf(k, 20, 0.8);
+  }
+  // 9000 simulated participants: 4 binomial SE
+  EXPECT_NEAR(p.at_least_90.expected, at_least_18,
+              4.0 * std::sqrt(at_least_18 * (1.0 - at_least_18) / 9000.0));
+  EXPECT_NEAR(p.at_most_50.expected, at_most_10,
+              4.0 * std::sqrt(at_most_10 * (1.0 - at_most_10) / 9000.0) + 1e-4);
+  EXPECT_NEAR(p.cohort_percent_correct.expected, 80.0, 4.0 * 100.0 * std::sqrt(0.16 / 180000.0));
+}
+
 TEST(SimulateTest, PredictedCohortsSeparateEasyFromIdenticalWalls) {
   ToyStimulusSource source;
   const ObserverParams observer;
