@@ -1,5 +1,6 @@
 // `rigidtouch study run|simulate|analyze|predict`: perception-study sessions for people, virtual
 // cohorts of simulated participants, analysis of logs, and the observer model's predictions.
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <iostream>
@@ -70,6 +71,8 @@ struct PredictOptions {
   std::string observer;
   std::uint64_t seed = 1;
   int taps = 20;
+  int participants = 9;
+  int cohorts = 1000;
   std::string scene;
   std::string device;
   bool json = false;
@@ -193,31 +196,63 @@ void Analyze(const AnalyzeOptions& o) {
   }
 }
 
+json ShareJson(const st::CohortShare& share) {
+  return {{"expected", share.expected}, {"interval_90", {share.low, share.high}}};
+}
+
 void Predict(const PredictOptions& o) {
   const st::Protocol protocol = st::LoadProtocol(o.protocol);
   const st::ObserverParams observer = LoadObserver(o.observer);
   const std::unique_ptr<st::StimulusSource> source = TapSource(o.scene, o.device);
-  const auto predictions = st::PredictProtocol(protocol, *source, observer, o.seed, o.taps);
+  st::PredictionConfig config;
+  config.seed = o.seed;
+  config.sample_taps = o.taps;
+  config.participants = o.participants;
+  config.cohorts = o.cohorts;
+  const auto predictions = st::PredictProtocol(protocol, *source, observer, config);
   if (o.json) {
     json tests = json::array();
     for (const auto& p : predictions) {
       tests.push_back({{"name", p.name},
                        {"distance_jnd", p.distance_jnd},
-                       {"predicted_percent_correct", p.percent_correct}});
+                       {"predicted_percent_correct", p.percent_correct},
+                       {"mean_percepts_jnd", p.mean_percepts},
+                       {"label_interference", p.label_interference},
+                       {"cohort_percent_correct", ShareJson(p.cohort_percent_correct)},
+                       {"share_at_least_90", ShareJson(p.at_least_90)},
+                       {"share_at_most_50", ShareJson(p.at_most_50)},
+                       {"cohorts_below_previous_test", std::isnan(p.cohorts_below_previous)
+                                                           ? json(nullptr)
+                                                           : json(p.cohorts_below_previous)}});
     }
     std::cout << json{{"tests", tests},
                       {"observer", observer.ToJson()},
                       {"stimulus_source", source->Describe()},
                       {"sample_taps", o.taps},
+                      {"participants", o.participants},
+                      {"cohorts", o.cohorts},
                       {"seed", o.seed}}
                      .dump()
               << "\n";
   } else {
-    std::cout << "Nominal observer, " << o.taps << " sampled taps per wall (" << source->Describe()
-              << ")\n";
+    std::cout << "Observer model, " << o.taps << " sampled taps per wall (" << source->Describe()
+              << "); " << o.cohorts << " simulated cohorts of " << o.participants
+              << " (intervals: 5th-95th percentile over cohorts)\n";
+    auto percent = [](double share) { return std::to_string(std::lround(100.0 * share)) + "%"; };
     for (const auto& p : predictions) {
-      std::cout << "  " << p.name << ": walls " << p.distance_jnd << " JND apart, predicted "
+      std::cout << "  " << p.name << ": walls " << p.distance_jnd << " JND apart; nominal observer "
                 << p.percent_correct << "% correct\n";
+      if (o.cohorts == 0) continue;
+      const st::CohortShare& m = p.cohort_percent_correct;
+      std::cout << "    cohort mean " << m.expected << "% correct [" << m.low << ", " << m.high
+                << "]; participants at >= 90%: " << percent(p.at_least_90.expected) << " ["
+                << percent(p.at_least_90.low) << ", " << percent(p.at_least_90.high)
+                << "]; at <= 50%: " << percent(p.at_most_50.expected) << " ["
+                << percent(p.at_most_50.low) << ", " << percent(p.at_most_50.high) << "]\n";
+      if (!std::isnan(p.cohorts_below_previous)) {
+        std::cout << "    cohorts whose mean is below the previous test's: "
+                  << percent(p.cohorts_below_previous) << "\n";
+      }
     }
   }
 }
@@ -284,13 +319,25 @@ void AddStudyCommand(CLI::App& root) {
 
   auto predict_options = std::make_shared<PredictOptions>();
   CLI::App* predict = study->add_subcommand(
-      "predict", "Predicted percent correct of the nominal observer for each test");
+      "predict",
+      "Predicted percent correct for each test: the nominal observer, and simulated cohorts "
+      "(shares of participants at >= 90% and <= 50%)");
   predict->add_option("--protocol", predict_options->protocol, "Protocol JSON file")->required();
   predict->add_option("--observer", predict_options->observer, "Observer parameter JSON file");
   predict->add_option("--seed", predict_options->seed, "Seed of the sampled taps")
       ->capture_default_str();
   predict->add_option("--taps", predict_options->taps, "Sampled taps per wall")
       ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  predict
+      ->add_option("--participants", predict_options->participants,
+                   "Cohort size the intervals refer to (the method's study had 9)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  predict
+      ->add_option("--cohorts", predict_options->cohorts,
+                   "Simulated cohorts for the shares and intervals (0: nominal observer only)")
+      ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   predict->add_option("--scene", predict_options->scene, "Scene for the tap experiment");
   predict->add_option("--device", predict_options->device, "Device preset");

@@ -29,6 +29,9 @@ enum Stream : std::uint64_t {
   kLapse = 17,
   kSwap = 18,
   kIndividual = 19,
+  kThreshold = 20,
+  kLabelLoss = 21,
+  kLabelCode = 22,
 };
 
 struct ParamSpec {
@@ -61,6 +64,10 @@ const ParamSpec kParamSpecs[] = {
     {"label_swap_probability", &ObserverParams::label_swap_probability, 0.0, false, 1.0},
     {"lapse_rate", &ObserverParams::lapse_rate, 0.0, false, 1.0},
     {"individual_jnd_log_sd", &ObserverParams::individual_jnd_log_sd, 0.0, false, kInf},
+    {"individual_threshold_sd_dB", &ObserverParams::individual_threshold_sd_dB, 0.0, false, kInf},
+    {"label_loss_per_series", &ObserverParams::label_loss_per_series, 0.0, false, 1.0},
+    {"label_code_sd_jnd", &ObserverParams::label_code_sd_jnd, 0.0, false, kInf},
+    {"label_interference", &ObserverParams::label_interference, 0.0, false, kInf},
 };
 
 std::string RangeText(const ParamSpec& spec) {
@@ -238,11 +245,33 @@ double NearestTemplateProbabilityCorrect(double distance, double series_variance
   return total / weight_sum;
 }
 
+double LabelSimilarity(const ObserverParams& params, double distance) {
+  const double sigma = params.label_code_sd_jnd;
+  if (!(distance > 0.0)) return 1.0;
+  return sigma > 0.0 ? 2.0 * NormalCdf(-distance / (std::sqrt(2.0) * sigma)) : 0.0;
+}
+
+double LabelLossProbability(const ObserverParams& params, double interference) {
+  return 1.0 - std::pow(1.0 - params.label_loss_per_series,
+                        1.0 + params.label_interference * interference);
+}
+
+double LabelSwapProbability(const ObserverParams& params, double distance, int series,
+                            double interference) {
+  // the coded memories of the two walls differ by D + e, e ~ N(0, 2 sigma^2 I); the labels come
+  // out swapped when (D + e) . D < 0, i.e. when e's component along D is below -|D|
+  const double sigma = params.label_code_sd_jnd;
+  const double q = !(distance > 0.0) ? 0.5
+                   : sigma > 0.0     ? NormalCdf(-distance / (std::sqrt(2.0) * sigma))
+                                     : 0.0;
+  const double kept = std::pow(1.0 - LabelLossProbability(params, interference), series + 1);
+  return kept * params.label_swap_probability + (1.0 - kept) * q;
+}
+
 double PredictPercentCorrect(const ObserverParams& params, const StudyTest& test,
-                             const PerceptVector& a, const PerceptVector& b) {
+                             const PerceptVector& a, const PerceptVector& b, double interference) {
   const double distance = PerceptDistance(a, b);
   const double series_variance = 1.0 / test.taps_per_series;
-  const double q = params.label_swap_probability;
   const double lapse = params.lapse_rate;
   double sum = 0.0;
   for (int s = 0; s < test.series; ++s) {
@@ -252,6 +281,7 @@ double PredictPercentCorrect(const ObserverParams& params, const StudyTest& test
         (s + 1) * params.memory_drift_sd_jnd_per_series * params.memory_drift_sd_jnd_per_series;
     const double pc = NearestTemplateProbabilityCorrect(distance, series_variance,
                                                         template_variance, kPerceptDimensions);
+    const double q = LabelSwapProbability(params, distance, s, interference);
     sum += 0.5 * lapse + (1.0 - lapse) * (q * (1.0 - pc) + (1.0 - q) * pc);
   }
   return 100.0 * sum / test.series;
@@ -273,6 +303,14 @@ SimulatedParticipant::SimulatedParticipant(const Protocol& protocol, const Obser
     : protocol_(protocol), params_(params), source_(source), seed_(seed) {
   Rng rng(DeriveSeed(seed_, {kIndividual}));
   jnd_factor_ = std::exp(params_.individual_jnd_log_sd * rng.Normal());
+  // a participant's detection threshold sits individual_threshold_sd_dB * z above the nominal one
+  // (its own stream, so the JND factor of a seed does not depend on this parameter)
+  Rng threshold(DeriveSeed(seed_, {kThreshold}));
+  threshold_offset_dB_ = params_.individual_threshold_sd_dB * threshold.Normal();
+  params_.vibration_threshold_rms_N *= std::pow(10.0, threshold_offset_dB_ / 20.0);
+  for (const Step& step : MakePlan(protocol_, seed_)) {
+    if (test_order_.empty() || test_order_.back() != step.test) test_order_.push_back(step.test);
+  }
 }
 
 void SimulatedParticipant::Present(const Condition& /*condition*/, int /*taps*/) {
@@ -334,6 +372,42 @@ const SimulatedParticipant::Memory& SimulatedParticipant::MemoryOf(int test) {
       memory.drift[s][c] = walk;
     }
   }
+  // label memory: the association of labels and templates is lost with probability h before each
+  // series; the participant then re-derives it by comparing the coded memory of each wall with
+  // the templates (LabelSwapProbability), and keeps the result until the next loss
+  // walls of the tests before this one that are not in it compete for its labels
+  for (int earlier : test_order_) {
+    if (earlier == test) break;
+    const StudyTest& e = protocol_.tests[earlier];
+    for (int ec = 0; ec < 2; ++ec) {
+      if (e.conditions[ec] == t.conditions[0] || e.conditions[ec] == t.conditions[1]) continue;
+      const PerceptVector other = MemoryOf(earlier).templates[ec];
+      for (int c = 0; c < 2; ++c) {
+        memory.interference +=
+            LabelSimilarity(params_, PerceptDistance(memory.templates[c], other));
+      }
+    }
+  }
+  const double loss_probability = LabelLossProbability(params_, memory.interference);
+  memory.swapped.resize(t.series);
+  bool swapped = labels_swapped(test);
+  for (int s = 0; s < t.series; ++s) {
+    const auto ss = static_cast<std::uint64_t>(s);
+    Rng loss(DeriveSeed(seed_, {kLabelLoss, tt, ss}));
+    if (loss.Bernoulli(loss_probability)) {
+      Rng code(DeriveSeed(seed_, {kLabelCode, tt, ss}));
+      double along = 0.0;  // (D + e_1 - e_0) . D
+      for (int i = 0; i < kPerceptDimensions; ++i) {
+        const double d = (memory.templates[1][i] + memory.drift[s][1][i]) -
+                         (memory.templates[0][i] + memory.drift[s][0][i]);
+        const double e = params_.label_code_sd_jnd * (code.Normal() - code.Normal());
+        along += (d + e) * d;
+      }
+      // exactly on the boundary (identical templates): a fair coin
+      swapped = along < 0.0 || (along == 0.0 && code.Bernoulli(0.5));
+    }
+    memory.swapped[s] = swapped;
+  }
   return memories_.emplace(test, std::move(memory)).first->second;
 }
 
@@ -356,7 +430,22 @@ int SimulatedParticipant::Decide(const Step& step) {
     distance[c] = PerceptDistance(felt, m);
   }
   const int nearer = distance[1] < distance[0] ? 1 : 0;
-  return labels_swapped(step.test) ? 1 - nearer : nearer;
+  return memory.swapped[step.series] ? 1 - nearer : nearer;
+}
+
+double SimulatedParticipant::interference(int test) {
+  return MemoryOf(test).interference;
+}
+
+bool SimulatedParticipant::labels_swapped(int test, int series) {
+  return MemoryOf(test).swapped.at(series);
+}
+
+PerceptVector SimulatedParticipant::TemplateAt(int test, int series, int condition) {
+  const Memory& memory = MemoryOf(test);
+  PerceptVector m = memory.templates.at(condition);
+  for (int i = 0; i < kPerceptDimensions; ++i) m[i] += memory.drift.at(series)[condition][i];
+  return m;
 }
 
 }  // namespace rigidtouch::study

@@ -7,11 +7,14 @@
 //   P level   sensation level of the Pacinian channel (dB above threshold) / intensity JND
 //   NP level  sensation level of the non-Pacinian (NP I) channel / intensity JND
 //   pitch     salience * ln(dominant frequency / P best frequency) / ln(1 + Weber fraction)
-// Internal noise adds an independent unit normal to every axis of every tap. The observer keeps a
-// memory template of each wall from the familiarization taps (averaged, plus encoding noise, plus
-// a random-walk drift per series: trace memory, Durlach & Braida 1969), averages the taps of a
-// series and names the wall whose template is nearer. It lapses (guesses) with a small
-// probability and can hold the labels swapped.
+// Internal noise adds an independent unit normal to every axis of every tap. Each participant has
+// its own JND scale and detection threshold. The observer keeps a memory template of each wall
+// from the familiarization taps (averaged, plus encoding noise, plus a random-walk drift per
+// series: trace memory, Durlach & Braida 1969), averages the taps of a series and takes the wall
+// whose template is nearer (discrimination). Naming it rests on a separate label memory: the
+// association of labels and templates can be lost before any series (more often when walls of
+// earlier tests felt alike) and is then re-derived from a coarse coded memory, possibly swapped
+// (identification). It lapses (guesses) with a small probability.
 #pragma once
 
 #include <array>
@@ -47,7 +50,12 @@ struct ObserverParams {
   double memory_drift_sd_jnd_per_series = 0.25;  ///< template random walk per series [JND]
   double label_swap_probability = 0.0;  ///< chance that a participant holds a test's labels swapped
   double lapse_rate = 0.02;             ///< chance of guessing a series regardless of the stimulus
-  double individual_jnd_log_sd = 0.2;   ///< SD across participants of ln(JND scale factor)
+  double individual_jnd_log_sd = 0.35;  ///< SD across participants of ln(JND scale factor)
+  double individual_threshold_sd_dB = 5.0;  ///< SD across participants of the detection threshold
+  double label_loss_per_series =
+      0.05;                         ///< chance per series that the wall-label association is lost
+  double label_code_sd_jnd = 4.0;   ///< noise of the coded memory the labels are re-derived from
+  double label_interference = 1.0;  ///< added loss rate per earlier wall that feels alike
 
   /// All parameters as a JSON object (field names as above).
   nlohmann::json ToJson() const;
@@ -96,12 +104,36 @@ double PerceptDistance(const PerceptVector& a, const PerceptVector& b);
 double NearestTemplateProbabilityCorrect(double distance, double series_variance,
                                          double template_variance, int dimensions);
 
+/// Probability that the observer holds a test's labels swapped at series `series` (0-based) for
+/// walls `distance` JND apart (label memory, docs/study.md): the association of labels and walls
+/// survives each series with probability 1 - h (h = label_loss_per_series); until the first loss
+/// the labels are swapped with label_swap_probability p; after a loss they are re-derived from a
+/// coded memory with noise sigma = label_code_sd_jnd per axis and per wall, which swaps them with
+/// q = Phi(-distance / (sqrt(2) sigma)). So P = (1 - h)^(s + 1) p + (1 - (1 - h)^(s + 1)) q.
+/// Exact when the templates equal the walls' mean percepts (the simulation draws each
+/// re-derivation from the participant's current templates).
+double LabelSwapProbability(const ObserverParams& params, double distance, int series,
+                            double interference = 0.0);
+
+/// How alike two walls `distance` JND apart are in the coded memory: the probability that their
+/// coded memories (noise label_code_sd_jnd per axis each) fall in the other's order along their
+/// difference, doubled: 2 Phi(-distance / (sqrt(2) sigma)); 1 for identical walls.
+double LabelSimilarity(const ObserverParams& params, double distance);
+
+/// Probability per series that a test's label association is lost: 1 - (1 - h)^(1 + lambda I),
+/// with h = label_loss_per_series, lambda = label_interference and `interference` I the summed
+/// LabelSimilarity of this test's walls to the walls of earlier tests that are not in this test
+/// (their labels compete for the same feeling: proactive interference).
+double LabelLossProbability(const ObserverParams& params, double interference);
+
 /// Expected percent correct of the nominal observer over a test's series, for walls whose mean
-/// percepts are `a` (condition 0) and `b` (condition 1): the average over series positions of
-/// lapse / 2 + (1 - lapse) (swap (1 - P) + (1 - swap) P). Tap-to-tap variability of the stimulus
-/// and differences between participants are not included (the simulation includes both).
+/// percepts are `a` (condition 0) and `b` (condition 1): the average over series positions s of
+/// lapse / 2 + (1 - lapse) (w_s (1 - P_s) + (1 - w_s) P_s), w_s = LabelSwapProbability. Tap-to-tap
+/// variability of the stimulus and differences between participants are not included (the
+/// simulation, and PredictProtocol's cohorts, include both).
 double PredictPercentCorrect(const ObserverParams& params, const StudyTest& test,
-                             const PerceptVector& a, const PerceptVector& b);
+                             const PerceptVector& a, const PerceptVector& b,
+                             double interference = 0.0);
 
 /// Mean perceptual point of `condition` over `taps` taps rendered with seeds derived from `seed`.
 PerceptVector MeanPerceptVector(const ObserverParams& params, StimulusSource& source,
@@ -126,13 +158,28 @@ class SimulatedParticipant : public WallPresenter, public Responder {
   int Decide(const Step& step);
   /// This participant's JND scale factor (1 for the nominal observer).
   double jnd_factor() const { return jnd_factor_; }
-  /// Whether this participant holds the labels of `test` swapped.
+  /// This participant's detection threshold offset [dB] (0 for the nominal observer).
+  double threshold_offset_dB() const { return threshold_offset_dB_; }
+  /// Whether this participant holds the labels of `test` swapped from the start (explicit swap,
+  /// label_swap_probability).
   bool labels_swapped(int test) const;
+  /// Whether this participant holds the labels of `test` swapped at series `series`, after any
+  /// losses of the label association (label memory).
+  bool labels_swapped(int test, int series);
+  /// The label interference of `test` (LabelLossProbability) from the tests before it in this
+  /// participant's plan, from this participant's templates.
+  double interference(int test);
+  /// The remembered template of condition `condition` of `test` as used at series `series`
+  /// (familiarization mean, encoding noise and the drift up to that series), in this
+  /// participant's perceptual units.
+  PerceptVector TemplateAt(int test, int series, int condition);
 
  private:
   struct Memory {
     std::array<PerceptVector, 2> templates;           // after familiarization
     std::vector<std::array<PerceptVector, 2>> drift;  // cumulative drift before each series
+    std::vector<bool> swapped;                        // labels swapped at each series
+    double interference = 0.0;                        // from the walls of earlier tests
   };
   const Memory& MemoryOf(int test);
   PerceptVector FeltMean(const Condition& condition, int taps, std::uint64_t tap_stream,
@@ -143,7 +190,9 @@ class SimulatedParticipant : public WallPresenter, public Responder {
   StimulusSource& source_;
   std::uint64_t seed_;
   double jnd_factor_ = 1.0;
+  double threshold_offset_dB_ = 0.0;
   std::map<int, Memory> memories_;
+  std::vector<int> test_order_;  // tests in the order of this participant's plan
 };
 
 }  // namespace rigidtouch::study

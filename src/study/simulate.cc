@@ -1,7 +1,12 @@
 #include "study/simulate.h"
 
+#include <algorithm>
+#include <cmath>
+#include <map>
+
 #include "rigidtouch/types.h"
 #include "study/log.h"
+#include "study/plan.h"
 #include "study/random.h"
 
 namespace rigidtouch::study {
@@ -9,6 +14,7 @@ namespace rigidtouch::study {
 namespace {
 constexpr std::uint64_t kParticipantStream = 31;
 constexpr std::uint64_t kPredictionStream = 32;
+constexpr std::uint64_t kCohortStream = 33;
 }  // namespace
 
 std::string SimulatedParticipantId(int index, int participants) {
@@ -71,30 +77,164 @@ std::vector<ParticipantRun> SimulateCohort(const Protocol& protocol, StimulusSou
   return runs;
 }
 
-std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
-                                            const ObserverParams& observer, std::uint64_t seed,
-                                            int sample_taps) {
-  if (sample_taps < 1) {
-    throw Error("sample taps: " + std::to_string(sample_taps) + "; valid: >= 1");
+namespace {
+
+// Replays taps rendered once per condition: tap `seed` draws one of them uniformly. Lets the
+// prediction run thousands of simulated participants on the engine's percepts without rendering
+// every tap again.
+class SampledTapSource final : public StimulusSource {
+ public:
+  SampledTapSource(StimulusSource& inner, std::uint64_t seed, int taps)
+      : inner_(inner), seed_(seed), taps_(taps) {}
+
+  // the taps of `condition` (rendered on first use): seeds depend on its configuration only
+  const std::vector<TapPercept>& TapsOf(const Condition& condition) {
+    const std::uint64_t config_hash = Fnv1a64(condition.ToJson().dump());
+    auto found = pools_.find(config_hash);
+    if (found != pools_.end()) return found->second;
+    const std::uint64_t stream = DeriveSeed(seed_, {kPredictionStream, config_hash});
+    std::vector<TapPercept> taps;
+    for (int j = 0; j < taps_; ++j) {
+      taps.push_back(
+          inner_.RenderTap(condition, DeriveSeed(stream, {static_cast<std::uint64_t>(j)})));
+    }
+    return pools_.emplace(config_hash, std::move(taps)).first->second;
   }
+
+  TapPercept RenderTap(const Condition& condition, std::uint64_t tap_seed) override {
+    const std::vector<TapPercept>& taps = TapsOf(condition);
+    Rng rng(tap_seed);
+    return taps[rng.Below(taps.size())];
+  }
+
+  std::string Describe() const override {
+    return std::to_string(taps_) + " sampled taps per wall of " + inner_.Describe();
+  }
+
+ private:
+  StimulusSource& inner_;
+  std::uint64_t seed_;
+  int taps_;
+  std::map<std::uint64_t, std::vector<TapPercept>> pools_;
+};
+
+// p-quantile of sorted values (nearest rank)
+double Quantile(const std::vector<double>& sorted, double p) {
+  const auto n = static_cast<double>(sorted.size());
+  const auto k = static_cast<std::size_t>(std::clamp(std::ceil(p * n) - 1.0, 0.0, n - 1.0));
+  return sorted[k];
+}
+
+CohortShare Summarise(std::vector<double> per_cohort, double expected) {
+  std::sort(per_cohort.begin(), per_cohort.end());
+  return {expected, Quantile(per_cohort, 0.05), Quantile(per_cohort, 0.95)};
+}
+
+}  // namespace
+
+std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
+                                            const ObserverParams& observer,
+                                            const PredictionConfig& config) {
+  if (config.sample_taps < 1) {
+    throw Error("sample taps: " + std::to_string(config.sample_taps) + "; valid: >= 1");
+  }
+  if (config.participants < 1) {
+    throw Error("participants: " + std::to_string(config.participants) + "; valid: >= 1");
+  }
+  if (config.cohorts < 0) {
+    throw Error("cohorts: " + std::to_string(config.cohorts) + "; valid: >= 0");
+  }
+  SampledTapSource sampled(source, config.seed, config.sample_taps);
   std::vector<TestPrediction> predictions;
-  for (const StudyTest& test : protocol.tests) {
-    std::array<PerceptVector, 2> means;
+  for (std::size_t index = 0; index < protocol.tests.size(); ++index) {
+    const StudyTest& test = protocol.tests[index];
+    std::array<PerceptVector, 2> means{};
     for (int c = 0; c < 2; ++c) {
-      // the stream depends on the configuration only: equal configurations get the same taps,
-      // so two labels for one wall are predicted at exactly chance
-      const Condition& condition = protocol.conditions[test.conditions[c]];
-      const std::uint64_t config_hash = Fnv1a64(condition.ToJson().dump());
-      means[c] = MeanPerceptVector(observer, source, condition, sample_taps,
-                                   DeriveSeed(seed, {kPredictionStream, config_hash}));
+      // equal configurations get the same taps, so two labels for one wall are predicted at
+      // exactly chance
+      const std::vector<TapPercept>& taps = sampled.TapsOf(protocol.conditions[test.conditions[c]]);
+      for (const TapPercept& tap : taps) {
+        const PerceptVector v = ToPerceptVector(observer, tap);
+        for (int i = 0; i < kPerceptDimensions; ++i) means[c][i] += v[i] / taps.size();
+      }
+    }
+    // label interference from the walls of the earlier tests (in the protocol's order) that are
+    // not in this one
+    double interference = 0.0;
+    for (std::size_t e = 0; e < index; ++e) {
+      for (int ec = 0; ec < 2; ++ec) {
+        const int condition = protocol.tests[e].conditions[ec];
+        if (condition == test.conditions[0] || condition == test.conditions[1]) continue;
+        for (int c = 0; c < 2; ++c) {
+          interference += LabelSimilarity(
+              observer, PerceptDistance(means[c], predictions[e].mean_percepts[ec]));
+        }
+      }
     }
     TestPrediction p;
     p.name = test.name;
     p.distance_jnd = PerceptDistance(means[0], means[1]);
-    p.percent_correct = PredictPercentCorrect(observer, test, means[0], means[1]);
+    p.label_interference = interference;
+    p.percent_correct = PredictPercentCorrect(observer, test, means[0], means[1], interference);
+    p.mean_percepts = means;
     predictions.push_back(p);
   }
+  if (config.cohorts == 0) return predictions;
+
+  // cohorts of simulated participants answering every series of the plan their seed gives
+  const std::size_t tests = protocol.tests.size();
+  std::vector<std::vector<double>> pc(tests), at_90(tests), at_50(tests);
+  std::vector<double> sum_pc(tests, 0.0), n_90(tests, 0.0), n_50(tests, 0.0);
+  for (int k = 0; k < config.cohorts; ++k) {
+    std::vector<double> cohort_pc(tests, 0.0), cohort_90(tests, 0.0), cohort_50(tests, 0.0);
+    for (int i = 0; i < config.participants; ++i) {
+      const std::uint64_t seed =
+          DeriveSeed(config.seed,
+                     {kCohortStream, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(i)});
+      SimulatedParticipant participant(protocol, observer, sampled, seed);
+      std::vector<int> correct(tests, 0), answered(tests, 0);
+      for (const Step& step : MakePlan(protocol, seed)) {
+        if (step.kind != StepKind::kSeries) continue;
+        correct[step.test] += participant.Decide(step) == step.condition ? 1 : 0;
+        ++answered[step.test];
+      }
+      for (std::size_t t = 0; t < tests; ++t) {
+        const double percent = 100.0 * correct[t] / answered[t];
+        cohort_pc[t] += percent / config.participants;
+        cohort_90[t] += (percent >= 90.0 ? 1.0 : 0.0) / config.participants;
+        cohort_50[t] += (percent <= 50.0 ? 1.0 : 0.0) / config.participants;
+      }
+    }
+    for (std::size_t t = 0; t < tests; ++t) {
+      pc[t].push_back(cohort_pc[t]);
+      at_90[t].push_back(cohort_90[t]);
+      at_50[t].push_back(cohort_50[t]);
+      sum_pc[t] += cohort_pc[t] / config.cohorts;
+      n_90[t] += cohort_90[t] / config.cohorts;
+      n_50[t] += cohort_50[t] / config.cohorts;
+    }
+  }
+  for (std::size_t t = 0; t < tests; ++t) {
+    double below = 0.0;
+    for (int k = 0; k < config.cohorts; ++k) {
+      if (t > 0 && pc[t][k] < pc[t - 1][k]) below += 1.0 / config.cohorts;
+    }
+    predictions[t].cohorts_below_previous = t > 0 ? below : std::nan("");
+    predictions[t].cohort_percent_correct = Summarise(pc[t], sum_pc[t]);
+    predictions[t].at_least_90 = Summarise(at_90[t], n_90[t]);
+    predictions[t].at_most_50 = Summarise(at_50[t], n_50[t]);
+  }
   return predictions;
+}
+
+std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
+                                            const ObserverParams& observer, std::uint64_t seed,
+                                            int sample_taps) {
+  PredictionConfig config;
+  config.seed = seed;
+  config.sample_taps = sample_taps;
+  config.cohorts = 0;
+  return PredictProtocol(protocol, source, observer, config);
 }
 
 }  // namespace rigidtouch::study

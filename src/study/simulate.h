@@ -3,6 +3,7 @@
 // resumable from their logs.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -55,16 +56,49 @@ SessionConfig SimulatedSessionConfig(const std::string& id, std::uint64_t seed,
 std::vector<ParticipantRun> SimulateCohort(const Protocol& protocol, StimulusSource& source,
                                            const CohortConfig& config);
 
-/// The observer model's analytic prediction for one test.
+/// A share of participants: its expectation and its central 90% interval over cohorts.
+struct CohortShare {
+  double expected = 0.0;  ///< share over all simulated participants, in [0, 1]
+  double low = 0.0;       ///< 5th percentile of the share in cohorts of the given size
+  double high = 0.0;      ///< 95th percentile
+};
+
+/// The observer model's prediction for one test.
 struct TestPrediction {
   std::string name;              ///< test name
   double distance_jnd = 0.0;     ///< distance between the walls' mean percepts [JND]
   double percent_correct = 0.0;  ///< PredictPercentCorrect for the nominal observer
+  std::array<PerceptVector, 2> mean_percepts{};  ///< each wall's mean percept [JND]
+  /// Label interference from the earlier tests in the protocol's order (LabelLossProbability).
+  double label_interference = 0.0;
+  /// Simulated cohorts (individual differences, tap variability, label memory): mean percent
+  /// correct over all simulated participants, and its 90% interval over cohorts.
+  CohortShare cohort_percent_correct;
+  CohortShare at_least_90;  ///< share of participants at >= 90% correct
+  CohortShare at_most_50;   ///< share of participants at <= 50% correct
+  /// Share of simulated cohorts whose mean percent correct in this test is below their mean in
+  /// the previous test of the protocol (NaN for the first test).
+  double cohorts_below_previous = 0.0;
 };
 
-/// Predicts every test of `protocol`: mean percepts from `sample_taps` taps per condition (seeds
-/// derived from `seed` and the condition's configuration, so equal configurations share taps),
-/// then PredictPercentCorrect.
+/// How PredictProtocol samples.
+struct PredictionConfig {
+  std::uint64_t seed = 1;  ///< seed of the sampled taps and of the simulated cohorts
+  int sample_taps = 20;    ///< taps rendered per condition (>= 1)
+  int participants = 9;    ///< cohort size the intervals refer to (>= 1)
+  int cohorts = 1000;      ///< simulated cohorts (>= 1; 0 skips the cohort part)
+};
+
+/// Predicts every test of `protocol`. Each condition's taps are rendered once, `sample_taps` taps
+/// with seeds derived from the seed and the condition's configuration (so equal configurations
+/// share taps); the nominal prediction is PredictPercentCorrect at their mean percepts; the
+/// cohort part runs `cohorts` cohorts of `participants` SimulatedParticipants (the same observer
+/// code as `study simulate`) whose taps are drawn from those rendered taps.
+std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
+                                            const ObserverParams& observer,
+                                            const PredictionConfig& config);
+
+/// Nominal prediction only (no cohorts), `sample_taps` taps per condition.
 std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
                                             const ObserverParams& observer, std::uint64_t seed,
                                             int sample_taps);

@@ -167,7 +167,9 @@ TEST(ObserverTest, PredictionBoundaries) {
   const PerceptVector a = {0.0, 0.0, 0.0, 0.0};
   const PerceptVector b = {2.0, 0.0, 0.0, 0.0};
   EXPECT_DOUBLE_EQ(PredictPercentCorrect(p, t, a, a), 50.0);
+  EXPECT_DOUBLE_EQ(PredictPercentCorrect(p, t, a, a, /*interference=*/3.0), 50.0);
   p.lapse_rate = 0.0;
+  p.label_loss_per_series = 0.0;  // an explicit swap held for the whole test
   const double straight = PredictPercentCorrect(p, t, a, b);
   EXPECT_GT(straight, 60.0);
   p.label_swap_probability = 1.0;
@@ -178,8 +180,8 @@ TEST(ObserverTest, PredictionBoundaries) {
 }
 
 // predicted percent correct of wall `base` against each member of a family
-std::vector<double> FamilyPrediction(const Condition& base, const std::vector<Condition>& family) {
-  const ObserverParams p;
+std::vector<double> FamilyPrediction(const Condition& base, const std::vector<Condition>& family,
+                                     const ObserverParams& p = {}) {
   ToyStimulusSource source;
   const StudyTest t = MethodTest();
   // the same tap seeds for every wall: only the condition differs
@@ -191,31 +193,44 @@ std::vector<double> FamilyPrediction(const Condition& base, const std::vector<Co
   return out;
 }
 
-void ExpectNonDecreasingFromChance(const std::vector<double>& pc, const std::string& family) {
+void ExpectNonDecreasingFromChance(const std::vector<double>& pc, const std::string& family,
+                                   double largest_above) {
   ASSERT_FALSE(pc.empty());
   EXPECT_DOUBLE_EQ(pc.front(), 50.0) << family << ": identical walls";
   for (std::size_t i = 1; i < pc.size(); ++i) {
     EXPECT_GE(pc[i], pc[i - 1] - 1e-9) << family << " member " << i;  // round-off only
   }
-  EXPECT_GT(pc.back(), 75.0) << family << ": the largest difference is discriminable";
+  EXPECT_GT(pc.back(), largest_above) << family << ": the largest difference is discriminable";
+}
+
+// each family with the default observer (label memory included) and with the label memory off
+// (discrimination alone): monotone from chance in both; the largest member is discriminable
+// (> 75%) and, with lost labels re-derived from a coarse memory, still well above chance (> 65%)
+void ExpectFamily(const Condition& base, const std::vector<Condition>& family,
+                  const std::string& name) {
+  ExpectNonDecreasingFromChance(FamilyPrediction(base, family), name, 65.0);
+  ObserverParams discrimination;
+  discrimination.label_loss_per_series = 0.0;
+  ExpectNonDecreasingFromChance(FamilyPrediction(base, family, discrimination),
+                                name + " (label memory off)", 75.0);
 }
 
 TEST(ObserverTest, LargerPhysicalDifferenceNeverLowersPredictedPercentCorrect) {
   std::vector<Condition> stiffer;
   for (double k = 1000.0; k <= 3000.0; k += 50.0) stiffer.push_back(Penalty(k));
-  ExpectNonDecreasingFromChance(FamilyPrediction(Penalty(1000.0), stiffer), "stiffness");
+  ExpectFamily(Penalty(1000.0), stiffer, "stiffness");
 
   std::vector<Condition> bouncier;
   for (double e = 0.0; e <= 1.0; e += 0.05) bouncier.push_back(Impulse(e));
-  ExpectNonDecreasingFromChance(FamilyPrediction(Impulse(0.0), bouncier), "restitution");
+  ExpectFamily(Impulse(0.0), bouncier, "restitution");
 
   std::vector<Condition> lower;
   for (double f = 250.0; f >= 100.0; f -= 10.0) lower.push_back(Train(f));
-  ExpectNonDecreasingFromChance(FamilyPrediction(Train(250.0), lower), "lower train frequency");
+  ExpectFamily(Train(250.0), lower, "lower train frequency");
 
   std::vector<Condition> higher;
   for (double f = 250.0; f <= 390.0; f += 10.0) higher.push_back(Train(f));
-  ExpectNonDecreasingFromChance(FamilyPrediction(Train(250.0), higher), "higher train frequency");
+  ExpectFamily(Train(250.0), higher, "higher train frequency");
 }
 
 Protocol TwoWalls(const Condition& a, const Condition& b) {
@@ -230,8 +245,9 @@ TEST(ObserverTest, SimulatedParticipantsAgreeWithThePrediction) {
   // analytic prediction describe the same random experiment
   ObserverParams p;
   p.individual_jnd_log_sd = 0.0;
+  p.individual_threshold_sd_dB = 0.0;
   ToyStimulusSource source(/*speed_log_sd=*/0.0);
-  const Protocol protocol = TwoWalls(Penalty(1000.0), Penalty(1500.0));
+  const Protocol protocol = TwoWalls(Penalty(1000.0), Penalty(1600.0));
   const PerceptVector a = MeanPerceptVector(p, source, protocol.conditions[0], 1, 0);
   const PerceptVector b = MeanPerceptVector(p, source, protocol.conditions[1], 1, 0);
   const double predicted = PredictPercentCorrect(p, protocol.tests[0], a, b);
@@ -292,11 +308,184 @@ TEST(ObserverTest, IndividualDifferencesScaleTheJnd) {
     factors.push_back(std::log(SimulatedParticipant(protocol, p, source, s).jnd_factor()));
   }
   const MeanSd m = ComputeMeanSd(factors);
-  // ln(factor) ~ N(0, 0.2^2): mean SE 0.01, SD SE ~0.0071; tolerances 5 SE
-  EXPECT_NEAR(m.mean, 0.0, 0.05);
-  EXPECT_NEAR(m.sd, 0.2, 0.036);
+  // ln(factor) ~ N(0, s^2), s = 0.35: mean SE s / 20, SD SE ~ s / sqrt(800); tolerances 5 SE
+  const double s = p.individual_jnd_log_sd;
+  EXPECT_EQ(s, 0.35);
+  EXPECT_NEAR(m.mean, 0.0, 5.0 * s / 20.0);
+  EXPECT_NEAR(m.sd, s, 5.0 * s / std::sqrt(800.0));
   p.individual_jnd_log_sd = 0.0;
   EXPECT_EQ(SimulatedParticipant(protocol, p, source, 9).jnd_factor(), 1.0);
+}
+
+TEST(ObserverTest, LabelMemoryClosedForms) {
+  ObserverParams p;
+  p.label_loss_per_series = 0.05;
+  p.label_code_sd_jnd = 4.0;
+  // no loss: the explicit swap alone, at every series
+  ObserverParams kept = p;
+  kept.label_loss_per_series = 0.0;
+  kept.label_swap_probability = 0.3;
+  EXPECT_DOUBLE_EQ(LabelSwapProbability(kept, 5.0, 0), 0.3);
+  EXPECT_DOUBLE_EQ(LabelSwapProbability(kept, 5.0, 19), 0.3);
+  // identical walls: a lost association is re-derived by a fair coin
+  EXPECT_NEAR(LabelSwapProbability(p, 0.0, 19), 0.5 * (1.0 - std::pow(0.95, 20)), 1e-15);
+  // walls sqrt(2) sigma apart: q = Phi(-1) after a loss, weighted by P(lost by series s)
+  const double d = std::sqrt(2.0) * 4.0;
+  EXPECT_NEAR(LabelSwapProbability(p, d, 0), 0.05 * NormalCdf(-1.0), 1e-15);
+  EXPECT_NEAR(LabelSwapProbability(p, d, 9), (1.0 - std::pow(0.95, 10)) * NormalCdf(-1.0), 1e-15);
+  p.label_swap_probability = 1.0;  // held swapped until the first loss
+  EXPECT_NEAR(LabelSwapProbability(p, d, 9),
+              std::pow(0.95, 10) + (1.0 - std::pow(0.95, 10)) * NormalCdf(-1.0), 1e-15);
+  p.label_swap_probability = 0.0;
+  // similarity of coded memories and the interference it adds to the loss rate
+  EXPECT_EQ(LabelSimilarity(p, 0.0), 1.0);
+  EXPECT_NEAR(LabelSimilarity(p, d), 2.0 * NormalCdf(-1.0), 1e-15);
+  EXPECT_LT(LabelSimilarity(p, 60.0), 1e-12);
+  EXPECT_NEAR(LabelLossProbability(p, 0.0), 0.05, 1e-15);
+  EXPECT_NEAR(LabelLossProbability(p, 1.5), 1.0 - std::pow(0.95, 2.5), 1e-15);
+  p.label_interference = 0.0;
+  EXPECT_NEAR(LabelLossProbability(p, 1.5), 0.05, 1e-15);
+  // a swap never exceeds chance for swap-free participants, and falls as the walls move apart
+  for (double distance = 0.0; distance < 20.0; distance += 0.5) {
+    EXPECT_LE(LabelSwapProbability(p, distance + 0.5, 19), LabelSwapProbability(p, distance, 19));
+    EXPECT_LE(LabelSwapProbability(p, distance, 19), 0.5);
+  }
+}
+
+// a protocol of two walls whose templates are nearly exact (100 familiarization taps, no tap
+// variability, no encoding noise or drift, no individual differences)
+ObserverParams ExactTemplates() {
+  ObserverParams p;
+  p.individual_jnd_log_sd = 0.0;
+  p.individual_threshold_sd_dB = 0.0;
+  p.memory_encoding_sd_jnd = 0.0;
+  p.memory_drift_sd_jnd_per_series = 0.0;
+  p.lapse_rate = 0.0;
+  return p;
+}
+
+TEST(ObserverTest, SimulatedLabelSwapsFollowTheClosedForm) {
+  ObserverParams p = ExactTemplates();
+  p.label_loss_per_series = 0.1;
+  ToyStimulusSource source(/*speed_log_sd=*/0.0);
+  json d = {{"name", "pair"},
+            {"familiarization_taps", 100},
+            {"conditions", {{"a", Train(250.0).ToJson()}, {"b", Train(150.0).ToJson()}}},
+            {"tests", {{{"name", "t"}, {"conditions", {"a", "b"}}}}}};
+  const Protocol protocol = ParseProtocol(d, "pair");
+  const double distance =
+      PerceptDistance(MeanPerceptVector(p, source, protocol.conditions[0], 1, 0),
+                      MeanPerceptVector(p, source, protocol.conditions[1], 1, 0));
+  ASSERT_GT(distance, 2.0);  // a pair whose re-derived labels swap often enough to measure
+  ASSERT_LT(distance, 8.0);
+  constexpr int kParticipants = 4000;
+  const std::vector<int> series_checked = {0, 4, 19};
+  std::vector<int> swaps(series_checked.size(), 0);
+  for (int i = 0; i < kParticipants; ++i) {
+    SimulatedParticipant participant(protocol, p, source,
+                                     DeriveSeed(99, {static_cast<std::uint64_t>(i)}));
+    for (std::size_t k = 0; k < series_checked.size(); ++k) {
+      swaps[k] += participant.labels_swapped(0, series_checked[k]) ? 1 : 0;
+    }
+  }
+  for (std::size_t k = 0; k < series_checked.size(); ++k) {
+    const int series = series_checked[k];
+    const int swapped = swaps[k];
+    const double expected = LabelSwapProbability(p, distance, series);
+    // 4 binomial SE; the templates' own noise (variance 1/100 per axis) moves q by < 0.005
+    const double se = std::sqrt(expected * (1.0 - expected) / kParticipants);
+    EXPECT_NEAR(static_cast<double>(swapped) / kParticipants, expected, 4.0 * se + 0.005)
+        << "series " << series;
+  }
+}
+
+TEST(ObserverTest, TemplateMemoryDecaysAsTheClosedForm) {
+  // template error per axis: familiarization mean (1 / F) + encoding + (s + 1) drift steps
+  ObserverParams p = ExactTemplates();
+  p.memory_encoding_sd_jnd = 0.5;
+  p.memory_drift_sd_jnd_per_series = 0.25;
+  ToyStimulusSource source(/*speed_log_sd=*/0.0);
+  const Protocol protocol = TwoWalls(Train(250.0), Train(100.0));
+  const PerceptVector truth = ToPerceptVector(p, source.RenderTap(protocol.conditions[0], 0));
+  constexpr int kParticipants = 2000;
+  for (int series : {0, 19}) {
+    std::vector<double> errors;
+    for (int i = 0; i < kParticipants; ++i) {
+      SimulatedParticipant participant(protocol, p, source,
+                                       DeriveSeed(7, {static_cast<std::uint64_t>(i)}));
+      const PerceptVector m = participant.TemplateAt(0, series, 0);
+      for (int k = 0; k < kPerceptDimensions; ++k) errors.push_back(m[k] - truth[k]);
+    }
+    const MeanSd e = ComputeMeanSd(errors);
+    const double variance = 1.0 / 3.0 + 0.25 + (series + 1) * 0.0625;
+    // 8000 errors: SE of the variance ~ variance sqrt(2 / 8000); tolerance 5 SE
+    EXPECT_NEAR(e.sd * e.sd, variance, 5.0 * variance * std::sqrt(2.0 / 8000.0))
+        << "series " << series;
+    EXPECT_NEAR(e.mean, 0.0, 5.0 * std::sqrt(variance / 8000.0));
+  }
+}
+
+TEST(ObserverTest, IndividualThresholdsShiftTheSensationLevel) {
+  ObserverParams p = ExactTemplates();
+  p.individual_threshold_sd_dB = 5.0;
+  ToyStimulusSource source(/*speed_log_sd=*/0.0);
+  json d = {{"name", "pair"},
+            {"familiarization_taps", 100},
+            {"conditions", {{"a", Train(250.0).ToJson()}, {"b", Train(100.0).ToJson()}}},
+            {"tests", {{{"name", "t"}, {"conditions", {"a", "b"}}}}}};
+  const Protocol protocol = ParseProtocol(d, "pair");
+  const PerceptVector nominal = ToPerceptVector(p, source.RenderTap(protocol.conditions[0], 0));
+  ASSERT_GT(nominal[1], 10.0);  // far above threshold: the P level moves dB for dB
+  std::vector<double> offsets;
+  for (std::uint64_t seed = 0; seed < 400; ++seed) {
+    SimulatedParticipant participant(protocol, p, source, seed);
+    offsets.push_back(participant.threshold_offset_dB());
+    // a threshold raised by x dB lowers the P level by x / JND; the template's noise has SD 0.1
+    const double p_level = participant.TemplateAt(0, 0, 0)[1];
+    EXPECT_NEAR(p_level, nominal[1] - participant.threshold_offset_dB() / p.intensity_jnd_dB, 0.5);
+  }
+  const MeanSd m = ComputeMeanSd(offsets);
+  // offsets ~ N(0, 5^2) dB: mean SE 0.25, SD SE ~0.18; tolerances 5 SE
+  EXPECT_NEAR(m.mean, 0.0, 1.25);
+  EXPECT_NEAR(m.sd, 5.0, 0.9);
+}
+
+TEST(ObserverTest, EarlierWallsThatFeelAlikeInterfereWithTheLabels) {
+  // test 2 repeats test 1's first wall under another label: its coded memory competes
+  ObserverParams p = ExactTemplates();
+  ToyStimulusSource source(/*speed_log_sd=*/0.0);
+  json d = {{"name", "two tests"},
+            {"familiarization_taps", 100},
+            {"conditions",
+             {{"a", Train(250.0).ToJson()},
+              {"b", Penalty(1000.0).ToJson()},
+              {"c", Train(250.0).ToJson()},
+              {"d", Train(100.0).ToJson()}}},
+            {"tests",
+             {{{"name", "first"}, {"conditions", {"a", "b"}}},
+              {{"name", "second"}, {"conditions", {"c", "d"}}}}}};
+  const Protocol protocol = ParseProtocol(d, "two tests");
+  PerceptVector mean[4];
+  for (int c = 0; c < 4; ++c) mean[c] = MeanPerceptVector(p, source, protocol.conditions[c], 1, 0);
+  // walls a, b of the first test against c, d of the second; a and c are the same wall
+  double expected = 0.0;
+  for (int earlier : {0, 1}) {
+    for (int now : {2, 3})
+      expected += LabelSimilarity(p, PerceptDistance(mean[earlier], mean[now]));
+  }
+  EXPECT_GT(expected, 1.0);  // at least the identical pair
+  for (std::uint64_t seed = 0; seed < 20; ++seed) {
+    SimulatedParticipant participant(protocol, p, source, seed);
+    EXPECT_EQ(participant.interference(0), 0.0);  // nothing came before the first test
+    // the templates' noise (SD 0.1 per axis) moves each similarity by < 0.03
+    EXPECT_NEAR(participant.interference(1), expected, 0.1);
+  }
+  // the prediction uses the same interference, so the second test is predicted lower than the
+  // same pair without a history
+  const double with_history =
+      PredictPercentCorrect(p, protocol.tests[1], mean[2], mean[3], expected);
+  const double alone = PredictPercentCorrect(p, protocol.tests[1], mean[2], mean[3]);
+  EXPECT_LT(with_history, alone - 0.5);
 }
 
 TEST(ObserverTest, ParametersParseWithNamedErrors) {

@@ -123,6 +123,7 @@ TEST(SimulateTest, SwappedLabelsAreFlaggedBelowChance) {
   config.seed = 3;
   config.observer.label_swap_probability = 1.0;
   config.observer.lapse_rate = 0.0;
+  config.observer.label_loss_per_series = 0.0;  // held swapped for the whole test
   std::vector<LogInput> logs;
   for (const auto& run : SimulateCohort(protocol, source, config)) {
     logs.push_back({run.id, run.records});
@@ -249,6 +250,99 @@ TEST(SimulateTest, PredictProtocolUsesTheObserverModel) {
   EXPECT_GT(p_diff[0].distance_jnd, 0.0);
   EXPECT_GT(p_diff[0].percent_correct, 50.0);
   EXPECT_THROW(PredictProtocol(same, source, observer, 1, 0), Error);
+}
+
+TEST(SimulateTest, PredictedSharesOfGuessingCohortsAreBinomial) {
+  // an observer who always guesses answers each of 20 series with a fair coin: a participant's
+  // score is Binomial(20, 1/2), so P(<= 50%) = P(X <= 10) and P(>= 90%) = P(X >= 18); the count
+  // of such participants in a cohort of 9 is Binomial(9, P)
+  const Protocol protocol = Cohort(kTrain250, kTrain100);
+  ToyStimulusSource source;
+  ObserverParams observer;
+  observer.lapse_rate = 1.0;
+  PredictionConfig config;
+  config.sample_taps = 5;
+  config.participants = 9;
+  config.cohorts = 1000;
+  const auto predictions = PredictProtocol(protocol, source, observer, config);
+  ASSERT_EQ(predictions.size(), 1u);
+  const TestPrediction& p = predictions[0];
+  double at_most_10 = 0.0;
+  double at_least_18 = 0.0;
+  for (int k = 0; k <= 20; ++k) {
+    if (k <= 10) at_most_10 += BinomialPmf(k, 20, 0.5);
+    if (k >= 18) at_least_18 += BinomialPmf(k, 20, 0.5);
+  }
+  // 9000 simulated participants: 4 binomial SE
+  EXPECT_NEAR(p.at_most_50.expected, at_most_10, 4.0 * std::sqrt(at_most_10 * 0.5 / 9000.0));
+  EXPECT_NEAR(p.at_least_90.expected, at_least_18, 0.001);
+  EXPECT_NEAR(p.cohort_percent_correct.expected, 50.0, 4.0 * 100.0 * std::sqrt(0.25 / 180000.0));
+  // the cohort interval: 5th and 95th percentiles of Binomial(9, P) / 9. The 5th is 3 of 9
+  // (CDF 0.030 at 2, 0.113 at 3: both several SE of 1000 cohorts away from 0.05); the 95th is 8
+  // of 9, but CDF(7) = 0.9385 is only 1.5 SE below 0.95, so 7 of 9 is allowed too
+  EXPECT_EQ(BinomialQuantile(9, at_most_10, 0.05), 3);
+  EXPECT_NEAR(p.at_most_50.low, 3.0 / 9.0, 1e-12);
+  EXPECT_EQ(BinomialQuantile(9, at_most_10, 0.95), 8);
+  EXPECT_TRUE(std::abs(p.at_most_50.high - 8.0 / 9.0) < 1e-12 ||
+              std::abs(p.at_most_50.high - 7.0 / 9.0) < 1e-12)
+      << p.at_most_50.high;
+  EXPECT_LE(p.at_most_50.low, p.at_most_50.expected);
+  EXPECT_GE(p.at_most_50.high, p.at_most_50.expected);
+  EXPECT_EQ(p.at_least_90.low, 0.0);
+}
+
+TEST(SimulateTest, PredictedSharesOfLapsingPerfectObserversAreBinomial) {
+  // walls far apart, exact memory, no label loss: right on every series except the lapses, which
+  // guess; so each answer is right with probability 1 - lapse / 2 = 0.8, independently, and a
+  // participant's score is Binomial(20, 0.8): P(>= 90%) = P(X >= 18), P(<= 50%) = P(X <= 10)
+  const Protocol protocol = Cohort(kPenalty1000, kTrain250);
+  ToyStimulusSource source(/*speed_log_sd=*/0.0);
+  ObserverParams observer;
+  observer.individual_jnd_log_sd = 0.0;
+  observer.individual_threshold_sd_dB = 0.0;
+  observer.memory_encoding_sd_jnd = 0.0;
+  observer.memory_drift_sd_jnd_per_series = 0.0;
+  observer.label_loss_per_series = 0.0;
+  observer.lapse_rate = 0.0;
+  PredictionConfig config;
+  config.sample_taps = 1;
+  config.cohorts = 0;
+  ASSERT_GT(PredictProtocol(protocol, source, observer, config)[0].percent_correct, 99.999);
+  observer.lapse_rate = 0.4;
+  config.cohorts = 1000;
+  const TestPrediction p = PredictProtocol(protocol, source, observer, config)[0];
+  double at_least_18 = 0.0;
+  double at_most_10 = 0.0;
+  for (int k = 0; k <= 20; ++k) {
+    if (k >= 18) at_least_18 += BinomialPmf(k, 20, 0.8);
+    if (k <= 10) at_most_10 += BinomialPmf(k, 20, 0.8);
+  }
+  // 9000 simulated participants: 4 binomial SE
+  EXPECT_NEAR(p.at_least_90.expected, at_least_18,
+              4.0 * std::sqrt(at_least_18 * (1.0 - at_least_18) / 9000.0));
+  EXPECT_NEAR(p.at_most_50.expected, at_most_10,
+              4.0 * std::sqrt(at_most_10 * (1.0 - at_most_10) / 9000.0) + 1e-4);
+  EXPECT_NEAR(p.cohort_percent_correct.expected, 80.0, 4.0 * 100.0 * std::sqrt(0.16 / 180000.0));
+}
+
+TEST(SimulateTest, PredictedCohortsSeparateEasyFromIdenticalWalls) {
+  ToyStimulusSource source;
+  const ObserverParams observer;
+  PredictionConfig config;
+  config.sample_taps = 10;
+  config.cohorts = 200;
+  const auto same = PredictProtocol(Cohort(kTrain250, kTrain250), source, observer, config)[0];
+  const auto easy = PredictProtocol(Cohort(kTrain250, kTrain100), source, observer, config)[0];
+  // identical walls: nobody is expected at >= 90% (P(X >= 18 of 20) = 2e-4 for a coin; answers
+  // to identical walls are no better than coins), most at <= 50%
+  EXPECT_LT(same.at_least_90.expected, 0.01);
+  EXPECT_GT(same.at_most_50.expected, 0.4);
+  EXPECT_NEAR(same.cohort_percent_correct.expected, 50.0, 2.0);
+  EXPECT_GT(easy.at_least_90.expected, 0.5);
+  EXPECT_LT(easy.at_most_50.expected, same.at_most_50.expected);
+  EXPECT_GT(easy.cohort_percent_correct.expected, 80.0);
+  config.participants = 0;
+  EXPECT_THROW(PredictProtocol(Cohort(kTrain250, kTrain100), source, observer, config), Error);
 }
 
 }  // namespace

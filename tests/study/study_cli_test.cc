@@ -1,6 +1,6 @@
-// End-to-end tests of `rigidtouch study run` and `study analyze`: the real executable, answers on
-// stdin, the text presenter, SIGKILL at random points, bad inputs. (`study simulate` needs the
-// engine's tap source, which is not wired in yet; its resume path is tested in simulate_test.)
+// End-to-end tests of `rigidtouch study run`, `study analyze` and `study predict`: the real
+// executable, answers on stdin, the text presenter, SIGKILL at random points, bad inputs.
+// (`study simulate`'s resume path is tested in simulate_test.)
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <set>
 #include <string>
@@ -421,6 +422,42 @@ TEST(StudyCliTest, AnalyzeWallsSessions) {
   const Result refused = RunCli(dir, {"study", "analyze", junk});
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_EQ(ReadFile(junk), "hello\n");
+}
+
+TEST(StudyCliTest, PredictPrintsTheCohortSharesWithIntervals) {
+  ScratchDir dir;
+  Result r = RunCli(dir, {"study", "predict", "--protocol", kWalls, "--taps", "5", "--cohorts",
+                          "100", "--participants", "9", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["participants"], 9);
+  EXPECT_EQ(j["cohorts"], 100);
+  ASSERT_EQ(j["tests"].size(), 2u);
+  for (const json& t : j["tests"]) {
+    for (const char* key : {"share_at_least_90", "share_at_most_50"}) {
+      const double expected = t[key]["expected"].get<double>();
+      const double low = t[key]["interval_90"][0].get<double>();
+      const double high = t[key]["interval_90"][1].get<double>();
+      EXPECT_LE(0.0, low) << key;
+      EXPECT_LE(low, expected) << key;
+      EXPECT_LE(expected, high) << key;
+      EXPECT_LE(high, 1.0) << key;
+      // a share of a cohort of 9 is a multiple of 1/9
+      EXPECT_NEAR(high * 9.0, std::round(high * 9.0), 1e-9) << key;
+    }
+    EXPECT_GT(t["predicted_percent_correct"].get<double>(), 50.0);
+  }
+  EXPECT_TRUE(j["tests"][0]["cohorts_below_previous_test"].is_null());
+  EXPECT_TRUE(j["tests"][1]["cohorts_below_previous_test"].is_number());
+
+  r = RunCli(dir, {"study", "predict", "--protocol", kWalls, "--taps", "5", "--cohorts", "20"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("participants at >= 90%: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("at <= 50%: "), std::string::npos) << r.out;
+
+  r = RunCli(dir, {"study", "predict", "--protocol", kWalls, "--participants", "0"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--participants"), std::string::npos) << r.err;
 }
 
 }  // namespace

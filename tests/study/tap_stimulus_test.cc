@@ -75,5 +75,33 @@ TEST(TapStimulusTest, IdenticalWallsThroughTheEngineGiveChance) {
   EXPECT_LE(t.percent_correct.mean, hi);
 }
 
+// the method's study through the engine (the documented prediction, docs/study.md): the second
+// test (wall 1 vs wall 2) is predicted harder than the first (wall 0 vs wall 1), by the nominal
+// observer and by simulated cohorts of 9, with fewer participants at >= 90% and more at <= 50%
+TEST(TapStimulusTest, WallsProtocolPredictsTheSecondTestHarder) {
+  const Protocol protocol =
+      LoadProtocol(std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json");
+  const auto source = MakeTapStimulusSource({});
+  PredictionConfig config;
+  config.cohorts = 300;
+  const auto p = PredictProtocol(protocol, *source, ObserverParams{}, config);
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_LT(p[1].distance_jnd, p[0].distance_jnd);
+  EXPECT_LT(p[1].percent_correct, p[0].percent_correct);
+  EXPECT_GT(p[1].label_interference, p[0].label_interference);  // wall 2 feels like wall 0
+  EXPECT_LT(p[1].cohort_percent_correct.expected, p[0].cohort_percent_correct.expected);
+  EXPECT_LT(p[1].at_least_90.expected, p[0].at_least_90.expected);
+  EXPECT_GT(p[1].at_most_50.expected, p[0].at_most_50.expected);
+  EXPECT_GT(p[1].cohorts_below_previous, 0.5);
+  for (const TestPrediction& t : p) {
+    for (const CohortShare& share : {t.at_least_90, t.at_most_50}) {
+      EXPECT_LE(0.0, share.low);
+      EXPECT_LE(share.low, share.expected);
+      EXPECT_LE(share.expected, share.high);
+      EXPECT_LE(share.high, 1.0);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rigidtouch::study
