@@ -37,6 +37,8 @@ start_s=$(date +%s)
 # set -e fails the script on any pytest status but 0, so also on 5 (no tests collected)
 PYTHONPATH="$prefix/lib/python3/dist-packages" RIGIDTOUCH_CLI="$prefix/bin/rigidtouch" \
   "$python" -m pytest -q -p no:cacheprovider python/tests
+PYTHONPATH="$prefix/lib/python3/dist-packages" "$python" examples/python/worked_example.py \
+  --out-dir build/python-example
 echo "Python pass: $(($(date +%s) - start_s)) s"
 
 if [ "${1:-}" != "--quick" ]; then
