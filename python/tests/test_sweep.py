@@ -84,3 +84,15 @@ def test_the_sweep_command(tmp_path):
                           capture_output=True, text=True, check=False)
     assert done.returncode == 2
     assert "rigidtouch: error: grid.renderer: an empty list" in done.stderr
+
+
+def test_zwidth_figure_counts_the_passive_points(tmp_path):
+    pytest.importorskip("matplotlib")
+    from rigidtouch.figures import zwidth_figure
+    made = [{"ok": True, "renderer": "penalty", "device": "omega3", "timestep_s": 0.001,
+             "stiffness_N_per_m": k, "damping_Ns_per_m": b, "passive": b > k * 0.001 / 2}
+            for k in (1000.0, 4000.0) for b in (0.0, 1.0, 3.0)]
+    made.append({"ok": False, "params": {}, "error": "ValueError: x"})
+    png = tmp_path / "z.png"
+    assert zwidth_figure(made, str(png)) == {("penalty", "omega3"): (3, 6)}
+    assert png.stat().st_size > 1000
