@@ -77,6 +77,11 @@ DeviceState MakeDeviceState(const py::dict& fields) {
   return s;
 }
 
+bool IsCommandField(const std::string& k) {
+  return k == "force_N" || k == "torque_Nm" || k == "penalty_force_N" || k == "impulsive_force_N" ||
+         k == "sequence" || k == "clipped" || k == "safe_fallback";
+}
+
 py::dict CommandDict(const DeviceCommand& c) {
   return py::dict("sequence"_a = c.sequence, "force_N"_a = Vec3(c.force_N),
                   "torque_Nm"_a = Vec3(c.torque_Nm), "penalty_force_N"_a = Vec3(c.penalty_force_N),
@@ -476,6 +481,11 @@ void DefineModule(py::module_& m) {
               if (k == "sequence") c.sequence = py::cast<std::uint64_t>(value);
               if (k == "clipped") c.clipped = py::cast<bool>(value);
               if (k == "safe_fallback") c.safe_fallback = py::cast<bool>(value);
+              if (!IsCommandField(k)) {
+                throw py::value_error("device command: unknown field '" + k +
+                                      "'; valid: force_N, torque_Nm, penalty_force_N, "
+                                      "impulsive_force_N, sequence, clipped, safe_fallback");
+              }
             }
             d.Write(c);
           },

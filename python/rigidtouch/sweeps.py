@@ -192,6 +192,7 @@ def run_sweep(spec, out, *, scheduler=None, workers=None, batch=None, progress=N
     if len(set(keys)) != len(keys):
         raise SpecError("sweep spec: two points have the same parameters")
     done = read_done(out)
+    open(out, "a").close()  # an output that cannot be written fails now, before the cluster starts
     todo = [(i, p) for i, (p, k) in enumerate(zip(todo_all, keys)) if k not in done]
     summary = {"points": len(todo_all), "already_done": len(todo_all) - len(todo), "ran": 0,
                "failed": 0, "out": out}
