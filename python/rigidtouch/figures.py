@@ -113,6 +113,9 @@ def rate_hardness_figure(records, out, *, y="rate", dpi=90):
         ax.set_xscale("log")
         if y == "rate":
             ax.set_yscale("log")
+            ax.minorticks_off()
+        ax.set_yticks(ys)
+        ax.set_yticklabels([f"{v:g}" for v in ys])
         ax.set_xlabel("wall stiffness K [N/m]")
         ax.set_title(renderer, fontsize=10)
     axes[0][0].set_ylabel("haptic rate [Hz]" if y == "rate" else y)
