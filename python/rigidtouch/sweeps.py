@@ -173,6 +173,9 @@ def read_done(out):
 
 
 def _client(scheduler, workers):
+    # the workers' start-up chatter stays out of the sweep's output (set before dask loads;
+    # local workers inherit it)
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "warning")
     from dask.distributed import Client, LocalCluster
     if scheduler:
         return Client(scheduler, timeout="30s"), None
@@ -199,7 +202,12 @@ def run_sweep(spec, out, *, scheduler=None, workers=None, batch=None, progress=N
     if not todo:
         return summary
     from dask.distributed import as_completed
-    client, cluster = _client(scheduler, workers)
+    try:
+        client, cluster = _client(scheduler, workers)
+    except OSError as e:
+        if not scheduler:
+            raise
+        raise SpecError(f"--scheduler {scheduler}: cannot reach the Dask scheduler ({e})") from None
     start = time.perf_counter()
     try:
         nworkers = max(1, len(client.scheduler_info()["workers"]))
@@ -262,6 +270,9 @@ def main(argv=None):
     except OSError as e:
         print(f"rigidtouch: error: {args.out}: {e.strerror or e}", file=sys.stderr)
         return 2
+    except Exception as e:  # the README's status 3: an internal error (e.g. the cluster failed)
+        print(f"rigidtouch: internal error: {type(e).__name__}: {e}", file=sys.stderr)
+        return 3
     if args.json:
         print(json.dumps(summary))
     else:
