@@ -186,3 +186,22 @@ def test_tap_releases_the_gil():
         counter[0] += 1
     thread.join()
     assert seen["after"] - seen["before"] > 1000
+
+
+def test_settings_resolve_as_on_the_command_line(tmp_path):
+    # a config file's field is used, a flag overrides it, and an error says where a value was set
+    config = tmp_path / "k.json"
+    config.write_text(json.dumps({"contact": {"stiffness_N_per_m": 321.0}}))
+    assert rt.tap(config=str(config), **TAP).metrics["stiffness_N_per_m"] == 321.0
+    assert rt.tap(config=str(config), stiffness=350.0, **TAP).metrics["stiffness_N_per_m"] == 350.0
+    config.write_text(json.dumps({"render": {"t_collision_s": 0.5}}))
+    with pytest.raises(ValueError, match=r"t_collision_s.*set in .*k\.json"):
+        rt.tap(config=str(config), **TAP)
+    # load options: nested sections are edited in place, then used by load_model
+    options = rt.LoadOptions()
+    options.contact.stiffness_N_per_m = 1234.0
+    options.render.renderer = "impulse"
+    model = rt.load_model(STACK, options)
+    assert model.contact.stiffness_N_per_m == 1234.0 and model.render.renderer == "impulse"
+    with pytest.raises(ValueError, match="none.json"):
+        rt.load_model(STACK, options, config=str(tmp_path / "none.json"))
