@@ -8,6 +8,7 @@ packages=(
   libsodium-dev
   libboost-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   python3 python3-matplotlib python3-numpy
+  pybind11-dev python3-pybind11 python3-dev python3-pytest python3-distributed python3-pandas
 )
 missing=()
 for p in "${packages[@]}"; do

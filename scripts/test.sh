@@ -14,8 +14,11 @@ files=$(git ls-files '*.h' '*.cc' 2>/dev/null || true)
 if [ -n "$files" ]; then clang-format --dry-run --Werror $files; fi
 
 echo "== release build, -Wall -Wextra -Werror"
+# the Python module is built for Debian's interpreter, where its packages are (not a pyenv's)
+python=/usr/bin/python3
+[ -x "$python" ] || python=$(command -v python3)
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRIGIDTOUCH_WERROR=ON -DRIGIDTOUCH_BUILD_TESTS=ON \
-  -DRIGIDTOUCH_BUILD_BENCHMARKS=ON
+  -DRIGIDTOUCH_BUILD_BENCHMARKS=ON -DRIGIDTOUCH_BUILD_PYTHON=ON -DPython3_EXECUTABLE="$python"
 cmake --build build -j"$jobs"
 (cd build && ctest --output-on-failure -j"$jobs")
 
@@ -28,6 +31,15 @@ cmake -S tests/install -B build/consumer -DCMAKE_PREFIX_PATH="$prefix" >/dev/nul
 cmake --build build/consumer -j"$jobs" >/dev/null
 ./build/consumer/consumer scenes/tap.xml
 test -x build/consumer/openhaptics_bridge && echo "vendor bridge example built"
+
+echo "== Python module: pytest against the installed package (docs/python.md)"
+start_s=$(date +%s)
+# set -e fails the script on any pytest status but 0, so also on 5 (no tests collected)
+PYTHONPATH="$prefix/lib/python3/dist-packages" RIGIDTOUCH_CLI="$prefix/bin/rigidtouch" \
+  "$python" -m pytest -q -p no:cacheprovider python/tests
+PYTHONPATH="$prefix/lib/python3/dist-packages" "$python" examples/python/worked_example.py \
+  --out-dir build/python-example
+echo "Python pass: $(($(date +%s) - start_s)) s"
 
 if [ "${1:-}" != "--quick" ]; then
   echo "== AddressSanitizer + UndefinedBehaviorSanitizer over the unit tests"

@@ -21,6 +21,7 @@
 #include "io/trace_csv.h"
 #include "scene_flags.h"
 #include "simulate_nonfinite.h"
+#include "tap_run.h"
 
 namespace rigidtouch::cli {
 namespace {
@@ -431,10 +432,9 @@ void Run(const TapFlags& f) {
   ThrowIfNonFinite(NonFinite(run));
 }
 
-void Register(CLI::App& root) {
+// tap's options, on the subcommand or on RunTapFlags' own parser (one definition for both)
+std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
   auto f = std::make_shared<TapFlags>();
-  CLI::App* app = root.add_subcommand(
-      "tap", "tap a wall with the simulated hand and device; metrics, trace and figures");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
   app->add_option("--wall", f->wall,
                   "the method's walls: 0 single impulse, 1 train 250 Hz, "
@@ -476,6 +476,13 @@ void Register(CLI::App& root) {
       app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
           ->capture_default_str();
   app->add_flag("--json", f->json, "print one JSON object");
+  return f;
+}
+
+void Register(CLI::App& root) {
+  CLI::App* app = root.add_subcommand(
+      "tap", "tap a wall with the simulated hand and device; metrics, trace and figures");
+  auto f = AddTapOptions(app);
   // an error about a parameter the user wrote says where it was written
   app->callback([f, out_dir] {
     f->out_dir_given = out_dir->count() > 0;
@@ -486,4 +493,44 @@ void Register(CLI::App& root) {
 const CommandRegistrar registrar(&Register);
 
 }  // namespace
+
+namespace {
+
+// tap's flags parsed from `args`, for the in-process runs below
+std::shared_ptr<TapFlags> ParseTapFlags(const std::vector<std::string>& args) {
+  CLI::App app{"rigidtouch tap"};
+  auto f = AddTapOptions(&app);
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses from the back
+  try {
+    app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    throw Error(std::string("tap: ") + e.what());
+  }
+  if (f->compare_walls || !f->trace.empty() || !f->plot.empty() || f->json) {
+    throw Error(
+        "tap: --compare-walls, --trace, --plot and --json write files or print; here the "
+        "run is returned instead");
+  }
+  if (f->wall && f->scene.renderer) throw Error("give either --wall or --renderer, not both");
+  return f;
+}
+
+}  // namespace
+
+TapOutcome RunTapFlags(const std::vector<std::string>& args) {
+  const auto f = ParseTapFlags(args);
+  return WithOrigins(ResolveSettings(f->scene), [&] {
+    TapOutcome out;
+    out.run = analysis::RunTapExperiment(MakeConfig(*f, f->wall));
+    out.result = RunJson(out.run, io::CouplingName(out.run.model.device.coupling));
+    return out;
+  });
+}
+
+analysis::TapSetup PrepareTapFlags(const std::vector<std::string>& args) {
+  const auto f = ParseTapFlags(args);
+  return WithOrigins(ResolveSettings(f->scene),
+                     [&] { return analysis::PrepareTap(MakeConfig(*f, f->wall)); });
+}
+
 }  // namespace rigidtouch::cli
