@@ -506,10 +506,10 @@ std::shared_ptr<TapFlags> ParseTapFlags(const std::vector<std::string>& args) {
   } catch (const CLI::ParseError& e) {
     throw Error(std::string("tap: ") + e.what());
   }
-  if (f->compare_walls || !f->trace.empty() || !f->plot.empty() || f->json) {
+  if (f->compare_walls || !f->compare.empty() || !f->trace.empty() || !f->plot.empty() || f->json) {
     throw Error(
-        "tap: --compare-walls, --trace, --plot and --json write files or print; here the "
-        "run is returned instead");
+        "tap: --compare, --compare-walls, --trace, --plot and --json write files or print; here "
+        "the run is returned instead");
   }
   if (f->wall && f->scene.renderer) throw Error("give either --wall or --renderer, not both");
   return f;
