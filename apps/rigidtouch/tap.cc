@@ -472,9 +472,8 @@ std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
                   "run these renderers side by side, comma-separated: penalty, impulse, train "
                   "(with the flags' parameters), wall0, wall1, wall2 (the method's walls); "
                   "writes traces, compare.md and figures to --out-dir");
-  CLI::Option* out_dir =
-      app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
-          ->capture_default_str();
+  app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
+      ->capture_default_str();
   app->add_flag("--json", f->json, "print one JSON object");
   return f;
 }
@@ -484,8 +483,8 @@ void Register(CLI::App& root) {
       "tap", "tap a wall with the simulated hand and device; metrics, trace and figures");
   auto f = AddTapOptions(app);
   // an error about a parameter the user wrote says where it was written
-  app->callback([f, out_dir] {
-    f->out_dir_given = out_dir->count() > 0;
+  app->callback([f, app] {
+    f->out_dir_given = app->get_option("--out-dir")->count() > 0;
     WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
   });
 }
@@ -506,10 +505,12 @@ std::shared_ptr<TapFlags> ParseTapFlags(const std::vector<std::string>& args) {
   } catch (const CLI::ParseError& e) {
     throw Error(std::string("tap: ") + e.what());
   }
-  if (f->compare_walls || !f->compare.empty() || !f->trace.empty() || !f->plot.empty() || f->json) {
+  f->out_dir_given = app.get_option("--out-dir")->count() > 0;
+  if (f->compare_walls || !f->compare.empty() || f->out_dir_given || !f->trace.empty() ||
+      !f->plot.empty() || f->json) {
     throw Error(
-        "tap: --compare, --compare-walls, --trace, --plot and --json write files or print; here "
-        "the run is returned instead");
+        "tap: --compare, --compare-walls, --out-dir, --trace, --plot and --json write files or "
+        "print; here the run is returned instead");
   }
   if (f->wall && f->scene.renderer) throw Error("give either --wall or --renderer, not both");
   return f;
