@@ -20,13 +20,14 @@ void ZeroWrench(DeviceCommand& command) {
 class HapticStep {
  public:
   HapticStep(const Model& model, Data& data, device::Device& device, double period_s,
-             TraceQueue* traces, RecordQueue* records, HapticLoopResult& r)
+             TraceQueue* traces, RecordQueue* records, TickObserver* observer, HapticLoopResult& r)
       : model_(model),
         data_(data),
         device_(device),
         period_s_(period_s),
         traces_(traces),
         records_(records),
+        observer_(observer),
         r_(r) {}
 
   bool operator()(std::int64_t tick) {
@@ -82,7 +83,7 @@ class HapticStep {
     if (!std::isfinite(f)) r_.finite = false;
     if (f > r_.max_force_N) r_.max_force_N = f;
     for (int k = 0; k < data_.nimpulse; ++k) r_.impulses += data_.impulses[k].tool ? 1 : 0;
-    if (traces_ != nullptr || records_ != nullptr) {
+    if (traces_ != nullptr || records_ != nullptr || observer_ != nullptr) {
       TraceSample s = MakeTraceSample(model_, data_, command);
       // before EndPeriod: the sample describes the start of the period, as the offline
       // tap experiment's does
@@ -96,6 +97,7 @@ class HapticStep {
         record_.hand_force_N = s.hand_force_N;
         records_->Push(record_);
       }
+      if (observer_ != nullptr) observer_->OnTick(model_, data_, s);
     }
     device_.EndPeriod(period_s_);
     return !device_.Ended();
@@ -108,6 +110,7 @@ class HapticStep {
   const double period_s_;
   TraceQueue* traces_;
   RecordQueue* records_;
+  TickObserver* observer_;
   HapticLoopResult& r_;
   TickInput input_;
   io::RecordSample record_;
@@ -120,19 +123,19 @@ class HapticStep {
 
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
                                const LoopOptions& options, const std::atomic<bool>* stop,
-                               TraceQueue* traces, RecordQueue* records) {
+                               TraceQueue* traces, RecordQueue* records, TickObserver* observer) {
   HapticLoopResult r;
   RateLoop loop(options);
-  HapticStep step(model, data, device, 1.0 / options.rate_hz, traces, records, r);
+  HapticStep step(model, data, device, 1.0 / options.rate_hz, traces, records, observer, r);
   r.timing = loop.Run([&step](std::int64_t tick, double) { return step(tick); }, stop);
   return r;
 }
 
 HapticLoopResult RunHapticTicks(const Model& model, Data& data, device::Device& device,
                                 double rate_hz, std::int64_t ticks, const std::atomic<bool>* stop,
-                                TraceQueue* traces, RecordQueue* records) {
+                                TraceQueue* traces, RecordQueue* records, TickObserver* observer) {
   HapticLoopResult r;
-  HapticStep step(model, data, device, 1.0 / rate_hz, traces, records, r);
+  HapticStep step(model, data, device, 1.0 / rate_hz, traces, records, observer, r);
   const auto t0 = std::chrono::steady_clock::now();
   r.timing.rate_hz = rate_hz;
   for (std::int64_t k = 0; k < ticks; ++k) {

@@ -30,6 +30,16 @@ struct HapticLoopResult {
   bool finite = true;                     // every command was finite
 };
 
+/// Sees every tick on the haptic thread, after Write (a live viewer's feed). OnTick must not
+/// allocate, lock, block or throw: it runs inside the loop's period.
+class TickObserver {
+ public:
+  virtual ~TickObserver() = default;
+  /// `sample` is the tick's trace sample with the device's annotations; `data` the state after
+  /// the tick.
+  virtual void OnTick(const Model& model, const Data& data, const TraceSample& sample) noexcept = 0;
+};
+
 /// Runs `model` against `device` at options.rate_hz (the model's time step should be its period).
 /// Each tick: Read, Tick, guard, Write, AnnotateTrace (when tracing), EndPeriod(1 / rate_hz); a
 /// device that lives in loop time (the simulated one) advances in EndPeriod. `traces`, when
@@ -47,7 +57,8 @@ struct HapticLoopResult {
 /// command (as written), with the device's annotations, for `--record` (never blocks).
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
                                const LoopOptions& options, const std::atomic<bool>* stop,
-                               TraceQueue* traces = nullptr, RecordQueue* records = nullptr);
+                               TraceQueue* traces = nullptr, RecordQueue* records = nullptr,
+                               TickObserver* observer = nullptr);
 
 /// Runs `ticks` periods of the same step as RunHapticLoop back to back, without waiting for
 /// deadlines (as fast as they compute; a replayed device, offline), or fewer if the device ends
@@ -56,7 +67,8 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
 /// achieved rate.
 HapticLoopResult RunHapticTicks(const Model& model, Data& data, device::Device& device,
                                 double rate_hz, std::int64_t ticks, const std::atomic<bool>* stop,
-                                TraceQueue* traces = nullptr, RecordQueue* records = nullptr);
+                                TraceQueue* traces = nullptr, RecordQueue* records = nullptr,
+                                TickObserver* observer = nullptr);
 
 /// Polls `device` about every millisecond until it reports a valid state, writing a zero wrench
 /// flagged safe-fallback after each read (so a bridge learns where to stream), for at most
