@@ -56,6 +56,7 @@ class MouseDevice : public Device {
   DeviceLimits limits_;
   MouseDeviceParams params_;
   std::atomic<double> target_[3];
+  static_assert(std::atomic<double>::is_always_lock_free);
   std::atomic<bool> tap_requested_{false};
   Vec3 x_m_ = Vec3::Zero();           // true handle position
   Vec3 sampled_m_ = Vec3::Zero();     // last encoder reading
