@@ -8,6 +8,7 @@ packages=(
   libsodium-dev
   libboost-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   python3 python3-matplotlib python3-numpy
+  libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth libgl1-mesa-dri
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -142,15 +142,16 @@ void DrawCapsule(ImDrawList* dl, const Camera& cam, const Vec3& pos, const Mat3&
 }
 
 void DrawPlane(ImDrawList* dl, const Camera& cam, const Vec3& pos, const Mat3& R, const Vec3& size,
-               const Vec3& around) {
-  // a grid of 1 cm cells within 15 cm of the tool's start (an MJCF plane of size 0 is infinite)
-  const double half = 0.15, step = 0.01;
+               const Vec3& around, double half) {
+  // a grid of 1 cm cells (5 cm for large scenes) around the scene (an MJCF plane of size 0 is
+  // infinite)
+  const double step = half > 0.3 ? 0.05 : 0.01;
   const Vec3 local = R.transpose() * (around - pos);
   const double hx = size.x() > 0.0 ? std::min(size.x(), half) : half;
   const double hy = size.y() > 0.0 ? std::min(size.y(), half) : half;
   const double ox = std::round(local.x() / step) * step, oy = std::round(local.y() / step) * step;
   for (double t = -half; t <= half + 1e-9; t += step) {
-    const float w = std::abs(std::fmod(std::abs(t + ox) + 1e-9, 0.05)) < 2e-9 ? 2.0f : 1.0f;
+    const float w = std::abs(std::fmod(std::abs(t + ox) + 1e-9, 5 * step)) < 2e-9 ? 2.0f : 1.0f;
     Line(dl, cam, pos + R * Vec3(ox + t, oy - hy, 0), pos + R * Vec3(ox + t, oy + hy, 0),
          kFloorColor, w);
     Line(dl, cam, pos + R * Vec3(ox - hx, oy + t, 0), pos + R * Vec3(ox + hx, oy + t, 0),
@@ -283,6 +284,20 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
   ImGuiGuard imgui_guard;
 
   const Vec3 start = model.initial[model.tool].x_W;
+  // the camera frames every geom but planes: their bounding sphere, seen from at least 0.2 m
+  Vec3 lo = start, hi = start;
+  for (const GeomModel& g : model.geoms) {
+    if (g.type == GeomType::kPlane) continue;
+    const Vec3 c = g.body < 0
+                       ? g.pos_B
+                       : Vec3(model.initial[g.body].x_W + model.initial[g.body].q_WB * g.pos_B);
+    lo = lo.cwiseMin(c - Vec3::Constant(g.rbound_m));
+    hi = hi.cwiseMax(c + Vec3::Constant(g.rbound_m));
+  }
+  const Vec3 centre = 0.5 * (lo + hi);
+  const double scene_radius = 0.5 * (hi - lo).norm();
+  const double distance = std::max(0.2, 3.0 * scene_radius);
+  const double grid_half = std::max(0.15, 1.5 * scene_radius);
   double target_depth = 0.0;
   Vec3 target = start;
   Scope scope(static_cast<std::size_t>(std::max(2.0, std::round(o.scope_window_s * o.rate_hz))));
@@ -303,7 +318,7 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
     }
     int w = 0, h = 0;
     glfwGetFramebufferSize(window, &w, &h);
-    const Camera cam(start, 0.2, w, h);
+    const Camera cam(centre, distance, w, h);
     if (target_depth == 0.0) target_depth = cam.Depth(start);
 
     ImGui_ImplOpenGL3_NewFrame();
@@ -371,7 +386,7 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
       const ImU32 c = g.body == model.tool ? kToolColor : g.body < 0 ? kStaticColor : kBodyColor;
       switch (g.type) {
         case GeomType::kPlane:
-          DrawPlane(dl, cam, p, R, g.size, start);
+          DrawPlane(dl, cam, p, R, g.size, centre, grid_half);
           break;
         case GeomType::kSphere:
           Disc(dl, cam, p, g.size.x(), c, true);
