@@ -15,6 +15,7 @@
 #include "device/mouse_device.h"
 #include "device/presets.h"
 #include "device/replay_device.h"
+#include "io/config.h"
 #include "io/device_record.h"
 #include "io/output_file.h"
 #include "loop/haptic_loop.h"
@@ -39,6 +40,9 @@ struct ViewFlags {
   std::string screenshot;
   std::string mouse_path;
   int tap_frame = -1;
+  int switch_frame = -1;
+  std::string switch_to = "penalty";
+  bool switch_at_contact = false;
   double display_hz = 60.0;
   int width_px = 1280, height_px = 720;
   bool realtime = false;
@@ -104,6 +108,9 @@ void Run(const ViewFlags& f) {
   vo.width_px = f.width_px;
   vo.height_px = f.height_px;
   if (!f.mouse_path.empty()) vo.mouse_path = ParsePath(f.mouse_path);
+  vo.switch_frame = f.switch_frame;
+  vo.switch_at_contact = f.switch_at_contact;
+  if (f.switch_frame >= 0 || f.switch_at_contact) vo.switch_to = io::ParseRenderer(f.switch_to);
 
   loop::LoopOptions lo;
   lo.rate_hz = rate_hz;
@@ -149,36 +156,83 @@ void Run(const ViewFlags& f) {
   view::ViewFeed feed(rate_hz, static_cast<std::size_t>(std::max(1024.0, 0.25 * rate_hz)));
   Data data = MakeData(model);
   std::atomic<bool> stop{false};
-  loop::HapticLoopResult r;
+  loop::HapticLoopResult r;  // the current segment's (a renderer switch starts a new one)
+  std::int64_t impulses = 0, ticks = 0;
+  double max_force_N = 0.0;
+  bool finite = true;
   std::exception_ptr loop_error;
-  std::thread haptic([&] {
-    try {
-      // stops when the window closes or the frames are drawn
-      r = loop::RunHapticLoop(model, data, *dev, lo, &stop, nullptr, records.get(), &feed);
-    } catch (...) {
-      loop_error = std::current_exception();
+  std::thread haptic;
+  const double sim_duration_s = lo.duration_s;
+  const auto start = [&] {
+    stop.store(false);
+    if (f.device == "sim") {
+      // a restarted loop runs what is left of the simulated hand's script
+      lo.duration_s = std::max(1.0 / rate_hz, sim_duration_s - setup.simulated->time_s());
     }
-  });
+    haptic = std::thread([&] {
+      try {
+        // stops when the window closes, the frames are drawn or the renderer is switched
+        r = loop::RunHapticLoop(model, data, *dev, lo, &stop, nullptr, records.get(), &feed);
+      } catch (...) {
+        loop_error = std::current_exception();
+      }
+    });
+  };
+  const auto halt = [&] {
+    stop.store(true);
+    haptic.join();
+    impulses += r.impulses;
+    ticks += r.timing.ticks;
+    max_force_N = std::max(max_force_N, r.max_force_N);
+    finite = finite && r.finite;
+  };
+  // between two loop runs on the same Data: the model's renderer changes only while the haptic
+  // thread is stopped, and only when no contact is active (checked on the stopped state)
+  const view::RendererSwitch switch_renderer =
+      [&](RendererKind kind) -> std::optional<std::string> {
+    halt();
+    std::optional<std::string> outcome;
+    if (data.tool_contacts == 0 && !loop_error) {
+      const RenderParams before = model.render;
+      model.render.renderer = kind;
+      try {
+        Configure(model);
+        outcome = "";
+      } catch (const Error& e) {
+        model.render = before;
+        Configure(model);
+        outcome = std::string("cannot switch: ") + e.what();
+      }
+    }
+    start();
+    return outcome;
+  };
+  start();
   view::ViewerResult vr;
   std::exception_ptr view_error;
   try {
-    vr = view::RunViewer(model, feed, mouse, vo);
+    vr = view::RunViewer(model, feed, mouse, vo, switch_renderer);
   } catch (...) {
     view_error = std::current_exception();
   }
-  stop.store(true);
-  haptic.join();
+  halt();
   if (view_error) std::rethrow_exception(view_error);
   if (loop_error) std::rethrow_exception(loop_error);
 
   nlohmann::json result;
-  result["loop"] = loop::ToJson(r.timing);
+  result["loop"] = loop::ToJson(r.timing);  // the last segment's timing
+  result["ticks"] = ticks;
+  result["renderer_switches"] = vr.renderer_switches;
+  result["renderer_switch_wait_frames"] = vr.switch_wait_frames;
+  result["renderer"] = model.render.renderer == RendererKind::kPenalty   ? "penalty"
+                       : model.render.renderer == RendererKind::kImpulse ? "impulse"
+                                                                         : "train";
   result["frames"] = vr.frames;
   result["display_rate_hz"] = vr.elapsed_s > 0.0 ? vr.frames / vr.elapsed_s : 0.0;
-  result["impulses"] = r.impulses;
-  result["max_force_N"] = r.max_force_N;
+  result["impulses"] = impulses;
+  result["max_force_N"] = max_force_N;
   result["force_limit_N"] = r.force_limit_N;
-  result["finite"] = r.finite;
+  result["finite"] = finite;
   result["device"] = f.device;
   result["warnings"] = WarningsJson(data);
   if (!f.screenshot.empty()) result["screenshot"] = f.screenshot;
@@ -226,6 +280,15 @@ void Register(CLI::App& root) {
                   "scripted cursor for --frames: 'X,Y X,Y ...' in pixels, followed evenly");
   app->add_option("--tap-at-frame", f->tap_frame, "press the tap key at this frame (scripted)")
       ->check(CLI::Range(0, 1000000));
+  app->add_option("--switch-at-frame", f->switch_frame,
+                  "switch the renderer at this frame, once no contact is active (scripted)")
+      ->check(CLI::Range(0, 1000000));
+  app->add_flag("--switch-at-contact", f->switch_at_contact,
+                "ask for the switch at the first frame showing a tool contact (scripted; it "
+                "happens once the contact is over)");
+  app->add_option("--switch-to", f->switch_to, "the renderer --switch-at-frame switches to")
+      ->check(CLI::IsMember({"penalty", "impulse", "train"}))
+      ->capture_default_str();
   app->add_option("--display-rate", f->display_hz, "frames per second [Hz]")
       ->check(CLI::Range(1.0, 240.0))
       ->capture_default_str();
@@ -237,6 +300,9 @@ void Register(CLI::App& root) {
     f->rate_given = app->count("--rate") > 0;
     if (f->device != "sim" && (app->count("--taps") + app->count("--speed")) > 0) {
       throw Error("view: --taps and --speed script the simulated hand (--device sim)");
+    }
+    if (app->count("--switch-to") > 0 && f->switch_frame < 0 && !f->switch_at_contact) {
+      throw Error("view: --switch-to needs --switch-at-frame or --switch-at-contact");
     }
     WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
   });

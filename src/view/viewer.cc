@@ -239,7 +239,7 @@ void WritePng(const std::string& path, int w, int h) {
 }  // namespace
 
 ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* mouse,
-                       const ViewerOptions& o) {
+                       const ViewerOptions& o, const RendererSwitch& switch_renderer) {
   if (!o.screenshot.empty()) io::CheckOutputPath(o.screenshot, "screenshot");
   if (!glfwInit()) {
     throw Error("view: cannot open a window (no display? set DISPLAY or run under xvfb-run)");
@@ -310,6 +310,9 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
       std::chrono::duration<double>(1.0 / o.display_hz));
   auto next_frame = t0;
   std::vector<int> order;
+  bool pending = false;  // a switch was asked for and waits for no contact
+  RendererKind pending_kind = RendererKind::kTrain;
+  std::string switch_message;
   for (int frame = 0; o.frames <= 0 || frame < o.frames; ++frame) {
     glfwPollEvents();
     if (glfwWindowShouldClose(window)) {
@@ -353,6 +356,21 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
       }
     }
 
+    if (frame == o.switch_frame || (o.switch_at_contact && result.renderer_switches == 0 &&
+                                    !pending && feed.Latest().sample.tool_contacts > 0)) {
+      pending = true;
+      pending_kind = o.switch_to;
+    }
+    // a renderer switch happens between ticks while no contact is active
+    if (pending && feed.Latest().sample.tool_contacts > 0) ++result.switch_wait_frames;
+    if (pending && switch_renderer && feed.Latest().sample.tool_contacts == 0) {
+      const std::optional<std::string> done = switch_renderer(pending_kind);
+      if (done) {
+        switch_message = *done;
+        if (done->empty()) ++result.renderer_switches;
+        pending = false;
+      }
+    }
     const ViewSnapshot& snap = feed.Latest();
     scope.Drain(feed);
     ImDrawList* dl = ImGui::GetBackgroundDrawList();
@@ -423,6 +441,22 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
     ImGui::Text("renderer %s  e %.2f  t_c %.0f ms  f %.0f Hz", RendererName(model.render.renderer),
                 model.render.restitution, 1e3 * model.render.t_collision_s,
                 model.render.frequency_hz);
+    if (switch_renderer) {
+      const bool contact = snap.sample.tool_contacts > 0;
+      ImGui::Text(contact ? "switch (no contact)" : "switch to");
+      for (const RendererKind k :
+           {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
+        ImGui::SameLine();
+        if (ImGui::RadioButton(RendererName(k), model.render.renderer == k) && !contact) {
+          pending = true;
+          pending_kind = k;
+        }
+      }
+      if (pending) ImGui::TextDisabled("waiting for no contact to switch");
+      if (!switch_message.empty()) {
+        ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "%s", switch_message.c_str());
+      }
+    }
     ImGui::Text("wall k %.0f N/m  b %.2f N s/m  force limit %.2f N",
                 model.contact.stiffness_N_per_m, model.contact.damping_Ns_per_m,
                 model.device.max_force_N);

@@ -4,6 +4,8 @@
 // on the calling thread and only reads the ViewFeed: it never blocks or locks the haptic thread.
 #pragma once
 
+#include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,19 +31,30 @@ struct ViewerOptions {
   double rate_hz = 1000.0;  // the haptic loop's requested rate, for the panel
   std::string device;       // what drives the handle, for the panel
   double scope_window_s = 0.5;
+  /// Scripted renderer switch: asked for at this frame (as a click on the panel would).
+  int switch_frame = -1;
+  bool switch_at_contact = false;  // ... or at the first frame that shows a tool contact
+  RendererKind switch_to = RendererKind::kPenalty;
 };
+
+/// Switches the renderer between ticks (the haptic loop paused). Returns "" when done, a reason
+/// when it cannot be done (shown on the panel), or nothing when a contact had become active: the
+/// viewer asks again once no contact is.
+using RendererSwitch = std::function<std::optional<std::string>(RendererKind)>;
 
 /// What a run of the viewer saw.
 struct ViewerResult {
   int frames = 0;
   double elapsed_s = 0.0;
   bool closed_by_user = false;
+  int renderer_switches = 0;
+  int switch_wait_frames = 0;  // frames switches waited for a contact to end
 };
 
 /// Opens the window and draws until it is closed or `options.frames` are drawn. `mouse`, when
 /// given, receives the cursor's target and the tap key (T). Throws Error when no window can be
 /// opened (no display) or the screenshot cannot be written (io::OutputError).
 ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* mouse,
-                       const ViewerOptions& options);
+                       const ViewerOptions& options, const RendererSwitch& switch_renderer = {});
 
 }  // namespace rigidtouch::view

@@ -117,6 +117,29 @@ TEST(ViewCliTest, ScopeShowsTheTrainsSpikesDuringATap) {
   std::filesystem::remove_all(dir);
 }
 
+nlohmann::json ViewJson(const std::string& args) {
+  const CliResult r = RunCli(args + " --json", "xvfb-run -a");
+  EXPECT_EQ(r.exit_code, 0) << args << ": " << r.err;
+  return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+}
+
+// the renderer switches between ticks, and only while the tool touches nothing: asked for before a
+// tap, the tap is rendered by penalty alone; asked for during the tap's contact, the switch waits
+// and the train renders the whole contact (its 25 impulses: 100 ms at 250 Hz)
+TEST(ViewCliTest, RendererSwitchesOnlyWithoutContact) {
+  if (!HaveXvfb()) GTEST_SKIP() << "no X server can be started: xvfb-run is not installed";
+  const std::string tap = "view --frames 75 --tap-at-frame 20 --mouse-path '640,360 640,360' ";
+  const auto before = ViewJson(tap + "--switch-at-frame 5");
+  EXPECT_EQ(before["renderer"], "penalty");
+  EXPECT_EQ(before["renderer_switches"], 1);
+  EXPECT_EQ(before["impulses"], 0);
+  const auto during = ViewJson(tap + "--switch-at-contact");
+  EXPECT_EQ(during["renderer"], "penalty");
+  EXPECT_EQ(during["renderer_switches"], 1);
+  EXPECT_GT(during["renderer_switch_wait_frames"].get<int>(), 0);
+  EXPECT_EQ(during["impulses"], 25);
+}
+
 TEST(ViewCliTest, BadArgumentsAreRefused) {
   for (const std::string args :
        {"view --device udp://x --frames 1", "view --screenshot a.png",
