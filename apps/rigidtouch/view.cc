@@ -15,6 +15,7 @@
 #include "device/mouse_device.h"
 #include "device/presets.h"
 #include "device/replay_device.h"
+#include "device/udp_device.h"
 #include "io/config.h"
 #include "io/device_record.h"
 #include "io/output_file.h"
@@ -47,7 +48,12 @@ struct ViewFlags {
   int width_px = 1280, height_px = 720;
   bool realtime = false;
   bool json = false;
+  std::string key_file;  // udp: empty means the per-user default key
+  double startup_timeout_s = 1.0;
 };
+
+// exit status when the device never answered, as serve's
+constexpr int kExitNoDevice = 5;
 
 constexpr std::string_view kReplayPrefix = "replay:";
 
@@ -75,9 +81,12 @@ std::vector<std::pair<double, double>> ParsePath(const std::string& text) {
 
 void Run(const ViewFlags& f) {
   const bool replay = f.device.starts_with(kReplayPrefix);
-  if (f.device != "mouse" && f.device != "sim" && !replay) {
-    throw Error("view: --device '" + f.device + "' is not mouse, sim or replay:LOG");
+  const bool udp = f.device.starts_with("udp://");
+  if (f.device != "mouse" && f.device != "sim" && !replay && !udp) {
+    throw Error("view: --device '" + f.device +
+                "' is not mouse, sim, udp://HOST:PORT or replay:LOG");
   }
+  if (!udp && !f.key_file.empty()) throw Error("view: --key applies to --device udp://HOST:PORT");
   if (!f.screenshot.empty() && f.frames <= 0) {
     throw Error("view: --screenshot needs --frames N (the last of N frames is written)");
   }
@@ -137,6 +146,21 @@ void Run(const ViewFlags& f) {
     auto r = std::make_unique<device::ReplayDevice>(std::move(recorded->samples), setup.device);
     model.initial[model.tool].x_W = r->first_state().position_m;
     owned = std::move(r);
+    dev = owned.get();
+  } else if (udp) {
+    // the UDP bridge as in serve: the preset's limits until the device announces its own
+    device::UdpDeviceOptions uo;
+    uo.server = f.device;
+    uo.limits = setup.device;
+    uo.key_file = f.key_file;
+    auto u = std::make_unique<device::UdpDevice>(uo);
+    if (!loop::AwaitFirstState(*u, f.startup_timeout_s, nullptr)) {
+      std::cerr << "rigidtouch: error: view: no state from the device at " << f.device << " within "
+                << f.startup_timeout_s << " s (--startup-timeout); is the device server running?\n";
+      throw CLI::RuntimeError(kExitNoDevice);
+    }
+    device::TightenDeviceParams(model.device, u->limits());
+    owned = std::move(u);
     dev = owned.get();
   } else {
     lo.duration_s = setup.simulated->duration_s();
@@ -263,8 +287,8 @@ void Register(CLI::App& root) {
   CLI::App* app = root.add_subcommand("view", "live viewer: the scene, the tool, the forces");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
   app->add_option("--device", f->device,
-                  "mouse (drag the tool; wheel: depth; T: tap), sim (the simulated hand's taps) "
-                  "or replay:LOG (a --record file)")
+                  "mouse (drag the tool; wheel: depth; T: tap), sim (the simulated hand's taps), "
+                  "udp://HOST:PORT (the device bridge) or replay:LOG (a --record file)")
       ->capture_default_str();
   app->add_option("--preset", f->preset, "device preset: its limits and the simulated device")
       ->capture_default_str();
@@ -294,6 +318,11 @@ void Register(CLI::App& root) {
       ->capture_default_str();
   app->add_option("--width", f->width_px, "window width [px]")->check(CLI::Range(320, 4096));
   app->add_option("--height", f->height_px, "window height [px]")->check(CLI::Range(240, 4096));
+  app->add_option("--key", f->key_file, "udp: pre-shared key file (default: the per-user key)");
+  app->add_option("--startup-timeout", f->startup_timeout_s,
+                  "udp: no first state from the device within this long [s]: exit status 5")
+      ->check(CLI::Range(1e-3, 3600.0))
+      ->capture_default_str();
   app->add_flag("--realtime", f->realtime, "SCHED_FIFO and locked memory when allowed");
   app->add_flag("--json", f->json, "print one JSON object at the end");
   app->callback([f, app] {

@@ -443,11 +443,11 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
                 model.render.frequency_hz);
     if (switch_renderer) {
       const bool contact = snap.sample.tool_contacts > 0;
-      ImGui::Text(contact ? "switch (no contact)" : "switch to");
+      ImGui::Text(contact ? "switch (after the contact)" : "switch to");
       for (const RendererKind k :
            {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
         ImGui::SameLine();
-        if (ImGui::RadioButton(RendererName(k), model.render.renderer == k) && !contact) {
+        if (ImGui::RadioButton(RendererName(k), model.render.renderer == k)) {
           pending = true;
           pending_kind = k;
         }

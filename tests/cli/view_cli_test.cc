@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 #include <stb_image.h>
 
+#include <signal.h>
+
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -140,9 +142,29 @@ TEST(ViewCliTest, RendererSwitchesOnlyWithoutContact) {
   EXPECT_EQ(during["impulses"], 25);
 }
 
+// the viewer drives the UDP bridge as serve does: device-sim's simulated hand taps, the viewer's
+// loop renders the contacts and draws them
+TEST(ViewCliTest, DrivesTheUdpBridge) {
+  if (!HaveXvfb()) GTEST_SKIP() << "no X server can be started: xvfb-run is not installed";
+  const auto dir = TempDir("view_udp");
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  const pid_t sim = Spawn("device-sim --listen " + addr +
+                              " --preset touch --rate 1000 --taps 20 --speed 0.2 --duration 20",
+                          (dir / "sim.json").string());
+  const auto j = ViewJson("view --device " + addr + " --startup-timeout 5 --frames 120");
+  ::kill(sim, SIGTERM);
+  Wait(sim);
+  EXPECT_EQ(j["device"], addr);
+  EXPECT_GT(j["ticks"].get<long>(), 500);
+  EXPECT_GT(j["max_force_N"].get<double>(), 1.0);  // the hand reached the wall
+  EXPECT_LE(j["max_force_N"].get<double>(), 3.3);  // the Touch's limit
+  EXPECT_TRUE(j["finite"].get<bool>());
+  std::filesystem::remove_all(dir);
+}
+
 TEST(ViewCliTest, BadArgumentsAreRefused) {
   for (const std::string args :
-       {"view --device udp://x --frames 1", "view --screenshot a.png",
+       {"view --device tcp://x --frames 1", "view --frames 1 --key k", "view --screenshot a.png",
         "view --device sim --tap-at-frame 3", "view --device mouse --taps 3 --frames 1",
         "view --frames 2 --mouse-path '1,2 x'"}) {
     const CliResult r = RunCli(args);
