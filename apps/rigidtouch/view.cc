@@ -21,6 +21,7 @@
 #include "io/output_file.h"
 #include "loop/haptic_loop.h"
 #include "loop/loop_json.h"
+#include "loop/stop_signal.h"
 #include "scene_flags.h"
 #include "view/feed.h"
 #include "view/viewer.h"
@@ -117,6 +118,8 @@ void Run(const ViewFlags& f) {
   vo.width_px = f.width_px;
   vo.height_px = f.height_px;
   if (!f.mouse_path.empty()) vo.mouse_path = ParsePath(f.mouse_path);
+  // SIGINT or SIGTERM closes the window as its close button does, so a record is still committed
+  vo.stop = &loop::InstallStopSignalHandlers();
   vo.switch_frame = f.switch_frame;
   vo.switch_at_contact = f.switch_at_contact;
   if (f.switch_frame >= 0 || f.switch_at_contact) vo.switch_to = io::ParseRenderer(f.switch_to);

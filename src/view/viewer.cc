@@ -315,7 +315,7 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
   std::string switch_message;
   for (int frame = 0; o.frames <= 0 || frame < o.frames; ++frame) {
     glfwPollEvents();
-    if (glfwWindowShouldClose(window)) {
+    if (glfwWindowShouldClose(window) || (o.stop != nullptr && o.stop->load())) {
       result.closed_by_user = true;
       break;
     }

@@ -4,6 +4,7 @@
 // on the calling thread and only reads the ViewFeed: it never blocks or locks the haptic thread.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <optional>
 #include <string>
@@ -31,6 +32,7 @@ struct ViewerOptions {
   double rate_hz = 1000.0;  // the haptic loop's requested rate, for the panel
   std::string device;       // what drives the handle, for the panel
   double scope_window_s = 0.5;
+  const std::atomic<bool>* stop = nullptr;  // when set (SIGINT, SIGTERM), the viewer returns
   /// Scripted renderer switch: asked for at this frame (as a click on the panel would).
   int switch_frame = -1;
   bool switch_at_contact = false;  // ... or at the first frame that shows a tool contact

@@ -16,8 +16,12 @@
 namespace rigidtouch::test {
 namespace {
 
+// whether an X server can be started here (Xvfb through xvfb-run), asked once
 bool HaveXvfb() {
-  return std::system("command -v xvfb-run >/dev/null 2>&1") == 0;
+  static const bool have =
+      std::system("command -v xvfb-run >/dev/null 2>&1") == 0 &&
+      std::system("xvfb-run -a -s '-screen 0 64x64x24' true >/dev/null 2>&1") == 0;
+  return have;
 }
 
 struct Image {
@@ -78,7 +82,9 @@ Image View(const std::string& args, const std::string& png) {
 constexpr int kTool[3] = {255, 140, 0}, kFloor[3] = {90, 90, 90}, kImpulsive[3] = {255, 0, 0};
 
 TEST(ViewCliTest, SceneIsDrawnAndTheToolFollowsTheScriptedMouse) {
-  if (!HaveXvfb()) GTEST_SKIP() << "no X server can be started: xvfb-run is not installed";
+  if (!HaveXvfb())
+    GTEST_SKIP()
+        << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
   const auto dir = TempDir("view_mouse");
   // the cursor stays at the centre, or moves 300 px right over the 60 frames
   const Image still = View("--mouse-path '640,360 640,360'", (dir / "still.png").string());
@@ -101,7 +107,9 @@ TEST(ViewCliTest, SceneIsDrawnAndTheToolFollowsTheScriptedMouse) {
 }
 
 TEST(ViewCliTest, ScopeShowsTheTrainsSpikesDuringATap) {
-  if (!HaveXvfb()) GTEST_SKIP() << "no X server can be started: xvfb-run is not installed";
+  if (!HaveXvfb())
+    GTEST_SKIP()
+        << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
   const auto dir = TempDir("view_scope");
   // the tap starts half way, so its contact is inside the scope's last 0.5 s at the end
   const std::string tap = "--mouse-path '640,360 640,360' --tap-at-frame 30 ";
@@ -129,7 +137,9 @@ nlohmann::json ViewJson(const std::string& args) {
 // tap, the tap is rendered by penalty alone; asked for during the tap's contact, the switch waits
 // and the train renders the whole contact (its 25 impulses: 100 ms at 250 Hz)
 TEST(ViewCliTest, RendererSwitchesOnlyWithoutContact) {
-  if (!HaveXvfb()) GTEST_SKIP() << "no X server can be started: xvfb-run is not installed";
+  if (!HaveXvfb())
+    GTEST_SKIP()
+        << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
   const std::string tap = "view --frames 75 --tap-at-frame 20 --mouse-path '640,360 640,360' ";
   const auto before = ViewJson(tap + "--switch-at-frame 5");
   EXPECT_EQ(before["renderer"], "penalty");
@@ -145,7 +155,9 @@ TEST(ViewCliTest, RendererSwitchesOnlyWithoutContact) {
 // the viewer drives the UDP bridge as serve does: device-sim's simulated hand taps, the viewer's
 // loop renders the contacts and draws them
 TEST(ViewCliTest, DrivesTheUdpBridge) {
-  if (!HaveXvfb()) GTEST_SKIP() << "no X server can be started: xvfb-run is not installed";
+  if (!HaveXvfb())
+    GTEST_SKIP()
+        << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
   const auto dir = TempDir("view_udp");
   const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
   const pid_t sim = Spawn("device-sim --listen " + addr +
