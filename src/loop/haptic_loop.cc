@@ -30,7 +30,7 @@ class HapticStep {
         observer_(observer),
         r_(r) {}
 
-  bool operator()(std::int64_t tick) {
+  bool operator()() {
     input_.device = device_.Read();
     const bool valid = input_.device.valid;
     if (!valid) ++r_.invalid_device_ticks;
@@ -90,7 +90,9 @@ class HapticStep {
       device_.AnnotateTrace(s);
       if (traces_ != nullptr) traces_->Push(s);
       if (records_ != nullptr) {
-        record_.tick = tick;
+        // the session's tick, continuous over loop runs on the same Data (a viewer's renderer
+        // switch restarts the loop)
+        record_.tick = tick_step;
         record_.state = input_.device;
         record_.command = command;
         record_.tap = s.tap;
@@ -127,7 +129,7 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
   HapticLoopResult r;
   RateLoop loop(options);
   HapticStep step(model, data, device, 1.0 / options.rate_hz, traces, records, observer, r);
-  r.timing = loop.Run([&step](std::int64_t tick, double) { return step(tick); }, stop);
+  r.timing = loop.Run([&step](std::int64_t, double) { return step(); }, stop);
   return r;
 }
 
@@ -144,7 +146,7 @@ HapticLoopResult RunHapticTicks(const Model& model, Data& data, device::Device& 
       break;
     }
     ++r.timing.ticks;
-    if (!step(k)) break;
+    if (!step()) break;
   }
   r.timing.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (r.timing.elapsed_s > 0.0) {

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "cli/cli_util.h"
+#include "io/device_record.h"
 
 namespace rigidtouch::test {
 namespace {
@@ -141,10 +142,15 @@ TEST(ViewCliTest, RendererSwitchesOnlyWithoutContact) {
     GTEST_SKIP()
         << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
   const std::string tap = "view --frames 75 --tap-at-frame 20 --mouse-path '640,360 640,360' ";
-  const auto before = ViewJson(tap + "--switch-at-frame 5");
+  const auto dir = TempDir("view_switch");
+  const std::string rec = (dir / "rec.csv").string();
+  const auto before = ViewJson(tap + "--switch-at-frame 5 --record " + rec);
   EXPECT_EQ(before["renderer"], "penalty");
   EXPECT_EQ(before["renderer_switches"], 1);
   EXPECT_EQ(before["impulses"], 0);
+  // the record runs on over the loop's restart: one row per tick of the session, in order
+  EXPECT_EQ(static_cast<long>(io::ReadRecord(rec).samples.size()), before["ticks"].get<long>());
+  std::filesystem::remove_all(dir);
   const auto during = ViewJson(tap + "--switch-at-contact");
   EXPECT_EQ(during["renderer"], "penalty");
   EXPECT_EQ(during["renderer_switches"], 1);
