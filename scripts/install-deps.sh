@@ -9,6 +9,7 @@ packages=(
   libboost-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   python3 python3-matplotlib python3-numpy
   pybind11-dev python3-pybind11 python3-dev python3-pytest python3-distributed python3-pandas
+  libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth libgl1-mesa-dri
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -44,7 +44,7 @@ echo "Python pass: $(($(date +%s) - start_s)) s"
 if [ "${1:-}" != "--quick" ]; then
   echo "== AddressSanitizer + UndefinedBehaviorSanitizer over the unit tests"
   cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGIDTOUCH_WERROR=ON \
-    -DRIGIDTOUCH_SANITIZE=ON -DRIGIDTOUCH_BUILD_TESTS=ON
+    -DRIGIDTOUCH_SANITIZE=ON -DRIGIDTOUCH_BUILD_TESTS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF
   cmake --build build-asan -j"$jobs"
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --output-on-failure -j"$jobs" -LE no_sanitize)
@@ -54,7 +54,7 @@ if [ "${1:-}" != "--quick" ]; then
   # -O1 -g1: line-number stacks in the reports at about 60% of the -O2 -g compile time
   cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGIDTOUCH_WERROR=ON \
     -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
-    -DRIGIDTOUCH_SANITIZE_THREAD=ON -DRIGIDTOUCH_BUILD_TESTS=ON >/dev/null
+    -DRIGIDTOUCH_SANITIZE_THREAD=ON -DRIGIDTOUCH_BUILD_TESTS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
   tsan_targets=$(ls tests/loop/*_test.cc tests/device/*_test.cc tests/cli/bridge_cli_test.cc \
     tests/cli/fake_device_test.cc |
     xargs -n1 basename | sed 's/\.cc$//')
@@ -74,7 +74,7 @@ if [ "${1:-}" != "--quick" ]; then
   if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
   CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O0" -DRIGIDTOUCH_WERROR=ON "${launcher[@]}" \
-    -DRIGIDTOUCH_BUILD_TESTS=OFF -DRIGIDTOUCH_BUILD_FUZZERS=ON >/dev/null
+    -DRIGIDTOUCH_BUILD_TESTS=OFF -DRIGIDTOUCH_BUILD_FUZZERS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
   fuzz_targets=$(ls tests/fuzz/*_fuzz.cc | xargs -n1 basename | sed 's/\.cc$//')
   # shellcheck disable=SC2086
   cmake --build build-fuzz -j"$jobs" --target $fuzz_targets

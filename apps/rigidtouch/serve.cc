@@ -1,15 +1,21 @@
-// `rigidtouch serve`: the real-time haptic loop against a device (the UDP bridge or the
-// in-process simulated device), with loop statistics at the end.
+// `rigidtouch serve`: the real-time haptic loop against a device (the UDP bridge, the in-process
+// simulated device or a recorded session replayed), with loop statistics at the end; `--record`
+// writes every tick's device state and command from the trace writer's side of the loop.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
+#include <sstream>
+#include <string_view>
 
 #include "analysis/tap_experiment.h"
 #include "command.h"
 #include "device/presets.h"
+#include "device/replay_device.h"
 #include "device/udp_device.h"
 #include "device/udp_json.h"
+#include "io/device_record.h"
 #include "io/output_file.h"
 #include "io/resources.h"
 #include "io/trace_csv.h"
@@ -39,8 +45,13 @@ struct ServeFlags {
   double max_device_radius_m = DeviceParams{}.plausible_radius_m;
   double max_device_speed_mps = DeviceParams{}.plausible_speed_mps;
   std::string trace;
+  std::string record;                // --record LOG: every tick's device state and command
+  std::string replay_pace = "rate";  // replay: "rate" (the loop's deadlines) or "max"
+  bool rate_given = false;           // --rate was on the command line
   bool json = false;
 };
+
+constexpr std::string_view kReplayPrefix = "replay:";
 
 // exit status when the device never answered (docs/device-protocol.md, Watchdogs); 2 is any
 // other error (bad parameter, e.g. a stiffness the device cannot display)
@@ -92,8 +103,25 @@ void SetPlausibility(const ServeFlags& f, DeviceParams& d) {
 }
 
 void Run(const ServeFlags& f) {
+  // a replay runs at the recorded rate: the recorded states are one period apart
+  const bool replay = f.device.starts_with(kReplayPrefix);
+  std::optional<io::Record> recorded;
+  double rate_hz = f.rate_hz;
+  if (replay) {
+    const std::string log = f.device.substr(kReplayPrefix.size());
+    if (log.empty()) throw Error("serve: --device replay:LOG needs the record file's path");
+    recorded = io::ReadRecord(log);
+    if (f.rate_given && f.rate_hz != recorded->rate_hz) {
+      std::ostringstream m;
+      m << "serve: --rate " << f.rate_hz << " Hz differs from the record's rate "
+        << recorded->rate_hz << " Hz in '" << log
+        << "': a replay runs at the recorded rate (leave --rate out)";
+      throw Error(m.str());
+    }
+    rate_hz = recorded->rate_hz;
+  }
   loop::LoopOptions lo;
-  lo.rate_hz = f.rate_hz;
+  lo.rate_hz = rate_hz;
   lo.realtime_priority = f.realtime;
   lo.lock_memory = f.realtime;
   lo.spin_us = f.spin_us;
@@ -106,6 +134,15 @@ void Run(const ServeFlags& f) {
   if (!f.trace.empty()) {
     io::CheckOutputPath(f.trace, "trace file");  // before the session, not after it
     traces = std::make_unique<loop::TraceQueue>(1 << 16, loop::VectorSink(&samples));
+  }
+  // the writer thread formats and writes the rows; the loop only pushes a copy (never blocks)
+  std::unique_ptr<io::RecordFileWriter> record_file;
+  std::unique_ptr<loop::RecordQueue> records;
+  if (!f.record.empty()) {
+    record_file = std::make_unique<io::RecordFileWriter>(f.record, rate_hz);
+    records = std::make_unique<loop::RecordQueue>(
+        1 << 16,
+        [w = record_file.get()](std::span<const io::RecordSample> batch) { w->Append(batch); });
   }
   const std::atomic<bool>& stop = loop::InstallStopSignalHandlers();
   nlohmann::json result;
@@ -120,8 +157,40 @@ void Run(const ServeFlags& f) {
     RefuseUnused(settings,
                  {"device.coupling_stiffness_N_per_m", "device.coupling_damping_Ns_per_m"}, why);
   }
-  if (f.device == "sim") {
-    analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, f.rate_hz, f.speed_mps, f.taps);
+  if (replay) {
+    // the model is built as on the simulated path, so a session recorded there replays through
+    // the same model; the tool starts where the recorded handle did
+    analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, rate_hz, f.speed_mps, f.taps);
+    c.load.device.coupling = Coupling::kDirect;
+    analysis::TapSetup setup = analysis::PrepareTap(c);
+    Model& model = setup.model;
+    PrintLoadWarnings(model);
+    device::ReplayDevice dev(std::move(recorded->samples), setup.device);
+    model.initial[model.tool].x_W = dev.first_state().position_m;
+    device::TightenDeviceParams(model.device, dev.limits());
+    SetPlausibility(f, model.device);
+    Configure(model);
+    const std::int64_t ticks =
+        f.duration_s > 0.0 ? std::llround(f.duration_s * rate_hz) : dev.size();
+    Data data = MakeData(model);
+    if (f.replay_pace == "max") {
+      r = loop::RunHapticTicks(model, data, dev, rate_hz, ticks, &stop, traces.get(),
+                               records.get());
+    } else {
+      // without --duration the loop runs until the record ends (the device says so), so a
+      // skipped deadline does not cut the last ticks off
+      lo.duration_s = f.duration_s;
+      r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records.get());
+    }
+    result = RenderJson(model, data);
+    result["device"] = {{"kind", "replay"},
+                        {"record", f.device.substr(kReplayPrefix.size())},
+                        {"pace", f.replay_pace},
+                        {"preset", f.preset},
+                        {"recorded_ticks", dev.size()},
+                        {"replayed_ticks", dev.position()}};
+  } else if (f.device == "sim") {
+    analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, rate_hz, f.speed_mps, f.taps);
     c.load.device.coupling = Coupling::kDirect;
     analysis::TapSetup setup = analysis::PrepareTap(c);
     Model& model = setup.model;
@@ -132,7 +201,7 @@ void Run(const ServeFlags& f) {
     Configure(model);
     lo.duration_s = f.duration_s > 0.0 ? f.duration_s : setup.simulated->duration_s();
     Data data = MakeData(model);
-    r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get());
+    r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get(), records.get());
     result = RenderJson(model, data);
     result["device"] = {{"kind", "simulated"},
                         {"preset", f.preset},
@@ -141,7 +210,7 @@ void Run(const ServeFlags& f) {
     // the wall defaults to what the device can display, as on the simulated path (and the tap
     // experiment): the preset's stiffness, damping k h capped at the preset's
     Settings settings = ResolveSettings(f.scene);
-    ApplyDevicePreset(settings, preset, f.rate_hz);
+    ApplyDevicePreset(settings, preset, rate_hz);
     LoadOptions load = settings.load;
     load.device.coupling = Coupling::kDirect;
     device::TightenDeviceParams(load.device, preset);
@@ -174,7 +243,7 @@ void Run(const ServeFlags& f) {
     Configure(model);
     lo.duration_s = f.duration_s;
     Data data = MakeData(model);
-    r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get());
+    r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records.get());
     result = RenderJson(model, data);
     result["device"] = {{"kind", "udp"},
                         {"server", f.device},
@@ -200,6 +269,19 @@ void Run(const ServeFlags& f) {
     io::WriteTraceCsv(f.trace, samples);
     result["trace"] = f.trace;
   }
+  if (records) {
+    records->Close();  // rethrows a failed write (exit status 4)
+    const loop::TraceQueueStats st = records->stats();
+    if (st.dropped > 0) {
+      // a record with a gap cannot be replayed tick for tick: keep nothing
+      throw io::OutputError("cannot write record file '" + f.record +
+                            "': " + std::to_string(st.dropped) +
+                            " ticks were dropped because the writer fell behind");
+    }
+    record_file->Commit();
+    result["record_queue"] = loop::ToJson(st);
+    result["record"] = f.record;
+  }
   PrintResult(result, f.json);
 }
 
@@ -207,7 +289,9 @@ void Register(CLI::App& root) {
   auto f = std::make_shared<ServeFlags>();
   CLI::App* app = root.add_subcommand("serve", "run the real-time haptic loop against a device");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
-  app->add_option("--device", f->device, "sim (in-process simulated device) or udp://HOST:PORT")
+  app->add_option("--device", f->device,
+                  "sim (in-process simulated device), udp://HOST:PORT, or replay:LOG (a --record "
+                  "file's handle motion, at its rate, through this scene and renderer)")
       ->capture_default_str();
   app->add_option("--preset", f->preset,
                   "device preset: its force, stiffness and damping limits apply on every device "
@@ -215,7 +299,8 @@ void Register(CLI::App& root) {
       ->capture_default_str();
   AddRateFlag(app, f->rate_hz, "loop rate [Hz]");
   app->add_option("--duration", f->duration_s,
-                  "run time [s]; 0: until SIGINT (udp) or the end of the taps (sim)")
+                  "run time [s]; 0: until SIGINT (udp), the end of the taps (sim) or of the record "
+                  "(replay)")
       ->check(InRange(0.0, INFINITY, "s"));
   app->add_flag("--realtime", f->realtime, "SCHED_FIFO and locked memory when allowed");
   app->add_option("--spin-us", f->spin_us, "busy-wait before each deadline [us]");
@@ -238,6 +323,13 @@ void Register(CLI::App& root) {
   app->add_option("--speed", f->speed_mps, "approach speed of the simulated hand [m/s] (sim)")
       ->capture_default_str();
   app->add_option("--trace", f->trace, "write the trace CSV here");
+  app->add_option("--record", f->record,
+                  "write every tick's device state and command here (replay with --device "
+                  "replay:LOG; docs/device-protocol.md)");
+  app->add_option("--replay-pace", f->replay_pace,
+                  "replay: rate (at the loop's deadlines) or max (as fast as it computes)")
+      ->check(CLI::IsMember({"rate", "max"}))
+      ->capture_default_str();
   app->add_flag("--json", f->json, "print one JSON object");
   app->footer(
       std::string(kPrecedence) +
@@ -248,7 +340,19 @@ void Register(CLI::App& root) {
       "damping. Every command is clipped to the stricter force limit. Exit status 5: the UDP "
       "device sent no state within --startup-timeout.");
   // an error about a parameter the user wrote says where it was written
-  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
+  app->callback([f, app] {
+    f->rate_given = app->count("--rate") > 0;
+    if (!f->device.starts_with(kReplayPrefix) && app->count("--replay-pace") > 0) {
+      throw Error("serve: --replay-pace applies to --device replay:LOG only");
+    }
+    if (f->device.starts_with(kReplayPrefix) &&
+        (app->count("--taps") + app->count("--speed")) > 0) {
+      throw Error(
+          "serve: --taps and --speed script the simulated hand; a replay moves the handle "
+          "as recorded");
+    }
+    WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
+  });
 }
 
 const CommandRegistrar registrar(&Register);

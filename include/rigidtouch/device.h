@@ -49,6 +49,10 @@ class Device {
   /// progress or the force a simulated hand applies. Called after Write and before EndPeriod,
   /// so the values describe the start of the period. The default leaves the sample unchanged.
   virtual void AnnotateTrace(TraceSample& sample) const { static_cast<void>(sample); }
+
+  /// True once a device that has an end (a replayed record) has delivered its last state; the
+  /// loop then stops after that period. Checked after EndPeriod. The default never ends.
+  virtual bool Ended() const { return false; }
 };
 
 /// Returns a monotonic clock reading in nanoseconds (CLOCK_MONOTONIC), the clock both ends of

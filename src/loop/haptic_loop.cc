@@ -15,83 +15,143 @@ void ZeroWrench(DeviceCommand& command) {
   command.torque_Nm.setZero();
 }
 
+// One period of the loop: Read, Tick, guard, Write, trace and record, EndPeriod. The paced and
+// the unpaced runs call the same step, so every device and every pace shares one path.
+class HapticStep {
+ public:
+  HapticStep(const Model& model, Data& data, device::Device& device, double period_s,
+             TraceQueue* traces, RecordQueue* records, TickObserver* observer, HapticLoopResult& r)
+      : model_(model),
+        data_(data),
+        device_(device),
+        period_s_(period_s),
+        traces_(traces),
+        records_(records),
+        observer_(observer),
+        r_(r) {}
+
+  bool operator()() {
+    input_.device = device_.Read();
+    const bool valid = input_.device.valid;
+    if (!valid) ++r_.invalid_device_ticks;
+    // a new sequence is a new reading; after an invalid tick any sequence is (resync)
+    const bool fresh = !valid || !have_sequence_ || input_.device.sequence != last_sequence_;
+    input_.device.fresh = fresh;
+    if (!fresh) ++r_.stale_device_ticks;
+    have_sequence_ = valid;
+    last_sequence_ = input_.device.sequence;
+
+    DeviceCommand command = Tick(model_, data_, input_);
+
+    // last guards before Write, whatever the tick did: nothing non-finite, nothing above
+    // the stricter of the model's and the device's force limits
+    const std::int64_t tick_step = data_.step - 1;  // Tick has advanced data.step
+    if (!command.force_N.allFinite() || !command.torque_Nm.allFinite()) {
+      ZeroWrench(command);
+      command.safe_fallback = true;
+      ++r_.non_finite_commands;
+    }
+    const double limit_N =
+        render::StricterLimit(model_.device.max_force_N, device_.limits().max_force_N);
+    r_.force_limit_N = limit_N;
+    if (render::LimitForce(limit_N, command.force_N, command.torque_Nm)) {
+      ++r_.guard_clipped_ticks;
+      command.clipped = true;
+      data_.WarnAt(Warning::kForceClipped, tick_step);
+      if (command.impulsive_force_N.squaredNorm() > 0.0) {
+        data_.WarnAt(Warning::kImpulseClipped, tick_step);
+      }
+    }
+    // a stale state must not make the force grow (docs/device-protocol.md, Watchdogs)
+    if (valid && !fresh) {
+      if (command.force_N.norm() > last_fresh_force_N_) {
+        if (last_fresh_force_N_ > 0.0) {
+          render::LimitForce(last_fresh_force_N_, command.force_N, command.torque_Nm);
+        } else {
+          ZeroWrench(command);
+        }
+        ++r_.held_force_ticks;
+      }
+    } else {
+      last_fresh_force_N_ = command.force_N.norm();
+    }
+
+    device_.Write(command);
+    if (command.safe_fallback) ++r_.safe_fallback_ticks;
+    if (command.clipped) ++r_.clipped_ticks;
+    const double f = command.force_N.norm();
+    if (!std::isfinite(f)) r_.finite = false;
+    if (f > r_.max_force_N) r_.max_force_N = f;
+    for (int k = 0; k < data_.nimpulse; ++k) r_.impulses += data_.impulses[k].tool ? 1 : 0;
+    if (traces_ != nullptr || records_ != nullptr || observer_ != nullptr) {
+      TraceSample s = MakeTraceSample(model_, data_, command);
+      // before EndPeriod: the sample describes the start of the period, as the offline
+      // tap experiment's does
+      device_.AnnotateTrace(s);
+      if (traces_ != nullptr) traces_->Push(s);
+      if (records_ != nullptr) {
+        // the session's tick, continuous over loop runs on the same Data (a viewer's renderer
+        // switch restarts the loop)
+        record_.tick = tick_step;
+        record_.state = input_.device;
+        record_.command = command;
+        record_.tap = s.tap;
+        record_.hand_force_N = s.hand_force_N;
+        records_->Push(record_);
+      }
+      if (observer_ != nullptr) observer_->OnTick(model_, data_, s);
+    }
+    device_.EndPeriod(period_s_);
+    return !device_.Ended();
+  }
+
+ private:
+  const Model& model_;
+  Data& data_;
+  device::Device& device_;
+  const double period_s_;
+  TraceQueue* traces_;
+  RecordQueue* records_;
+  TickObserver* observer_;
+  HapticLoopResult& r_;
+  TickInput input_;
+  io::RecordSample record_;
+  bool have_sequence_ = false;  // a valid state was read on the previous tick
+  std::uint64_t last_sequence_ = 0;
+  double last_fresh_force_N_ = 0.0;
+};
+
 }  // namespace
 
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
                                const LoopOptions& options, const std::atomic<bool>* stop,
-                               TraceQueue* traces) {
+                               TraceQueue* traces, RecordQueue* records, TickObserver* observer) {
   HapticLoopResult r;
   RateLoop loop(options);
-  const double period_s = 1.0 / options.rate_hz;
-  TickInput input;
-  bool have_sequence = false;  // a valid state was read on the previous tick
-  std::uint64_t last_sequence = 0;
-  double last_fresh_force_N = 0.0;
-  r.timing = loop.Run(
-      [&](std::int64_t, double) {
-        input.device = device.Read();
-        const bool valid = input.device.valid;
-        if (!valid) ++r.invalid_device_ticks;
-        // a new sequence is a new reading; after an invalid tick any sequence is (resync)
-        const bool fresh = !valid || !have_sequence || input.device.sequence != last_sequence;
-        input.device.fresh = fresh;
-        if (!fresh) ++r.stale_device_ticks;
-        have_sequence = valid;
-        last_sequence = input.device.sequence;
+  HapticStep step(model, data, device, 1.0 / options.rate_hz, traces, records, observer, r);
+  r.timing = loop.Run([&step](std::int64_t, double) { return step(); }, stop);
+  return r;
+}
 
-        DeviceCommand command = Tick(model, data, input);
-
-        // last guards before Write, whatever the tick did: nothing non-finite, nothing above
-        // the stricter of the model's and the device's force limits
-        const std::int64_t tick_step = data.step - 1;  // Tick has advanced data.step
-        if (!command.force_N.allFinite() || !command.torque_Nm.allFinite()) {
-          ZeroWrench(command);
-          command.safe_fallback = true;
-          ++r.non_finite_commands;
-        }
-        const double limit_N =
-            render::StricterLimit(model.device.max_force_N, device.limits().max_force_N);
-        r.force_limit_N = limit_N;
-        if (render::LimitForce(limit_N, command.force_N, command.torque_Nm)) {
-          ++r.guard_clipped_ticks;
-          command.clipped = true;
-          data.WarnAt(Warning::kForceClipped, tick_step);
-          if (command.impulsive_force_N.squaredNorm() > 0.0) {
-            data.WarnAt(Warning::kImpulseClipped, tick_step);
-          }
-        }
-        // a stale state must not make the force grow (docs/device-protocol.md, Watchdogs)
-        if (valid && !fresh) {
-          if (command.force_N.norm() > last_fresh_force_N) {
-            if (last_fresh_force_N > 0.0) {
-              render::LimitForce(last_fresh_force_N, command.force_N, command.torque_Nm);
-            } else {
-              ZeroWrench(command);
-            }
-            ++r.held_force_ticks;
-          }
-        } else {
-          last_fresh_force_N = command.force_N.norm();
-        }
-
-        device.Write(command);
-        if (command.safe_fallback) ++r.safe_fallback_ticks;
-        if (command.clipped) ++r.clipped_ticks;
-        const double f = command.force_N.norm();
-        if (!std::isfinite(f)) r.finite = false;
-        if (f > r.max_force_N) r.max_force_N = f;
-        for (int k = 0; k < data.nimpulse; ++k) r.impulses += data.impulses[k].tool ? 1 : 0;
-        if (traces != nullptr) {
-          TraceSample s = MakeTraceSample(model, data, command);
-          // before EndPeriod: the sample describes the start of the period, as the offline
-          // tap experiment's does
-          device.AnnotateTrace(s);
-          traces->Push(s);
-        }
-        device.EndPeriod(period_s);
-        return true;
-      },
-      stop);
+HapticLoopResult RunHapticTicks(const Model& model, Data& data, device::Device& device,
+                                double rate_hz, std::int64_t ticks, const std::atomic<bool>* stop,
+                                TraceQueue* traces, RecordQueue* records, TickObserver* observer) {
+  HapticLoopResult r;
+  HapticStep step(model, data, device, 1.0 / rate_hz, traces, records, observer, r);
+  const auto t0 = std::chrono::steady_clock::now();
+  r.timing.rate_hz = rate_hz;
+  for (std::int64_t k = 0; k < ticks; ++k) {
+    if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
+      r.timing.stop_requested = true;
+      break;
+    }
+    ++r.timing.ticks;
+    if (!step()) break;
+  }
+  r.timing.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (r.timing.elapsed_s > 0.0) {
+    r.timing.achieved_rate_hz = static_cast<double>(r.timing.ticks) / r.timing.elapsed_s;
+  }
   return r;
 }
 

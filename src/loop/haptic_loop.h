@@ -30,11 +30,21 @@ struct HapticLoopResult {
   bool finite = true;                     // every command was finite
 };
 
+/// Sees every tick on the haptic thread, after Write (a live viewer's feed). OnTick must not
+/// allocate, lock, block or throw: it runs inside the loop's period.
+class TickObserver {
+ public:
+  virtual ~TickObserver() = default;
+  /// `sample` is the tick's trace sample with the device's annotations; `data` the state after
+  /// the tick.
+  virtual void OnTick(const Model& model, const Data& data, const TraceSample& sample) noexcept = 0;
+};
+
 /// Runs `model` against `device` at options.rate_hz (the model's time step should be its period).
 /// Each tick: Read, Tick, guard, Write, AnnotateTrace (when tracing), EndPeriod(1 / rate_hz); a
 /// device that lives in loop time (the simulated one) advances in EndPeriod. `traces`, when
-/// given, receives one sample per tick (never blocks). Stops at the duration or on `*stop`;
-/// never throws inside the loop.
+/// given, receives one sample per tick (never blocks). Stops at the duration, on `*stop` or after
+/// the period in which the device reports Ended(); never throws inside the loop.
 ///
 /// A valid state whose sequence equals the previous tick's is stale: the loop passes
 /// DeviceState::fresh = false to Tick (no window starts, no impulse) and holds the force's
@@ -42,9 +52,23 @@ struct HapticLoopResult {
 /// command the safe zero wrench and clips the force to the stricter of DeviceParams::max_force_N
 /// and device.limits().max_force_N (read every tick: a bridge may announce its limits late),
 /// setting DeviceCommand::clipped and Warning::kForceClipped.
+///
+/// `records`, when given, receives every tick's device state (as read, `fresh` as decided) and
+/// command (as written), with the device's annotations, for `--record` (never blocks).
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
                                const LoopOptions& options, const std::atomic<bool>* stop,
-                               TraceQueue* traces = nullptr);
+                               TraceQueue* traces = nullptr, RecordQueue* records = nullptr,
+                               TickObserver* observer = nullptr);
+
+/// Runs `ticks` periods of the same step as RunHapticLoop back to back, without waiting for
+/// deadlines (as fast as they compute; a replayed device, offline), or fewer if the device ends
+/// or `*stop` is set. The device still ends each
+/// period with EndPeriod(1 / rate_hz). Timing statistics hold only ticks, elapsed_s and the
+/// achieved rate.
+HapticLoopResult RunHapticTicks(const Model& model, Data& data, device::Device& device,
+                                double rate_hz, std::int64_t ticks, const std::atomic<bool>* stop,
+                                TraceQueue* traces = nullptr, RecordQueue* records = nullptr,
+                                TickObserver* observer = nullptr);
 
 /// Polls `device` about every millisecond until it reports a valid state, writing a zero wrench
 /// flagged safe-fallback after each read (so a bridge learns where to stream), for at most

@@ -29,7 +29,8 @@ std::chrono::nanoseconds CheckedIdlePeriod(double idle_period_s) {
 
 }  // namespace
 
-TraceQueue::TraceQueue(std::size_t capacity, Sink sink, double idle_period_s)
+template <typename Sample>
+SampleQueue<Sample>::SampleQueue(std::size_t capacity, Sink sink, double idle_period_s)
     : sink_(std::move(sink)),
       capacity_(CheckedCapacity(capacity)),
       idle_period_(CheckedIdlePeriod(idle_period_s)),
@@ -39,7 +40,8 @@ TraceQueue::TraceQueue(std::size_t capacity, Sink sink, double idle_period_s)
   writer_ = std::thread([this] { WriterMain(); });
 }
 
-TraceQueue::~TraceQueue() {
+template <typename Sample>
+SampleQueue<Sample>::~SampleQueue() {
   try {
     Close();
   } catch (...) {
@@ -47,7 +49,8 @@ TraceQueue::~TraceQueue() {
   }
 }
 
-bool TraceQueue::Push(const TraceSample& sample) noexcept {
+template <typename Sample>
+bool SampleQueue<Sample>::Push(const Sample& sample) noexcept {
   pushed_.fetch_add(1, std::memory_order_relaxed);
   if (closing_.load(std::memory_order_relaxed) || !queue_.push(sample)) {
     dropped_.fetch_add(1, std::memory_order_relaxed);
@@ -56,7 +59,8 @@ bool TraceQueue::Push(const TraceSample& sample) noexcept {
   return true;
 }
 
-void TraceQueue::Close() {
+template <typename Sample>
+void SampleQueue<Sample>::Close() {
   if (closed_) return;
   closed_ = true;
   // release: every push before this store is visible to the writer's final drain
@@ -65,7 +69,8 @@ void TraceQueue::Close() {
   if (sink_error_) std::rethrow_exception(std::exchange(sink_error_, nullptr));
 }
 
-TraceQueueStats TraceQueue::stats() const {
+template <typename Sample>
+TraceQueueStats SampleQueue<Sample>::stats() const {
   TraceQueueStats out;
   out.pushed = pushed_.load(std::memory_order_relaxed);
   out.dropped = dropped_.load(std::memory_order_relaxed);
@@ -75,7 +80,8 @@ TraceQueueStats TraceQueue::stats() const {
   return out;
 }
 
-void TraceQueue::WriterMain() {
+template <typename Sample>
+void SampleQueue<Sample>::WriterMain() {
   for (;;) {
     // read the flag before draining, so a close is only acted on after a drain that follows it
     const bool closing = closing_.load(std::memory_order_acquire);
@@ -86,7 +92,7 @@ void TraceQueue::WriterMain() {
         continue;
       }
       try {
-        sink_(std::span<const TraceSample>(batch_.data(), count));
+        sink_(std::span<const Sample>(batch_.data(), count));
         written_.fetch_add(count, std::memory_order_relaxed);
       } catch (...) {
         sink_error_ = std::current_exception();
@@ -97,6 +103,9 @@ void TraceQueue::WriterMain() {
     std::this_thread::sleep_for(idle_period_);
   }
 }
+
+template class SampleQueue<TraceSample>;
+template class SampleQueue<io::RecordSample>;
 
 TraceQueue::Sink VectorSink(std::vector<TraceSample>* samples) {
   return [samples](std::span<const TraceSample> batch) {

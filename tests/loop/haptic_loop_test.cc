@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "analysis/tap_experiment.h"
+#include "device/replay_device.h"
 #include "device/simulated_device.h"
 #include "loop/trace_queue.h"
 #include "rigidtouch/device.h"
@@ -270,6 +271,65 @@ TEST(HapticLoop, AwaitFirstStateTimesOutWithoutADevice) {
   FreezingDevice present(10, 0, 0.0);
   EXPECT_TRUE(AwaitFirstState(present, 0.05, nullptr));
   EXPECT_TRUE(present.commands.empty());
+}
+
+}  // namespace
+}  // namespace rigidtouch::loop
+
+namespace rigidtouch::loop {
+namespace {
+
+// --record's path: every tick's state and command reach the record queue; replaying the recorded
+// states through the same model, unpaced, reproduces every command bit for bit and ends with the
+// record (the device's Ended), not before or after
+TEST(HapticLoop, RecordedSessionReplaysToTheSameCommandsBitForBit) {
+  analysis::TapSetup setup = WallSetup();
+  Data data = MakeData(setup.model);
+  std::vector<io::RecordSample> recorded;
+  recorded.reserve(400);
+  {
+    RecordQueue records(400, [&](std::span<const io::RecordSample> b) {
+      recorded.insert(recorded.end(), b.begin(), b.end());
+    });
+    const HapticLoopResult r = RunHapticTicks(setup.model, data, *setup.simulated, kRateHz, 300,
+                                              nullptr, nullptr, &records);
+    records.Close();
+    ASSERT_EQ(r.timing.ticks, 300);
+    ASSERT_GT(r.impulses, 0);  // the tap reached the wall within 0.3 s
+    EXPECT_EQ(records.stats().dropped, 0u);
+  }
+  ASSERT_EQ(recorded.size(), 300u);
+  for (std::size_t k = 0; k < recorded.size(); ++k) ASSERT_EQ(recorded[k].tick, std::int64_t(k));
+
+  analysis::TapSetup again = WallSetup();  // same model, fresh data
+  Data replay_data = MakeData(again.model);
+  device::ReplayDevice replay(recorded, again.device);
+  std::vector<io::RecordSample> replayed;
+  replayed.reserve(400);
+  RecordQueue records(400, [&](std::span<const io::RecordSample> b) {
+    replayed.insert(replayed.end(), b.begin(), b.end());
+  });
+  // asked for more ticks than recorded: the replay's end stops the run
+  const HapticLoopResult r =
+      RunHapticTicks(again.model, replay_data, replay, kRateHz, 1000, nullptr, nullptr, &records);
+  records.Close();
+  EXPECT_EQ(r.timing.ticks, 300);
+  ASSERT_EQ(replayed.size(), recorded.size());
+  int in_contact = 0;
+  for (std::size_t k = 0; k < recorded.size(); ++k) {
+    const DeviceCommand& a = recorded[k].command;
+    const DeviceCommand& b = replayed[k].command;
+    // exact equality: the replay must compute the same doubles, not close ones
+    ASSERT_EQ(a.force_N, b.force_N) << "tick " << k;
+    ASSERT_EQ(a.penalty_force_N, b.penalty_force_N) << "tick " << k;
+    ASSERT_EQ(a.impulsive_force_N, b.impulsive_force_N) << "tick " << k;
+    ASSERT_EQ(a.clipped, b.clipped) << "tick " << k;
+    ASSERT_EQ(recorded[k].state.position_m, replayed[k].state.position_m) << "tick " << k;
+    ASSERT_EQ(recorded[k].tap, replayed[k].tap);
+    ASSERT_EQ(recorded[k].hand_force_N, replayed[k].hand_force_N);
+    in_contact += a.force_N.norm() > 0.0 ? 1 : 0;
+  }
+  EXPECT_GT(in_contact, 10);
 }
 
 }  // namespace
