@@ -200,7 +200,7 @@ void PrintLoadWarnings(const Model& model) {
 analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& device_preset,
                                         double rate_hz, double speed_mps, int taps) {
   Settings s = ResolveSettings(f);
-  ApplyDevicePreset(s, device::FindPreset(device_preset), rate_hz);
+  ApplyDevicePreset(s, device::ParseDeviceSpec(device_preset).limits, rate_hz);
   analysis::TapExperimentConfig c;
   c.scene_path = f.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene;
   c.load = s.load;
@@ -217,6 +217,42 @@ analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& 
   }
   c.script.approach_speed_mps = speed_mps;
   c.script.taps = taps;
+  return c;
+}
+
+bool IsConnection(const std::string& text) {
+  return text == "sim" || text.rfind("udp://", 0) == 0;
+}
+
+DeviceChoice ResolveDevice(const std::optional<std::string>& device,
+                           const std::optional<std::string>& connect,
+                           const std::optional<std::string>& preset) {
+  DeviceChoice c;
+  if (connect && !IsConnection(*connect)) {
+    throw Error("--connect " + *connect +
+                ": valid connections: sim (the in-process simulated device) or udp://HOST:PORT "
+                "(a device through the bridge); the device itself is --device NAME|FILE.json");
+  }
+  std::optional<std::string> spec = device;
+  if (device && IsConnection(*device)) {
+    // the old spelling: --device names the connection, --preset the device
+    if (connect) {
+      throw Error("--device " + *device + " and --connect " + *connect +
+                  " both name a connection; give the device with --device " +
+                  device::DeviceSpecHelp() + " and the connection with --connect");
+    }
+    c.connect = *device;
+    spec = preset;
+  } else {
+    if (device && preset) {
+      throw Error("--device " + *device + " and --preset " + *preset +
+                  " both name the device (--preset is the old spelling of --device); give one");
+    }
+    if (preset) spec = preset;
+    if (connect) c.connect = *connect;
+  }
+  c.spec_text = spec.value_or("touch");
+  c.spec = device::ParseDeviceSpec(c.spec_text);
   return c;
 }
 

@@ -24,8 +24,9 @@ namespace {
 
 struct ServeFlags {
   SceneFlags scene;
-  std::string device = "sim";
-  std::string preset = "touch";
+  std::optional<std::string> device;   // the device: a preset or a JSON spec (or old: connection)
+  std::optional<std::string> connect;  // sim | udp://HOST:PORT; default sim
+  std::optional<std::string> preset;   // old spelling of --device NAME
   double rate_hz = 1000.0;
   double duration_s = 0.0;
   bool realtime = false;
@@ -110,7 +111,9 @@ void Run(const ServeFlags& f) {
   const std::atomic<bool>& stop = loop::InstallStopSignalHandlers();
   nlohmann::json result;
   loop::HapticLoopResult r;
-  const device::DeviceLimits& preset = device::FindPreset(f.preset);
+  const DeviceChoice choice = ResolveDevice(f.device, f.connect, f.preset);
+  const std::string connect = choice.connect.empty() ? "sim" : choice.connect;
+  const device::DeviceLimits& preset = choice.spec.limits;
   {
     const Settings settings = ResolveSettings(f.scene);
     const char* why = "serve couples the tool to the device directly";
@@ -120,8 +123,9 @@ void Run(const ServeFlags& f) {
     RefuseUnused(settings,
                  {"device.coupling_stiffness_N_per_m", "device.coupling_damping_Ns_per_m"}, why);
   }
-  if (f.device == "sim") {
-    analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, f.rate_hz, f.speed_mps, f.taps);
+  if (connect == "sim") {
+    analysis::TapExperimentConfig c =
+        TapConfig(f.scene, choice.spec_text, f.rate_hz, f.speed_mps, f.taps);
     c.load.device.coupling = Coupling::kDirect;
     analysis::TapSetup setup = analysis::PrepareTap(c);
     Model& model = setup.model;
@@ -135,7 +139,8 @@ void Run(const ServeFlags& f) {
     r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get());
     result = RenderJson(model, data);
     result["device"] = {{"kind", "simulated"},
-                        {"preset", f.preset},
+                        {"preset", preset.name},
+                        {"spec", choice.spec_text},
                         {"energy_to_user_J", setup.simulated->energy_to_user_J()}};
   } else {
     // the wall defaults to what the device can display, as on the simulated path (and the tap
@@ -150,12 +155,12 @@ void Run(const ServeFlags& f) {
         f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
     // Configure refuses what the preset cannot display
     Model model = LoadModel(scene, load);
-    // the tool is the end effector; without a model of the real device, the simulated one's
-    analysis::UseDeviceAndHandMass(model, device::DeviceModelParams{}, device::HandParams{});
+    // the tool is the end effector: the spec's apparent mass plus a modelled hand's
+    analysis::UseDeviceAndHandMass(model, choice.spec.model, device::HandParams{});
     Configure(model);
     PrintLoadWarnings(model);
     device::UdpDeviceOptions o;
-    o.server = f.device;
+    o.server = connect;
     o.watchdog_s = f.watchdog_s;
     o.limits = preset;
     o.key_file = f.key_file;
@@ -164,9 +169,8 @@ void Run(const ServeFlags& f) {
     device::UdpDevice dev(o);
     if (!loop::AwaitFirstState(dev, f.startup_timeout_s, &stop)) {
       if (stop.load()) return;  // interrupted before the device answered: nothing was rendered
-      std::cerr << "rigidtouch: error: serve: no state from the device at " << f.device
-                << " within " << f.startup_timeout_s
-                << " s (--startup-timeout); is the device server running?\n";
+      std::cerr << "rigidtouch: error: serve: no state from the device at " << connect << " within "
+                << f.startup_timeout_s << " s (--startup-timeout); is the device server running?\n";
       throw CLI::RuntimeError(kExitNoDevice);
     }
     // the device's own limits, known once its session has started, tighten the preset's
@@ -177,8 +181,9 @@ void Run(const ServeFlags& f) {
     r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get());
     result = RenderJson(model, data);
     result["device"] = {{"kind", "udp"},
-                        {"server", f.device},
-                        {"preset", f.preset},
+                        {"server", connect},
+                        {"preset", preset.name},
+                        {"spec", choice.spec_text},
                         {"link", ToJson(dev.counters())},
                         {"watchdog_tripped", dev.watchdog_tripped()}};
   }
@@ -207,12 +212,15 @@ void Register(CLI::App& root) {
   auto f = std::make_shared<ServeFlags>();
   CLI::App* app = root.add_subcommand("serve", "run the real-time haptic loop against a device");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
-  app->add_option("--device", f->device, "sim (in-process simulated device) or udp://HOST:PORT")
-      ->capture_default_str();
-  app->add_option("--preset", f->preset,
-                  "device preset: its force, stiffness and damping limits apply on every device "
-                  "(with the device's own, the stricter wins); the simulated device's model")
-      ->capture_default_str();
+  app->add_option("--device", f->device,
+                  "the device: a preset or a JSON device spec (" + device::DeviceSpecHelp() +
+                      ", default touch); its force, stiffness and damping limits apply on every "
+                      "connection (with the device's own, the stricter wins), and it is the "
+                      "simulated device's model");
+  app->add_option("--connect", f->connect,
+                  "sim (the in-process simulated device, default) or udp://HOST:PORT (a device "
+                  "through the bridge)");
+  app->add_option("--preset", f->preset, "old spelling of --device NAME");
   AddRateFlag(app, f->rate_hz, "loop rate [Hz]");
   app->add_option("--duration", f->duration_s,
                   "run time [s]; 0: until SIGINT (udp) or the end of the taps (sim)")

@@ -336,7 +336,9 @@ void Register(CLI::App& root) {
   wall_point->needs(wall_normal)->excludes(wall_geom);
   wall_normal->needs(wall_point);
   AddRateFlag(app, f->rate_hz, "haptic rate [Hz]");
-  app->add_option("--device", f->device, "device preset: touch, omni, falcon, omega3, generic")
+  app->add_option("--device", f->device,
+                  "the device: a preset or a JSON device spec (" + device::DeviceSpecHelp() +
+                      "; docs/devices.md)")
       ->capture_default_str();
   app->add_option("--coupling", f->coupling,
                   "direct | virtual (default: the config's device.coupling, else direct)");

@@ -51,9 +51,8 @@ TEST(TapExperimentTest, ImpulseCountsAndSpacingOfTheThreeWalls) {
   const int expected_count[] = {1, 25, 5};
   const double expected_gap_s[] = {0.0, 0.004, 0.020};
   for (int wall = 0; wall <= 2; ++wall) {
-    TapExperimentConfig c = Config(wall, "touch", 0.1);
-    c.max_force_N = 0.0;
-    c.device_model.encoder_resolution_m = 1e-6;
+    TapExperimentConfig c = Config(wall, "ideal", 0.1);
+    c.stiffness_N_per_m = 400.0;  // the Touch's wall, damping k h as there
     const TapRun run = RunTapExperiment(c);
     EXPECT_EQ(run.clipped_ticks, 0) << "wall " << wall;
     ASSERT_EQ(run.taps.size(), 1u);
