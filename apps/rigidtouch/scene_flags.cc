@@ -8,6 +8,7 @@
 #include "io/resources.h"
 #include "io/text.h"
 #include "render/limits.h"
+#include "render/materials.h"
 
 namespace rigidtouch::cli {
 
@@ -28,6 +29,8 @@ const std::map<std::string, std::string>& FlagOf() {
       {"render.t_collision_s", "--t-collision"},
       {"render.frequency_hz", "--frequency"},
       {"render.reference_solver", "--reference-solver"},
+      {"render.passivity_control", "--passivity-control"},
+      {"render.material", "--material"},
       {"contact.stiffness_N_per_m", "--stiffness"},
       {"contact.damping_Ns_per_m", "--damping"}};
   return flags;
@@ -71,8 +74,11 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--tool", f.tool,
                   "name of the free body that is the tool (default: the config's, else tool)");
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");
-  app->add_option("--renderer", f.renderer, "penalty | impulse | train")
-      ->check(CLI::IsMember({"penalty", "impulse", "train"}));
+  app->add_option("--renderer", f.renderer, "penalty | impulse | train | event")
+      ->check(CLI::IsMember(io::RendererNames()));
+  app->add_option("--material", f.material,
+                  "the event renderer's material: rubber | wood | aluminium | FILE.json "
+                  "(docs/renderers.md)");
   app->add_option("--restitution", f.restitution, "restitution e in [0, 1] (impulse renderer)");
   app->add_option("--t-collision", f.t_collision_s, "collision window t_c [s], at most 0.1");
   app->add_option("--frequency", f.frequency_hz, "impulse-train frequency f [Hz]");
@@ -80,6 +86,9 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--damping", f.damping_Ns_per_m, "tool contact damping b [N s/m]");
   app->add_flag("--reference-solver", f.reference_solver,
                 "use the exact pseudo-inverse of Eq. 5/8 (may pull; allocates)");
+  app->add_flag("--passivity-control", f.passivity_control,
+                "passivity observer and controller at the device port (Hannaford and Ryu 2002; "
+                "docs/renderers.md)");
   const std::string footer = app->get_footer();
   app->footer(footer.empty() ? kPrecedence : std::string(kPrecedence) + "\n\n" + footer);
 }
@@ -109,6 +118,14 @@ Settings ResolveSettings(const SceneFlags& f) {
   if (f.reference_solver) {
     o.render.reference_solver = true;
     s.origin["render.reference_solver"] = "--reference-solver";
+  }
+  if (f.material) {
+    o.render.material = render::ParseMaterial(*f.material);
+    s.origin["render.material"] = "--material";
+  }
+  if (f.passivity_control) {
+    o.render.passivity_control = true;
+    s.origin["render.passivity_control"] = "--passivity-control";
   }
   // a scene law the user wrote is kept even when it equals the default (Configure derives the
   // scene's otherwise)

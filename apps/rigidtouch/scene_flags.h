@@ -30,6 +30,8 @@ struct SceneFlags {
   std::optional<double> stiffness_N_per_m;
   std::optional<double> damping_Ns_per_m;
   bool reference_solver = false;
+  bool passivity_control = false;
+  std::optional<std::string> material;
 };
 
 /// How a setting is resolved, stated in every subcommand's --help and in docs/cli.md.

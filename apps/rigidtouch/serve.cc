@@ -149,6 +149,7 @@ void Run(const ServeFlags& f) {
     ApplyDevicePreset(settings, preset, f.rate_hz);
     LoadOptions load = settings.load;
     load.device.coupling = Coupling::kDirect;
+    load.device.position_resolution_m = choice.spec.model.encoder_resolution_m;
     device::TightenDeviceParams(load.device, preset);
     SetPlausibility(f, load.device);
     const std::string scene =

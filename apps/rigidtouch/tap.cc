@@ -116,7 +116,8 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"energy_to_user_J", t.energy_to_user_J},
                     {"dominant_frequency_hz", t.dominant_frequency_hz},
                     {"band_energy_fraction", t.band_energy_fraction},
-                    {"force_clipped", t.force_clipped}});
+                    {"force_clipped", t.force_clipped},
+                    {"passivity_dissipated_J", t.passivity_dissipated_J}});
   }
   const bool train = m.render.renderer == RendererKind::kTrain;
   return {
@@ -134,6 +135,9 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"damping_Ns_per_m", m.contact.damping_Ns_per_m},
       {"tool_mass_kg", m.bodies[m.tool].mass_kg},
       {"energy_to_user_J", run.energy_to_user_J},
+      {"passivity_control", m.render.passivity_control},
+      {"material", m.render.material.name.empty() ? nlohmann::json(nullptr)
+                                                  : nlohmann::json(m.render.material.name)},
       {"clipped_ticks", run.clipped_ticks},
       {"clipped_impulse_ticks", run.clipped_impulse_ticks},
       {"taps", taps},

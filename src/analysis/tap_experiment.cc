@@ -172,6 +172,7 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   load.contact.damping_Ns_per_m = config.damping_Ns_per_m.value_or(
       limits.max_damping_Ns_per_m > 0.0 ? std::min(k * h, limits.max_damping_Ns_per_m) : k * h);
   load.device.max_force_N = limits.max_force_N;
+  load.device.position_resolution_m = config.device_model.value_or(spec.model).encoder_resolution_m;
   if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;
   if (load.device.coupling == Coupling::kVirtual) {
     // the coupling is what the device renders: its limits bound the coupling, not the wall

@@ -34,7 +34,7 @@ struct TapExperimentConfig {
   std::optional<double> max_force_N;        // overrides the preset's force limit (0: unlimited)
   double rate_hz = 1000.0;                  // haptic rate: engine step and device tick, h = 1/rate
   std::optional<double> stiffness_N_per_m;  // default: the preset's maximum stiffness
-  std::optional<double> damping_Ns_per_m;   // default: k h, twice Colgate's bound k T / 2
+  std::optional<double> damping_Ns_per_m;   // default: k h (capped at the device's damping)
   // virtual coupling only; default: the preset's maximum stiffness, and k h capped at its damping
   std::optional<double> coupling_stiffness_N_per_m;
   std::optional<double> coupling_damping_Ns_per_m;

@@ -78,6 +78,8 @@ struct TapMetrics {
   std::array<double, 4> band_energy_fraction = {0.0, 0.0, 0.0, 0.0};
   /// Some sample of the tap had its device force clipped by the device limit.
   bool force_clipped = false;
+  /// Energy the passivity controller dissipated over the tap [J] (0 without it).
+  double passivity_dissipated_J = 0.0;
 };
 
 /// Splits a trace into taps: maximal runs of consecutive samples with the same tap >= 0.

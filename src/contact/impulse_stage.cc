@@ -126,7 +126,12 @@ void ImpulseScratch::Reserve(const Model& model) {
 }
 
 void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseScratch& scratch) {
-  if (model.render.renderer == RendererKind::kPenalty) return;
+  // penalty and event-based transients apply no impulses (the event renderer's window only
+  // marks the onset its transient starts from)
+  if (model.render.renderer == RendererKind::kPenalty ||
+      model.render.renderer == RendererKind::kEvent) {
+    return;
+  }
   for (int g = 0; g < G.ngroup; ++g) {
     WindowState w = data.window[G.bodies[G.body_start[g]]];
     GroupImpulse(model, data, G, g, w, scratch);
