@@ -123,6 +123,19 @@ Settings ResolveSettings(const SceneFlags& f) {
     o.render.material = render::ParseMaterial(*f.material);
     s.origin["render.material"] = "--material";
   }
+  if (f.material && o.render.renderer == RendererKind::kTrain) {
+    // a material train: f and the window come from the material, not from a flag as well
+    for (const char* field : {"render.frequency_hz", "render.t_collision_s"}) {
+      if (s.Given(field)) {
+        throw Error(std::string(field) + " (" + Where(s, field) +
+                    ") and --material both set the train; a material train takes f and t_c from "
+                    "the material (docs/renderers.md): give one");
+      }
+    }
+    const render::MaterialTrainParams t = render::MaterialTrain(o.render.material);
+    o.render.frequency_hz = t.frequency_hz;
+    o.render.t_collision_s = t.t_collision_s;
+  }
   if (f.passivity_control) {
     o.render.passivity_control = true;
     s.origin["render.passivity_control"] = "--passivity-control";

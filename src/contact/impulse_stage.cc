@@ -45,7 +45,9 @@ bool SolveImpulse(const Model& model, const ImpulseProblem& problem, int remaini
     // exact Eq. 5 / Eq. 8 with the pseudo-inverse (may pull), for comparison runs
     return s.reference != nullptr && s.reference->Solve(problem, e, remaining, p);
   }
-  const double scale = (1.0 + e) / remaining;
+  // Eq. 8's share 1 / (N - i + 1), or a material train's envelope share
+  const double scale =
+      (1.0 + e) * TrainShare(model.schedule, model.render, model.timestep_s, remaining);
   return s.solver->Solve(problem, scale, p).error == ImpulseSolverError::kNone;
 }
 

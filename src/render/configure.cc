@@ -282,9 +282,19 @@ void Configure(Model& model) {
             "frequency_hz", m.frequency_hz,
             "in (0, 1 / (2 h)) = (0, " + io::FormatNumber(nyquist_hz) +
                 ") Hz: a sampled transient cannot show more");
+  } else if (r.renderer == RendererKind::kTrain && !r.material.name.empty()) {
+    // a material train: its shares follow e^(-B t) (contact::TrainShare); f and t_c are the
+    // render parameters' (render::MaterialTrain derives them from the material)
+    Require(std::isfinite(r.material.decay_per_s) && r.material.decay_per_s > 0.0, "decay_per_s",
+            r.material.decay_per_s, "> 0 1/s, finite");
+    if (r.reference_solver) {
+      throw Error(
+          "parameter reference_solver = true cannot give a material train's decaying shares "
+          "(it applies Eq. 8's equal shares); drop it or the material");
+    }
   } else if (!r.material.name.empty()) {
     throw Error("parameter material = " + r.material.name +
-                " is used only by the event renderer (--renderer event); the " +
+                " is used only by the event and train renderers; the " +
                 io::RendererName(r.renderer) + " renderer takes none");
   }
   model.schedule = contact::MakeSchedule(model.timestep_s, r);

@@ -1,10 +1,13 @@
 #include "render/materials.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 
 #include "io/strict_json.h"
 #include "io/text.h"
+#include "render/limits.h"
 
 namespace rigidtouch::render {
 namespace {
@@ -64,6 +67,14 @@ Material ParseMaterial(std::string_view text) {
   for (const Material& m : Table()) names += m.name + ", ";
   throw Error("unknown material '" + std::string(text) + "'; valid materials: the presets " +
               names + "or a JSON material FILE.json (docs/renderers.md)");
+}
+
+MaterialTrainParams MaterialTrain(const Material& material) {
+  MaterialTrainParams p;
+  p.frequency_hz = material.frequency_hz;
+  const double window_s = std::log(20.0) / material.decay_per_s;
+  p.t_collision_s = std::max(std::min(window_s, kMaxCollisionWindow_s), 1.0 / p.frequency_hz);
+  return p;
 }
 
 }  // namespace rigidtouch::render

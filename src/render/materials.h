@@ -24,4 +24,13 @@ Material ReadMaterial(const std::string& path);
 /// presets and the file form.
 Material ParseMaterial(std::string_view text);
 
+/// A passive material train's frequency and window (docs/renderers.md): f the material's, the
+/// window three decay time constants (the envelope at 5 %, ln 20 / B), at most the method's
+/// 100 ms and at least one period 1 / f.
+struct MaterialTrainParams {
+  double frequency_hz = 0.0;
+  double t_collision_s = 0.0;
+};
+MaterialTrainParams MaterialTrain(const Material& material);
+
 }  // namespace rigidtouch::render

@@ -36,7 +36,8 @@ TEST(RendererCliTest, EventRendererAndPassivityControlAreUsedAndReported) {
 TEST(RendererCliTest, MaterialMistakesAreRefused) {
   const std::pair<std::string, std::string> cases[] = {
       {"tap --renderer event", "material is missing"},
-      {"tap --renderer train --material wood", "used only by the event renderer"},
+      {"tap --renderer impulse --material wood", "used only by the event and train renderers"},
+      {"tap --renderer train --material wood --frequency 50", "give one"},
       {"tap --renderer event --material glass", "'glass'"},
   };
   for (const auto& [args, says] : cases) {
