@@ -4,7 +4,7 @@
 #include <iostream>
 
 #include "command.h"
-#include "device/presets.h"
+#include "device/device_spec.h"
 #include "device/simulated_device.h"
 #include "device/udp_json.h"
 #include "loop/loop_json.h"
@@ -19,7 +19,8 @@ namespace {
 
 struct DeviceSimFlags {
   std::string listen = "udp://127.0.0.1:47000";
-  std::string preset = "touch";
+  std::optional<std::string> device;  // a preset or a JSON device spec; default touch
+  std::optional<std::string> preset;  // old spelling of --device NAME
   double rate_hz = 1000.0;
   double duration_s = 0.0;
   int taps = 3;
@@ -34,13 +35,19 @@ struct DeviceSimFlags {
 };
 
 void Run(const DeviceSimFlags& f) {
-  device::DeviceModelParams dm;
+  if (f.device && f.preset) {
+    throw Error("--device " + *f.device + " and --preset " + *f.preset +
+                " both name the device (--preset is the old spelling of --device); give one");
+  }
+  const device::DeviceSpec spec =
+      device::ParseDeviceSpec(f.device.value_or(f.preset.value_or("touch")));
+  device::DeviceModelParams dm = spec.model;
   dm.tick_rate_hz = f.rate_hz;
   device::TapScript script;
   script.taps = f.taps;
   script.approach_speed_mps = f.speed_mps;
   script.surface_point_m = Vec3(0.0, 0.0, f.wall_height_m);
-  device::SimulatedDevice sim(device::FindPreset(f.preset), device::HandParams{}, dm, script);
+  device::SimulatedDevice sim(spec.limits, device::HandParams{}, dm, script);
   device::UdpDeviceServerOptions so;
   so.listen = f.listen;
   so.watchdog_s = f.watchdog_s;
@@ -82,7 +89,10 @@ void Register(CLI::App& root) {
       root.add_subcommand("device-sim", "run the simulated hand and device as a UDP device server");
   app->add_option("--listen", f->listen, "udp://HOST:PORT to bind (loopback unless told)")
       ->capture_default_str();
-  app->add_option("--preset", f->preset, "device preset")->capture_default_str();
+  app->add_option("--device", f->device,
+                  "the simulated device: a preset or a JSON device spec (" +
+                      device::DeviceSpecHelp() + ", default touch)");
+  app->add_option("--preset", f->preset, "old spelling of --device NAME");
   AddRateFlag(app, f->rate_hz, "device rate [Hz]");
   app->add_option("--duration", f->duration_s, "run time [s]; 0: until SIGINT/SIGTERM")
       ->check(InRange(0.0, INFINITY, "s"));

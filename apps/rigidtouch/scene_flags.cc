@@ -8,6 +8,7 @@
 #include "io/resources.h"
 #include "io/text.h"
 #include "render/limits.h"
+#include "render/materials.h"
 
 namespace rigidtouch::cli {
 
@@ -28,6 +29,8 @@ const std::map<std::string, std::string>& FlagOf() {
       {"render.t_collision_s", "--t-collision"},
       {"render.frequency_hz", "--frequency"},
       {"render.reference_solver", "--reference-solver"},
+      {"render.passivity_control", "--passivity-control"},
+      {"render.material", "--material"},
       {"contact.stiffness_N_per_m", "--stiffness"},
       {"contact.damping_Ns_per_m", "--damping"}};
   return flags;
@@ -71,8 +74,11 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--tool", f.tool,
                   "name of the free body that is the tool (default: the config's, else tool)");
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");
-  app->add_option("--renderer", f.renderer, "penalty | impulse | train")
-      ->check(CLI::IsMember({"penalty", "impulse", "train"}));
+  app->add_option("--renderer", f.renderer, "penalty | impulse | train | event")
+      ->check(CLI::IsMember(io::RendererNames()));
+  app->add_option("--material", f.material,
+                  "the event renderer's material: rubber | wood | aluminium | FILE.json "
+                  "(docs/renderers.md)");
   app->add_option("--restitution", f.restitution, "restitution e in [0, 1] (impulse renderer)");
   app->add_option("--t-collision", f.t_collision_s, "collision window t_c [s], at most 0.1");
   app->add_option("--frequency", f.frequency_hz, "impulse-train frequency f [Hz]");
@@ -80,6 +86,9 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--damping", f.damping_Ns_per_m, "tool contact damping b [N s/m]");
   app->add_flag("--reference-solver", f.reference_solver,
                 "use the exact pseudo-inverse of Eq. 5/8 (may pull; allocates)");
+  app->add_flag("--passivity-control", f.passivity_control,
+                "passivity observer and controller at the device port (Hannaford and Ryu 2002; "
+                "docs/renderers.md)");
   const std::string footer = app->get_footer();
   app->footer(footer.empty() ? kPrecedence : std::string(kPrecedence) + "\n\n" + footer);
 }
@@ -109,6 +118,27 @@ Settings ResolveSettings(const SceneFlags& f) {
   if (f.reference_solver) {
     o.render.reference_solver = true;
     s.origin["render.reference_solver"] = "--reference-solver";
+  }
+  if (f.material) {
+    o.render.material = render::ParseMaterial(*f.material);
+    s.origin["render.material"] = "--material";
+  }
+  if (f.material && o.render.renderer == RendererKind::kTrain) {
+    // a material train: f and the window come from the material, not from a flag as well
+    for (const char* field : {"render.frequency_hz", "render.t_collision_s"}) {
+      if (s.Given(field)) {
+        throw Error(std::string(field) + " (" + Where(s, field) +
+                    ") and --material both set the train; a material train takes f and t_c from "
+                    "the material (docs/renderers.md): give one");
+      }
+    }
+    const render::MaterialTrainParams t = render::MaterialTrain(o.render.material);
+    o.render.frequency_hz = t.frequency_hz;
+    o.render.t_collision_s = t.t_collision_s;
+  }
+  if (f.passivity_control) {
+    o.render.passivity_control = true;
+    s.origin["render.passivity_control"] = "--passivity-control";
   }
   // a scene law the user wrote is kept even when it equals the default (Configure derives the
   // scene's otherwise)
@@ -200,7 +230,7 @@ void PrintLoadWarnings(const Model& model) {
 analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& device_preset,
                                         double rate_hz, double speed_mps, int taps) {
   Settings s = ResolveSettings(f);
-  ApplyDevicePreset(s, device::FindPreset(device_preset), rate_hz);
+  ApplyDevicePreset(s, device::ParseDeviceSpec(device_preset).limits, rate_hz);
   analysis::TapExperimentConfig c;
   c.scene_path = f.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene;
   c.load = s.load;
@@ -217,6 +247,43 @@ analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& 
   }
   c.script.approach_speed_mps = speed_mps;
   c.script.taps = taps;
+  return c;
+}
+
+bool IsConnection(const std::string& text) {
+  return text == "sim" || text.rfind("udp://", 0) == 0 || text.rfind("replay:", 0) == 0;
+}
+
+DeviceChoice ResolveDevice(const std::optional<std::string>& device,
+                           const std::optional<std::string>& connect,
+                           const std::optional<std::string>& preset) {
+  DeviceChoice c;
+  if (connect && !IsConnection(*connect)) {
+    throw Error("--connect " + *connect +
+                ": valid connections: sim (the in-process simulated device), udp://HOST:PORT "
+                "(a device through the bridge) or replay:LOG (a recorded session); the device "
+                "itself is --device NAME|FILE.json");
+  }
+  std::optional<std::string> spec = device;
+  if (device && IsConnection(*device)) {
+    // the old spelling: --device names the connection, --preset the device
+    if (connect) {
+      throw Error("--device " + *device + " and --connect " + *connect +
+                  " both name a connection; give the device with --device " +
+                  device::DeviceSpecHelp() + " and the connection with --connect");
+    }
+    c.connect = *device;
+    spec = preset;
+  } else {
+    if (device && preset) {
+      throw Error("--device " + *device + " and --preset " + *preset +
+                  " both name the device (--preset is the old spelling of --device); give one");
+    }
+    if (preset) spec = preset;
+    if (connect) c.connect = *connect;
+  }
+  c.spec_text = spec.value_or("touch");
+  c.spec = device::ParseDeviceSpec(c.spec_text);
   return c;
 }
 

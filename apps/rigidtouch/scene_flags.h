@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "analysis/tap_experiment.h"
+#include "device/device_spec.h"
 #include "device/presets.h"
 #include "rigidtouch/rigidtouch.h"
 
@@ -29,6 +30,8 @@ struct SceneFlags {
   std::optional<double> stiffness_N_per_m;
   std::optional<double> damping_Ns_per_m;
   bool reference_solver = false;
+  bool passivity_control = false;
+  std::optional<std::string> material;
 };
 
 /// How a setting is resolved, stated in every subcommand's --help and in docs/cli.md.
@@ -92,10 +95,28 @@ void PrintWarnings(const nlohmann::json& warnings, std::ostream& out);
 void PrintLoadWarnings(const Model& model);
 
 /// The tap experiment on the scene flags' scene (the shipped wall when none is given) with the
-/// resolved settings (ApplyDevicePreset for `device_preset` at `rate_hz`), approach speed and
-/// taps.
+/// resolved settings (ApplyDevicePreset for the device `device_preset`, a preset or a JSON
+/// device spec, at `rate_hz`), approach speed and taps.
 analysis::TapExperimentConfig TapConfig(const SceneFlags& flags, const std::string& device_preset,
                                         double rate_hz, double speed_mps, int taps);
+
+/// The device a subcommand renders for, from --device NAME|FILE.json (its spec: a preset or a
+/// JSON device spec, device::ParseDeviceSpec) and, where a device is reached, --connect
+/// sim|udp://HOST:PORT (how). The old spellings of serve and study run, --device sim|udp://...
+/// with --preset NAME, are read the same way: no preset or spec file is called sim or starts
+/// with udp://, so the two forms cannot be confused (docs/decisions.md, "One --device").
+/// `connect` is empty when neither spelling gave a connection.
+struct DeviceChoice {
+  device::DeviceSpec spec;
+  std::string spec_text;  // what the user gave (or the default): a preset name or a file
+  std::string connect;
+};
+DeviceChoice ResolveDevice(const std::optional<std::string>& device,
+                           const std::optional<std::string>& connect,
+                           const std::optional<std::string>& preset);
+
+/// Whether `text` is a connection (sim or udp://...) rather than a device spec.
+bool IsConnection(const std::string& text);
 
 /// JSON array of a Vec3.
 inline nlohmann::json Json(const Vec3& v) {

@@ -30,8 +30,9 @@ namespace {
 
 struct ServeFlags {
   SceneFlags scene;
-  std::string device = "sim";
-  std::string preset = "touch";
+  std::optional<std::string> device;   // the device: a preset or a JSON spec (or old: connection)
+  std::optional<std::string> connect;  // sim | udp://HOST:PORT; default sim
+  std::optional<std::string> preset;   // old spelling of --device NAME
   double rate_hz = 1000.0;
   double duration_s = 0.0;
   bool realtime = false;
@@ -103,13 +104,16 @@ void SetPlausibility(const ServeFlags& f, DeviceParams& d) {
 }
 
 void Run(const ServeFlags& f) {
+  const DeviceChoice choice = ResolveDevice(f.device, f.connect, f.preset);
+  const std::string connect = choice.connect.empty() ? "sim" : choice.connect;
+  const device::DeviceLimits& preset = choice.spec.limits;
   // a replay runs at the recorded rate: the recorded states are one period apart
-  const bool replay = f.device.starts_with(kReplayPrefix);
+  const bool replay = connect.starts_with(kReplayPrefix);
   std::optional<io::Record> recorded;
   double rate_hz = f.rate_hz;
   if (replay) {
-    const std::string log = f.device.substr(kReplayPrefix.size());
-    if (log.empty()) throw Error("serve: --device replay:LOG needs the record file's path");
+    const std::string log = connect.substr(kReplayPrefix.size());
+    if (log.empty()) throw Error("serve: --connect replay:LOG needs the record file's path");
     recorded = io::ReadRecord(log);
     if (f.rate_given && f.rate_hz != recorded->rate_hz) {
       std::ostringstream m;
@@ -147,7 +151,6 @@ void Run(const ServeFlags& f) {
   const std::atomic<bool>& stop = loop::InstallStopSignalHandlers();
   nlohmann::json result;
   loop::HapticLoopResult r;
-  const device::DeviceLimits& preset = device::FindPreset(f.preset);
   {
     const Settings settings = ResolveSettings(f.scene);
     const char* why = "serve couples the tool to the device directly";
@@ -160,7 +163,8 @@ void Run(const ServeFlags& f) {
   if (replay) {
     // the model is built as on the simulated path, so a session recorded there replays through
     // the same model; the tool starts where the recorded handle did
-    analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, rate_hz, f.speed_mps, f.taps);
+    analysis::TapExperimentConfig c =
+        TapConfig(f.scene, choice.spec_text, rate_hz, f.speed_mps, f.taps);
     c.load.device.coupling = Coupling::kDirect;
     analysis::TapSetup setup = analysis::PrepareTap(c);
     Model& model = setup.model;
@@ -184,13 +188,15 @@ void Run(const ServeFlags& f) {
     }
     result = RenderJson(model, data);
     result["device"] = {{"kind", "replay"},
-                        {"record", f.device.substr(kReplayPrefix.size())},
+                        {"record", connect.substr(kReplayPrefix.size())},
                         {"pace", f.replay_pace},
-                        {"preset", f.preset},
+                        {"preset", preset.name},
+                        {"spec", choice.spec_text},
                         {"recorded_ticks", dev.size()},
                         {"replayed_ticks", dev.position()}};
-  } else if (f.device == "sim") {
-    analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, rate_hz, f.speed_mps, f.taps);
+  } else if (connect == "sim") {
+    analysis::TapExperimentConfig c =
+        TapConfig(f.scene, choice.spec_text, rate_hz, f.speed_mps, f.taps);
     c.load.device.coupling = Coupling::kDirect;
     analysis::TapSetup setup = analysis::PrepareTap(c);
     Model& model = setup.model;
@@ -204,7 +210,8 @@ void Run(const ServeFlags& f) {
     r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get(), records.get());
     result = RenderJson(model, data);
     result["device"] = {{"kind", "simulated"},
-                        {"preset", f.preset},
+                        {"preset", preset.name},
+                        {"spec", choice.spec_text},
                         {"energy_to_user_J", setup.simulated->energy_to_user_J()}};
   } else {
     // the wall defaults to what the device can display, as on the simulated path (and the tap
@@ -213,18 +220,19 @@ void Run(const ServeFlags& f) {
     ApplyDevicePreset(settings, preset, rate_hz);
     LoadOptions load = settings.load;
     load.device.coupling = Coupling::kDirect;
+    load.device.position_resolution_m = choice.spec.model.encoder_resolution_m;
     device::TightenDeviceParams(load.device, preset);
     SetPlausibility(f, load.device);
     const std::string scene =
         f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
     // Configure refuses what the preset cannot display
     Model model = LoadModel(scene, load);
-    // the tool is the end effector; without a model of the real device, the simulated one's
-    analysis::UseDeviceAndHandMass(model, device::DeviceModelParams{}, device::HandParams{});
+    // the tool is the end effector: the spec's apparent mass plus a modelled hand's
+    analysis::UseDeviceAndHandMass(model, choice.spec.model, device::HandParams{});
     Configure(model);
     PrintLoadWarnings(model);
     device::UdpDeviceOptions o;
-    o.server = f.device;
+    o.server = connect;
     o.watchdog_s = f.watchdog_s;
     o.limits = preset;
     o.key_file = f.key_file;
@@ -233,9 +241,8 @@ void Run(const ServeFlags& f) {
     device::UdpDevice dev(o);
     if (!loop::AwaitFirstState(dev, f.startup_timeout_s, &stop)) {
       if (stop.load()) return;  // interrupted before the device answered: nothing was rendered
-      std::cerr << "rigidtouch: error: serve: no state from the device at " << f.device
-                << " within " << f.startup_timeout_s
-                << " s (--startup-timeout); is the device server running?\n";
+      std::cerr << "rigidtouch: error: serve: no state from the device at " << connect << " within "
+                << f.startup_timeout_s << " s (--startup-timeout); is the device server running?\n";
       throw CLI::RuntimeError(kExitNoDevice);
     }
     // the device's own limits, known once its session has started, tighten the preset's
@@ -246,8 +253,9 @@ void Run(const ServeFlags& f) {
     r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records.get());
     result = RenderJson(model, data);
     result["device"] = {{"kind", "udp"},
-                        {"server", f.device},
-                        {"preset", f.preset},
+                        {"server", connect},
+                        {"preset", preset.name},
+                        {"spec", choice.spec_text},
                         {"link", ToJson(dev.counters())},
                         {"watchdog_tripped", dev.watchdog_tripped()}};
   }
@@ -290,13 +298,15 @@ void Register(CLI::App& root) {
   CLI::App* app = root.add_subcommand("serve", "run the real-time haptic loop against a device");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
   app->add_option("--device", f->device,
-                  "sim (in-process simulated device), udp://HOST:PORT, or replay:LOG (a --record "
-                  "file's handle motion, at its rate, through this scene and renderer)")
-      ->capture_default_str();
-  app->add_option("--preset", f->preset,
-                  "device preset: its force, stiffness and damping limits apply on every device "
-                  "(with the device's own, the stricter wins); the simulated device's model")
-      ->capture_default_str();
+                  "the device: a preset or a JSON device spec (" + device::DeviceSpecHelp() +
+                      ", default touch); its force, stiffness and damping limits apply on every "
+                      "connection (with the device's own, the stricter wins), and it is the "
+                      "simulated device's model");
+  app->add_option("--connect", f->connect,
+                  "sim (the in-process simulated device, default), udp://HOST:PORT (a device "
+                  "through the bridge), or replay:LOG (a --record file's handle motion, at its "
+                  "rate, through this scene and renderer)");
+  app->add_option("--preset", f->preset, "old spelling of --device NAME");
   AddRateFlag(app, f->rate_hz, "loop rate [Hz]");
   app->add_option("--duration", f->duration_s,
                   "run time [s]; 0: until SIGINT (udp), the end of the taps (sim) or of the record "
@@ -342,11 +352,14 @@ void Register(CLI::App& root) {
   // an error about a parameter the user wrote says where it was written
   app->callback([f, app] {
     f->rate_given = app->count("--rate") > 0;
-    if (!f->device.starts_with(kReplayPrefix) && app->count("--replay-pace") > 0) {
-      throw Error("serve: --replay-pace applies to --device replay:LOG only");
+    const auto replay = [](const std::optional<std::string>& v) {
+      return v && v->starts_with(kReplayPrefix);
+    };
+    const bool replaying = replay(f->device) || replay(f->connect);
+    if (!replaying && app->count("--replay-pace") > 0) {
+      throw Error("serve: --replay-pace applies to --connect replay:LOG only");
     }
-    if (f->device.starts_with(kReplayPrefix) &&
-        (app->count("--taps") + app->count("--speed")) > 0) {
+    if (replaying && (app->count("--taps") + app->count("--speed")) > 0) {
       throw Error(
           "serve: --taps and --speed script the simulated hand; a replay moves the handle "
           "as recorded");

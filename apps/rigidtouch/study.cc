@@ -10,9 +10,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "device/device_spec.h"
 #include "io/output_file.h"
 #include "rigidtouch/command.h"
 #include "rigidtouch/types.h"
+#include "scene_flags.h"
 #include "study/analysis.h"
 #include "study/log.h"
 #include "study/observer.h"
@@ -43,8 +45,9 @@ struct RunOptions {
   CLI::Option* seed_option = nullptr;
   std::string presenter = "device";
   std::string scene;
-  std::string device;
-  std::string preset = "touch";
+  std::optional<std::string> device;   // the device: a preset or a JSON spec (or old: connection)
+  std::optional<std::string> connect;  // udp://HOST:PORT, or sim for a dry run
+  std::optional<std::string> preset;   // old spelling of --device NAME
   std::string key_file;
   bool json = false;
 };
@@ -112,8 +115,9 @@ void Run(const RunOptions& o) {
     screen << "Dry run with the text presenter: it names the rendered wall, so do not use it with "
               "a participant.\n";
   } else {
-    presenter =
-        st::MakeDeviceWallPresenter(st::PresenterOptions{o.scene, o.device, o.preset, o.key_file});
+    const DeviceChoice choice = ResolveDevice(o.device, o.connect, o.preset);
+    presenter = st::MakeDeviceWallPresenter(
+        st::PresenterOptions{o.scene, choice.connect, choice.spec_text, o.key_file});
   }
   st::SessionConfig config;
   config.participant = o.participant;
@@ -282,11 +286,13 @@ void AddStudyCommand(CLI::App& root) {
       ->capture_default_str();
   run->add_option("--scene", run_options->scene, "Scene for the device presenter");
   run->add_option("--device", run_options->device,
+                  "the device: a preset or a JSON device spec (" + device::DeviceSpecHelp() +
+                      ", default touch); its limits apply (force, stiffness, damping)");
+  run->add_option("--connect", run_options->connect,
                   "device presenter: udp://HOST:PORT (a device through the bridge), or sim (a "
-                  "dry run on the in-process simulated device, logged as one); required");
-  run->add_option("--preset", run_options->preset,
-                  "device preset whose limits apply (force, stiffness, damping)")
-      ->capture_default_str();
+                  "dry run on the in-process simulated device, logged as one); required (the "
+                  "old spelling --device udp://...|sim is read the same)");
+  run->add_option("--preset", run_options->preset, "old spelling of --device NAME");
   run->add_option("--key", run_options->key_file,
                   "bridge key file (rigidtouch keygen); default: the per-user key");
   run->add_flag("--json", run_options->json,
@@ -307,7 +313,8 @@ void AddStudyCommand(CLI::App& root) {
   simulate->add_option("--observer", sim_options->observer,
                        "JSON file overriding observer parameters (docs/study.md)");
   simulate->add_option("--scene", sim_options->scene, "Scene for the tap experiment");
-  simulate->add_option("--device", sim_options->device, "Device preset for the tap experiment");
+  simulate->add_option("--device", sim_options->device,
+                       "Device for the tap experiment: " + device::DeviceSpecHelp());
   simulate->add_flag("--json", sim_options->json, "Print one JSON object");
   simulate->callback([sim_options] { Simulate(*sim_options); });
 
@@ -340,7 +347,8 @@ void AddStudyCommand(CLI::App& root) {
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   predict->add_option("--scene", predict_options->scene, "Scene for the tap experiment");
-  predict->add_option("--device", predict_options->device, "Device preset");
+  predict->add_option("--device", predict_options->device,
+                      "Device for the tap experiment: " + device::DeviceSpecHelp());
   predict->add_flag("--json", predict_options->json, "Print one JSON object");
   predict->callback([predict_options] { Predict(*predict_options); });
 }

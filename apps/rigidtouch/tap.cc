@@ -19,6 +19,7 @@
 #include "io/resources.h"
 #include "io/text.h"
 #include "io/trace_csv.h"
+#include "render/materials.h"
 #include "scene_flags.h"
 #include "simulate_nonfinite.h"
 #include "tap_run.h"
@@ -75,6 +76,17 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
   if (spec) {
     c.load.render.renderer = spec->renderer;
     if (spec->render) wall_params = spec->render;
+    if (spec->material) {
+      // as --material: the event renderer's transient, or a material train's f and window
+      c.load.render.material = *spec->material;
+      if (spec->renderer == RendererKind::kTrain) {
+        RefuseUnused(ResolveSettings(f.scene), {"render.t_collision_s", "render.frequency_hz"},
+                     "a material train takes f and t_c from its material (docs/renderers.md)");
+        const render::MaterialTrainParams t = render::MaterialTrain(*spec->material);
+        c.load.render.frequency_hz = t.frequency_hz;
+        c.load.render.t_collision_s = t.t_collision_s;
+      }
+    }
   }
   if (wall_params) {
     RefuseUnused(ResolveSettings(f.scene), kWallFixedFields, kWallFixedWhy);
@@ -145,7 +157,8 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"transient_peak_to_mean", t.transient_peak_to_mean},
                     {"transient_band_energy_fraction", t.transient_band_energy_fraction},
                     {"transient_power_ratio", t.transient_power_ratio},
-                    {"force_clipped", t.force_clipped}});
+                    {"force_clipped", t.force_clipped},
+                    {"passivity_dissipated_J", t.passivity_dissipated_J}});
   }
   const bool train = m.render.renderer == RendererKind::kTrain;
   return {
@@ -163,6 +176,9 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"damping_Ns_per_m", m.contact.damping_Ns_per_m},
       {"tool_mass_kg", m.bodies[m.tool].mass_kg},
       {"energy_to_user_J", run.energy_to_user_J},
+      {"passivity_control", m.render.passivity_control},
+      {"material", m.render.material.name.empty() ? nlohmann::json(nullptr)
+                                                  : nlohmann::json(m.render.material.name)},
       {"clipped_ticks", run.clipped_ticks},
       {"clipped_impulse_ticks", run.clipped_impulse_ticks},
       {"taps", taps},
@@ -269,6 +285,7 @@ std::string OutPath(const TapFlags& f, const std::string& name) {
 std::string FileStem(const analysis::RendererSpec& spec) {
   std::string stem = spec.name;
   std::replace(stem.begin(), stem.end(), ':', '_');
+  std::replace(stem.begin(), stem.end(), '/', '_');
   return stem;
 }
 
@@ -453,7 +470,9 @@ std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
   wall_point->needs(wall_normal)->excludes(wall_geom);
   wall_normal->needs(wall_point);
   AddRateFlag(app, f->rate_hz, "haptic rate [Hz]");
-  app->add_option("--device", f->device, "device preset: touch, omni, falcon, omega3, generic")
+  app->add_option("--device", f->device,
+                  "the device: a preset or a JSON device spec (" + device::DeviceSpecHelp() +
+                      "; docs/devices.md)")
       ->capture_default_str();
   app->add_option("--coupling", f->coupling,
                   "direct | virtual (default: the config's device.coupling, else direct)");

@@ -98,6 +98,33 @@ struct WorkspaceDeleter {
   void operator()(Workspace* w) const;
 };
 
+/// The passivity observer and controller at the device port (render::PassivityControl).
+struct PassivityState {
+  /// Energy the renderer absorbed at the port since the current contact began [J]:
+  /// -sum F_k . (x_{k+1} - x_k) over the ticks with a force. >= 0 is passive.
+  double observed_J = 0.0;
+  /// Energy the controller's damping has dissipated since the start [J], measured like observed_J.
+  double dissipated_J = 0.0;
+  /// The part of dissipated_J measured this tick (the controller's force of the last tick) [J].
+  double step_dissipated_J = 0.0;
+  /// The controller's damping this tick [N s/m]; 0 when it is idle.
+  double damping_Ns_per_m = 0.0;
+  /// sum |F_k - F_(k-1)| over the contact [N]: with the position quantum it bounds the observer's
+  /// error.
+  double force_variation_N = 0.0;
+  Vec3 last_force_N = Vec3::Zero();          // the force the device held over the last tick
+  Vec3 last_control_force_N = Vec3::Zero();  // the controller's part of it
+  Vec3 last_position_m = Vec3::Zero();       // the device's position at the last tick
+  bool has_last = false;
+};
+
+/// The event renderer's transient in progress (render::EventTransient).
+struct EventState {
+  std::int64_t onset_step = -1;     // the tick the transient started; -1: none
+  double approach_speed_mps = 0.0;  // v_in
+  Vec3 normal_W = Vec3::UnitZ();    // the direction it pushes the tool
+};
+
 /// All mutable state. Create with MakeData; every buffer is sized there and never grows in Tick.
 struct Data {
   // time
@@ -132,6 +159,11 @@ struct Data {
   int tool_contacts = 0;
   std::vector<ImpulseEvent> impulses;  // (nbody) impulses applied this tick
   int nimpulse = 0;
+
+  // PASSIVITY observer and controller state, kept across ticks
+  PassivityState passivity;
+  // EVENT transient state, kept across ticks
+  EventState event;
 
   // diagnostics
   std::array<WarningStat, static_cast<int>(Warning::kCount)> warnings{};

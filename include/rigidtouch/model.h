@@ -23,6 +23,18 @@ enum class RendererKind {
   kPenalty,  ///< penalty feedback only, no impulses
   kImpulse,  ///< one impulse at contact onset, Eq. 5 with restitution e (the [IAP] model)
   kTrain,    ///< a modulated train of N impulses over the collision window, Eq. 8 (e = 0)
+  kEvent,    ///< penalty plus an open-loop decaying sinusoid at contact onset (Kuchenbecker,
+             ///< Fiene and Niemeyer 2006; Okamura, Cutkosky and Dennerlein 2001); not passive
+};
+
+/// A material's contact transient, the decaying sinusoid A v_in e^(-B t) sin(2 pi f t) along the
+/// contact normal (Okamura, Cutkosky and Dennerlein 2001), v_in the approach speed at onset.
+/// Presets and JSON files: src/render/materials.h, docs/renderers.md.
+struct Material {
+  std::string name;                 // empty: none given
+  double amplitude_Ns_per_m = 0.0;  // A: force per approach speed [N/(m/s)]
+  double decay_per_s = 0.0;         // B [1/s]
+  double frequency_hz = 0.0;        // f [Hz]
 };
 
 /// How the device drives the virtual tool (tick stage 1, docs/architecture.md).
@@ -97,6 +109,11 @@ struct RenderParams {
   double t_collision_s = 0.1;     // t_c, collision-rendering window, at most 0.1 s
   double frequency_hz = 250.0;    // f, impulse-train frequency, in [1/t_c, 1/h]
   bool reference_solver = false;  // use the exact Eq. 5/8 pseudo-inverse (may pull) instead
+  /// Time-domain passivity observer and controller at the device port (Hannaford and Ryu 2002,
+  /// render::PassivityControl), over any renderer; needs a device (direct or virtual coupling).
+  bool passivity_control = false;
+  /// The event renderer's transient (required by it); other renderers refuse one.
+  Material material;
 };
 
 /// Impulse schedule derived from RenderParams and the time step (Eq. 6, Eq. 7).
@@ -118,6 +135,9 @@ struct DeviceParams {
   /// the coupling's under virtual coupling (docs/decisions.md, "Device limits").
   double max_stiffness_N_per_m = 0.0;
   double max_damping_Ns_per_m = 0.0;
+  /// The device's position quantum (encoder resolution) [m]; 0: exact. The passivity observer
+  /// keeps a reserve for the error it makes in the observed energy.
+  double position_resolution_m = 0.0;
   /// A device state farther than this from the device's origin, or faster, is implausible: the
   /// tick outputs zero force and counts Warning::kImplausibleDeviceState.
   double plausible_radius_m = 1.0;

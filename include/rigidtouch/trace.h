@@ -27,6 +27,7 @@ struct TraceSample {
   double kinetic_energy_before_J = 0.0;   // group kinetic energy before this tick's impulse
   double kinetic_energy_after_J = 0.0;    // and after it (equal when no impulse)
   bool clipped = false;                   // the device force limit clipped this tick
+  double passivity_dissipated_J = 0.0;    // the passivity controller's dissipation, measured now
 };
 
 }  // namespace rigidtouch

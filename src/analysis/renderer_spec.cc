@@ -3,13 +3,14 @@
 #include <algorithm>
 
 #include "analysis/tap_experiment.h"
+#include "render/materials.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::analysis {
 
 namespace {
 
-constexpr const char* kValidNames = "penalty, impulse, train, wall0, wall1, wall2";
+constexpr const char* kValidNames = "penalty, impulse, train, event, wall0, wall1, wall2";
 
 std::string Quote(std::string_view s) {
   return "'" + std::string(s) + "'";
@@ -31,6 +32,9 @@ RendererSpec ParseRendererSpec(std::string_view spec) {
   } else if (name == "train") {
     r.renderer = RendererKind::kTrain;
     r.label = "impulse train";
+  } else if (name == "event") {
+    r.renderer = RendererKind::kEvent;
+    r.label = "event-based transient";
   } else if (name.size() == 5 && name.substr(0, 4) == "wall" && name[4] >= '0' && name[4] <= '2') {
     const int wall = name[4] - '0';
     r.render = WallRenderParams(wall);
@@ -43,9 +47,14 @@ RendererSpec ParseRendererSpec(std::string_view spec) {
                 "; valid names: " + kValidNames + " (as name or name:material)");
   }
   if (colon != std::string_view::npos) {
-    // materials are not defined yet: a material the user wrote is refused, never dropped
-    throw Error("unknown material " + Quote(spec.substr(colon + 1)) + " in " + Quote(spec) +
-                ": no materials are defined; give the renderer name alone");
+    if (r.renderer != RendererKind::kEvent && r.renderer != RendererKind::kTrain) {
+      throw Error("a material goes with event or train, not with " + Quote(name) + " in " +
+                  Quote(spec));
+    }
+    r.material = render::ParseMaterial(spec.substr(colon + 1));
+    r.label =
+        (r.renderer == RendererKind::kEvent ? "event-based transient: " : "material train: ") +
+        r.material->name;
   }
   return r;
 }

@@ -19,11 +19,15 @@ struct RendererSpec {
   /// Set when the spec fixes every render parameter (the method's walls: e, t_c and f); unset,
   /// the entry takes them from the flags, the config or the defaults like `--renderer` does.
   std::optional<RenderParams> render;
+  /// The material after the colon (event:wood, train:wood; render::ParseMaterial): the event
+  /// renderer's transient, or a passive material train's frequency, window and shares.
+  std::optional<Material> material;
 };
 
-/// Parses "name[:material]". Names: penalty, impulse, train (the renderers), wall0, wall1, wall2
-/// (the method's walls, WallRenderParams). Throws Error naming the spec and the valid names for
-/// an unknown name, and "unknown material" for any material (none is defined yet).
+/// Parses "name[:material]". Names: penalty, impulse, train, event (the renderers), wall0, wall1,
+/// wall2 (the method's walls, WallRenderParams). A material (a preset name or FILE.json) goes
+/// with event and train only. Throws Error naming the spec and the valid names for an unknown
+/// name, and the material's error for an unknown material.
 RendererSpec ParseRendererSpec(std::string_view spec);
 
 /// Parses a comma-separated list of specs (ParseRendererSpec each). Throws Error for an empty

@@ -154,29 +154,37 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
     throw Error("wall normal must be a finite non-zero vector");
   }
   TapSetup setup;
-  setup.device = device::FindPreset(config.device_preset);
+  const device::DeviceSpec spec = device::ParseDeviceSpec(config.device_preset);
+  setup.device = spec.limits;
   if (config.max_force_N) setup.device.max_force_N = *config.max_force_N;
   const device::DeviceLimits& limits = setup.device;
   const double h = 1.0 / config.rate_hz;
 
   LoadOptions load = config.load;
   load.timestep_s = h;
-  load.contact.stiffness_N_per_m = config.stiffness_N_per_m.value_or(limits.max_stiffness_N_per_m);
+  // a device with no stiffness limit (ideal, or a spec's 0) keeps the contact law's own
+  const auto capped = [](double limit, double otherwise) {
+    return limit > 0.0 ? limit : otherwise;
+  };
+  load.contact.stiffness_N_per_m = config.stiffness_N_per_m.value_or(
+      capped(limits.max_stiffness_N_per_m, load.contact.stiffness_N_per_m));
   const double k = load.contact.stiffness_N_per_m;
   load.contact.damping_Ns_per_m = config.damping_Ns_per_m.value_or(
       limits.max_damping_Ns_per_m > 0.0 ? std::min(k * h, limits.max_damping_Ns_per_m) : k * h);
   load.device.max_force_N = limits.max_force_N;
+  load.device.position_resolution_m = config.device_model.value_or(spec.model).encoder_resolution_m;
   if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;
   if (load.device.coupling == Coupling::kVirtual) {
     // the coupling is what the device renders: its limits bound the coupling, not the wall
-    load.device.coupling_stiffness_N_per_m =
-        config.coupling_stiffness_N_per_m.value_or(limits.max_stiffness_N_per_m);
+    load.device.coupling_stiffness_N_per_m = config.coupling_stiffness_N_per_m.value_or(
+        capped(limits.max_stiffness_N_per_m, load.device.coupling_stiffness_N_per_m));
+    const double kc_h = load.device.coupling_stiffness_N_per_m * h;
     load.device.coupling_damping_Ns_per_m = config.coupling_damping_Ns_per_m.value_or(
-        std::min(load.device.coupling_stiffness_N_per_m * h, limits.max_damping_Ns_per_m));
+        limits.max_damping_Ns_per_m > 0.0 ? std::min(kc_h, limits.max_damping_Ns_per_m) : kc_h);
   }
   Model model = LoadModel(config.scene_path, load);
 
-  device::DeviceModelParams dm = config.device_model;
+  device::DeviceModelParams dm = config.device_model.value_or(spec.model);
   dm.tick_rate_hz = config.rate_hz;
   device::TapScript script = config.script;
   if (config.wall_point_m) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "analysis/tap_metrics.h"
+#include "device/device_spec.h"
 #include "device/presets.h"
 #include "device/simulated_device.h"
 #include "rigidtouch/rigidtouch.h"
@@ -27,13 +28,13 @@ struct Wall {
 
 /// Everything a tap run needs.
 struct TapExperimentConfig {
-  std::string scene_path;  // MJCF with a wall and the tool
-  LoadOptions load;        // tool name, renderer, contact law, coupling
-  std::string device_preset = "touch";
+  std::string scene_path;                   // MJCF with a wall and the tool
+  LoadOptions load;                         // tool name, renderer, contact law, coupling
+  std::string device_preset = "touch";      // a preset name or a JSON device spec (device_spec.h)
   std::optional<double> max_force_N;        // overrides the preset's force limit (0: unlimited)
   double rate_hz = 1000.0;                  // haptic rate: engine step and device tick, h = 1/rate
   std::optional<double> stiffness_N_per_m;  // default: the preset's maximum stiffness
-  std::optional<double> damping_Ns_per_m;   // default: k h, twice Colgate's bound k T / 2
+  std::optional<double> damping_Ns_per_m;   // default: k h (capped at the device's damping)
   // virtual coupling only; default: the preset's maximum stiffness, and k h capped at its damping
   std::optional<double> coupling_stiffness_N_per_m;
   std::optional<double> coupling_damping_Ns_per_m;
@@ -43,8 +44,9 @@ struct TapExperimentConfig {
   std::optional<Vec3> wall_point_m;
   Vec3 wall_normal = Vec3::UnitZ();
   device::HandParams hand;
-  device::DeviceModelParams device_model;  // tick_rate_hz is set from rate_hz
-  device::TapScript script;                // surface point and normal are set from the wall
+  // default: the device spec's inertia and sensing; tick_rate_hz is set from rate_hz
+  std::optional<device::DeviceModelParams> device_model;
+  device::TapScript script;  // surface point and normal are set from the wall
 };
 
 /// The result of a run.

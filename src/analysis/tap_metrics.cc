@@ -59,6 +59,7 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   for (const TraceSample& sample : s) {
     m.max_penetration_m = std::max(m.max_penetration_m, sample.penetration_m);
     m.force_clipped = m.force_clipped || sample.clipped;
+    m.passivity_dissipated_J += sample.passivity_dissipated_J;
   }
 
   std::size_t onset = 0;

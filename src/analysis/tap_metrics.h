@@ -100,6 +100,8 @@ struct TapMetrics {
   double transient_power_ratio = 0.0;
   /// Some sample of the tap had its device force clipped by the device limit.
   bool force_clipped = false;
+  /// Energy the passivity controller dissipated over the tap [J] (0 without it).
+  double passivity_dissipated_J = 0.0;
 };
 
 /// Splits a trace into taps: maximal runs of consecutive samples with the same tap >= 0.

@@ -45,7 +45,9 @@ bool SolveImpulse(const Model& model, const ImpulseProblem& problem, int remaini
     // exact Eq. 5 / Eq. 8 with the pseudo-inverse (may pull), for comparison runs
     return s.reference != nullptr && s.reference->Solve(problem, e, remaining, p);
   }
-  const double scale = (1.0 + e) / remaining;
+  // Eq. 8's share 1 / (N - i + 1), or a material train's envelope share
+  const double scale =
+      (1.0 + e) * TrainShare(model.schedule, model.render, model.timestep_s, remaining);
   return s.solver->Solve(problem, scale, p).error == ImpulseSolverError::kNone;
 }
 
@@ -126,7 +128,12 @@ void ImpulseScratch::Reserve(const Model& model) {
 }
 
 void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseScratch& scratch) {
-  if (model.render.renderer == RendererKind::kPenalty) return;
+  // penalty and event-based transients apply no impulses (the event renderer's window only
+  // marks the onset its transient starts from)
+  if (model.render.renderer == RendererKind::kPenalty ||
+      model.render.renderer == RendererKind::kEvent) {
+    return;
+  }
   for (int g = 0; g < G.ngroup; ++g) {
     WindowState w = data.window[G.bodies[G.body_start[g]]];
     GroupImpulse(model, data, G, g, w, scratch);

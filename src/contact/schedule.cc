@@ -59,4 +59,15 @@ bool ImpulseDue(const Schedule& schedule, const WindowState& window, std::int64_
   return true;
 }
 
+double TrainShare(const Schedule& schedule, const RenderParams& render, double timestep_s,
+                  int remaining) {
+  if (remaining <= 1) return 1.0;
+  if (render.renderer != RendererKind::kTrain || render.material.name.empty()) {
+    return 1.0 / remaining;  // Eq. 8
+  }
+  const double r = std::exp(-render.material.decay_per_s * schedule.interval_steps * timestep_s);
+  if (!(r < 1.0)) return 1.0 / remaining;  // no decay: Eq. 8's limit
+  return (1.0 - r) / (1.0 - std::pow(r, remaining));
+}
+
 }  // namespace rigidtouch::contact

@@ -17,4 +17,14 @@ Schedule MakeSchedule(double timestep_s, const RenderParams& render);
 bool ImpulseDue(const Schedule& schedule, const WindowState& window, std::int64_t step, int* index,
                 int* remaining);
 
+/// The share of the remaining plastic impulse that impulse i removes, `remaining` = N - i + 1
+/// impulses still due, this one included: Eq. 8's equal shares 1 / (N - i + 1), or, for a train
+/// with a material (RenderParams::material given), shares that follow the material's envelope
+/// e^(-B t): impulse j (0-based) weighs w_j = r^j, r = e^(-B n_i h), and removes
+/// w_j / sum_(k >= j) w_k = (1 - r) / (1 - r^(N - i + 1)) of what a plastic collision would remove
+/// now. Every share lies in (0, 1] and the last one is 1, so each impulse stays plastic-or-less
+/// (never adds energy) and the last stops the approach.
+double TrainShare(const Schedule& schedule, const RenderParams& render, double timestep_s,
+                  int remaining);
+
 }  // namespace rigidtouch::contact

@@ -12,8 +12,8 @@ namespace {
 
 // values as CHAI3D 3.x sets m_maxLinearForce [N], m_maxLinearStiffness [N/m] and
 // m_maxLinearDamping [N/(m/s)] in its device classes
-const std::array<DeviceLimits, 5>& PresetTable() {
-  static const std::array<DeviceLimits, 5> table = {{
+const std::array<DeviceLimits, 6>& PresetTable() {
+  static const std::array<DeviceLimits, 6> table = {{
       // CHAI3D CPhantomDevices.cpp, model name "Touch" (3D Systems / Geomagic Touch)
       {"touch", 3.3, 400.0, 4.0},
       // CHAI3D CPhantomDevices.cpp, model name "PHANTOM Omni"
@@ -26,6 +26,9 @@ const std::array<DeviceLimits, 5>& PresetTable() {
       // device (CVirtualDevice.cpp: 10 N, 1000 N/m); damping 10 N s/m is our choice, between
       // the PHANToM family (4-8) and the Falcon (20), since CHAI3D's virtual 100 is not physical
       {"generic", 10.0, 1000.0, 10.0},
+      // not a device: the method itself, no force, stiffness or damping limit (its 1 um encoder
+      // and zero delay are in device_spec.cc's PresetSpec)
+      {"ideal", 0.0, 0.0, 0.0},
   }};
   return table;
 }

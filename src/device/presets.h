@@ -9,9 +9,10 @@
 
 namespace rigidtouch::device {
 
-/// All presets, in a fixed order: touch, omni, falcon, omega3, generic. Values (max force,
+/// All presets, in a fixed order: touch, omni, falcon, omega3, generic, ideal. Values (max force,
 /// max closed-loop stiffness, max closed-loop damping) are those of CHAI3D 3.x's device classes;
-/// `generic` is an assumption (see presets.cc).
+/// `generic` is an assumption (see presets.cc); `ideal` has no limits (0), for studying the
+/// method without a device's (device_spec.h).
 std::span<const DeviceLimits> Presets();
 
 /// The preset called `name` (exact, lowercase). Throws rigidtouch::Error naming the unknown

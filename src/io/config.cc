@@ -11,7 +11,7 @@ namespace rigidtouch::io {
 namespace {
 
 // in enum order: the index of a name is its enumerator
-const std::vector<std::string> kRendererNames = {"penalty", "impulse", "train"};
+const std::vector<std::string> kRendererNames = {"penalty", "impulse", "train", "event"};
 const std::vector<std::string> kCouplingNames = {"none", "direct", "virtual"};
 
 const char* NameOf(const std::vector<std::string>& names, int index) {
@@ -96,11 +96,13 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
               {{"restitution", &r.restitution},
                {"t_collision_s", &r.t_collision_s},
                {"frequency_hz", &r.frequency_hz}},
-              given, {"renderer", "reference_solver"}, [&r](const StrictObject& in) {
+              given, {"renderer", "reference_solver", "passivity_control"},
+              [&r](const StrictObject& in) {
                 if (auto name = in.OneOf("renderer", kRendererNames, "renderer")) {
                   r.renderer = ParseRenderer(*name);
                 }
                 in.Read("reference_solver", r.reference_solver);
+                in.Read("passivity_control", r.passivity_control);
               });
 
   DeviceParams& d = options.device;

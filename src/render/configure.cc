@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "contact/schedule.h"
+#include "io/config.h"
 #include "io/text.h"
 #include "render/limits.h"
 #include "rigidtouch/rigidtouch.h"
@@ -266,6 +267,36 @@ void Configure(Model& model) {
       throw Error(msg.str());
     }
   }
+  if (r.renderer == RendererKind::kEvent) {
+    const Material& m = r.material;
+    if (m.name.empty()) {
+      throw Error(
+          "parameter material is missing: the event renderer plays a material's transient "
+          "(--material rubber|wood|aluminium|FILE.json)");
+    }
+    RequireFinite("amplitude_Ns_per_m", m.amplitude_Ns_per_m, 0.0, kInf, ">= 0 N/(m/s)");
+    Require(std::isfinite(m.decay_per_s) && m.decay_per_s > 0.0, "decay_per_s", m.decay_per_s,
+            "> 0 1/s, finite");
+    const double nyquist_hz = 0.5 / model.timestep_s;
+    Require(std::isfinite(m.frequency_hz) && m.frequency_hz > 0.0 && m.frequency_hz < nyquist_hz,
+            "frequency_hz", m.frequency_hz,
+            "in (0, 1 / (2 h)) = (0, " + io::FormatNumber(nyquist_hz) +
+                ") Hz: a sampled transient cannot show more");
+  } else if (r.renderer == RendererKind::kTrain && !r.material.name.empty()) {
+    // a material train: its shares follow e^(-B t) (contact::TrainShare); f and t_c are the
+    // render parameters' (render::MaterialTrain derives them from the material)
+    Require(std::isfinite(r.material.decay_per_s) && r.material.decay_per_s > 0.0, "decay_per_s",
+            r.material.decay_per_s, "> 0 1/s, finite");
+    if (r.reference_solver) {
+      throw Error(
+          "parameter reference_solver = true cannot give a material train's decaying shares "
+          "(it applies Eq. 8's equal shares); drop it or the material");
+    }
+  } else if (!r.material.name.empty()) {
+    throw Error("parameter material = " + r.material.name +
+                " is used only by the event and train renderers; the " +
+                io::RendererName(r.renderer) + " renderer takes none");
+  }
   model.schedule = contact::MakeSchedule(model.timestep_s, r);
 
   const DeviceParams& d = model.device;
@@ -284,6 +315,11 @@ void Configure(Model& model) {
           "plausible_speed_mps", d.plausible_speed_mps, "> 0 m/s, finite");
   Require(std::isfinite(d.plausible_angular_speed_radps) && d.plausible_angular_speed_radps > 0.0,
           "plausible_angular_speed_radps", d.plausible_angular_speed_radps, "> 0 rad/s, finite");
+  if (r.passivity_control && d.coupling == Coupling::kNone) {
+    throw Error(
+        "parameter passivity_control = true needs a device port to observe: direct or virtual "
+        "coupling (this model has none, the offline simulation's)");
+  }
   if (d.coupling == Coupling::kDirect) {
     const std::string why = "direct coupling: the device renders the tool's contact law";
     RequireDisplayable("stiffness_N_per_m", c.stiffness_N_per_m, "max_stiffness_N_per_m",

@@ -74,6 +74,8 @@ void ResetState(const Model& model, Data& data) {
   data.tool_normal_W = Vec3::UnitZ();
   data.tool_contacts = 0;
   data.nimpulse = 0;
+  data.passivity = PassivityState{};
+  data.event = EventState{};
   if (data.workspace) {
     data.workspace->collision.Reset(model);
     data.workspace->velocity.group_solver.ForgetFactor();
@@ -109,6 +111,7 @@ TraceSample MakeTraceSample(const Model& model, const Data& data, const DeviceCo
   s.penetration_m = data.tool_penetration_m;
   s.tool_contacts = data.tool_contacts;
   s.clipped = command.clipped;
+  s.passivity_dissipated_J = data.passivity.step_dissipated_J;
   for (int k = 0; k < data.nimpulse; ++k) {
     const ImpulseEvent& e = data.impulses[k];
     if (!e.tool) continue;

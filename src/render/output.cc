@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "render/event.h"
 #include "render/workspace.h"
 
 namespace rigidtouch::render {
@@ -91,7 +92,8 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequenc
     out.penalty_force_N = data.tool_penalty_force_W;
     out.torque_Nm = tool_torque;
   }
-  out.impulsive_force_N = data.tool_impulse_W / model.timestep_s;  // Eq. 9
+  // Eq. 9, or the event renderer's open-loop transient (no impulses there)
+  out.impulsive_force_N = data.tool_impulse_W / model.timestep_s + EventTransient(model, data);
   out.force_N = out.penalty_force_N + out.impulsive_force_N;
   const double max_force_N = model.device.max_force_N;
   if (out.force_N.allFinite()) {

@@ -8,6 +8,7 @@
 #include "geometry/collision.h"
 #include "render/coupling.h"
 #include "render/output.h"
+#include "render/passivity.h"
 #include "render/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 
@@ -55,8 +56,11 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   dynamics::IntegratePositions(model, data);
   render::HoldTool(model, data, coupling);
 
-  // 8. render: penalty (or coupling) + Eq. 9, the device's force limit, the safety guards
+  // 8. render: penalty (or coupling) + Eq. 9, the device's force limit, the passivity
+  // controller, the safety guards
   DeviceCommand out = render::DeviceWrench(model, data, input.device.sequence);
+  // the passivity observer and controller at the port, over whatever the renderer asked for
+  render::PassivityControl(model, data, input.device, coupling.device_ok, out);
   render::Safeguard(model, data, coupling.device_ok, out);
 
   ++data.step;

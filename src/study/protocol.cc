@@ -93,6 +93,12 @@ Condition ParseCondition(const JsonSource& ctx, const std::string& label, const 
              "unknown renderer " + Quote(name) + "; valid renderers: " + Join(renderers));
   }
   c.renderer = io::ParseRenderer(name);
+  if (c.renderer == RendererKind::kEvent) {
+    // a condition cannot name a material yet: refused here rather than at the first tap
+    ctx.Fail(path + ".renderer",
+             "renderer \"event\" needs a material, which a protocol condition cannot name yet; "
+             "valid renderers in a protocol: penalty, impulse, train");
+  }
 
   // parameters of another renderer are errors rather than silently ignored settings
   const std::vector<std::string> valid = ConditionKeysFor(c.renderer);

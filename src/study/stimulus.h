@@ -86,7 +86,7 @@ class TextPresenter : public WallPresenter {
 /// Options for the engine-backed tap source used by `study simulate`.
 struct TapSourceOptions {
   std::string scene;   ///< MJCF scene path; empty: the engine's default tap scene
-  std::string device;  ///< device preset; empty: the engine's default
+  std::string device;  ///< a device preset or JSON device spec; empty: the engine's default
   /// Mean hand approach speed when a condition does not set one [m/s]; 0: the engine's default.
   double approach_speed_mps = 0.0;
   /// Relative standard deviation of the hand approach speed across taps; < 0: engine default.
@@ -97,7 +97,7 @@ struct TapSourceOptions {
 struct PresenterOptions {
   std::string scene;   ///< MJCF scene path; empty: the engine's default wall scene
   std::string device;  ///< "udp://HOST:PORT" (a device through the bridge) or "sim" (dry run)
-  std::string preset = "touch";  ///< device preset: its limits apply on either device
+  std::string preset = "touch";  ///< the device: a preset or a JSON device spec; its limits apply
   std::string key_file;          ///< bridge key file; empty: the per-user key
 };
 

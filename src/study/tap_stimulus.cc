@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "analysis/tap_experiment.h"
+#include "device/device_spec.h"
 #include "device/presets.h"
 #include "device/udp_device.h"
 #include "io/resources.h"
@@ -116,12 +117,12 @@ class DeviceWallPresenter final : public WallPresenter {
     // a person's session needs a real device; the simulated one only as an explicit dry run
     if (o.device != "sim" && o.device.rfind("udp://", 0) != 0) {
       throw Error(
-          "study run: --device " + (o.device.empty() ? std::string("is missing") : o.device) +
+          "study run: --connect " + (o.device.empty() ? std::string("is missing") : o.device) +
           ": a participant's session needs a device: udp://HOST:PORT (a device through the "
           "bridge), or sim for a dry run on the in-process simulated device, which no person "
           "feels (it is recorded in the log as a dry run)");
     }
-    device::FindPreset(o.preset);  // an unknown preset is an error before the session starts
+    device::ParseDeviceSpec(o.preset);  // an unknown device is an error before the session
   }
 
   void Present(const Condition& condition, int taps) override {
@@ -150,16 +151,21 @@ class DeviceWallPresenter final : public WallPresenter {
     // the preset's limits on every path, as serve applies them: the wall defaults to what the
     // device can display (its stiffness, damping k h capped at its damping), the force to its
     // limit, and the device's own announced limits tighten them further
-    const device::DeviceLimits& preset = device::FindPreset(options_.preset);
+    const device::DeviceLimits preset = device::ParseDeviceSpec(options_.preset).limits;
     const double h = 0.001;
     LoadOptions load;
     load.render = ToRenderParams(condition);
     load.device.coupling = Coupling::kDirect;
     load.timestep_s = h;
+    // a device without a stiffness or damping limit (0) keeps the contact law's default
+    if (preset.max_stiffness_N_per_m > 0.0) {
+      load.contact.stiffness_N_per_m = preset.max_stiffness_N_per_m;
+    }
     load.contact.stiffness_N_per_m =
-        condition.stiffness_N_per_m.value_or(preset.max_stiffness_N_per_m);
+        condition.stiffness_N_per_m.value_or(load.contact.stiffness_N_per_m);
+    const double kh = load.contact.stiffness_N_per_m * h;
     load.contact.damping_Ns_per_m = condition.damping_Ns_per_m.value_or(
-        std::min(load.contact.stiffness_N_per_m * h, preset.max_damping_Ns_per_m));
+        preset.max_damping_Ns_per_m > 0.0 ? std::min(kh, preset.max_damping_Ns_per_m) : kh);
     device::TightenDeviceParams(load.device, preset);
     const std::string scene = condition.scene          ? *condition.scene
                               : options_.scene.empty() ? io::ShippedFile("scenes/wall.xml")

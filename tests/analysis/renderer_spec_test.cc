@@ -45,12 +45,27 @@ TEST(RendererSpecTest, TheWallsSetIsPenaltyAndTheThreeWalls) {
 TEST(RendererSpecTest, BadListsAreRefusedWithTheReason) {
   EXPECT_NE(ErrorOf("penalty,springy").find("unknown renderer 'springy'"), std::string::npos);
   EXPECT_NE(ErrorOf("penalty,springy").find("penalty, impulse, train"), std::string::npos);
-  EXPECT_NE(ErrorOf("train:wood").find("unknown material 'wood'"), std::string::npos);
+  EXPECT_NE(ErrorOf("train:balsa").find("unknown material 'balsa'"), std::string::npos);
+  EXPECT_NE(ErrorOf("penalty:wood").find("a material goes with event or train"), std::string::npos);
   EXPECT_NE(ErrorOf("wall3").find("unknown renderer"), std::string::npos);
   EXPECT_NE(ErrorOf("").find("empty"), std::string::npos);
   EXPECT_NE(ErrorOf("penalty,,train").find("empty entry"), std::string::npos);
   EXPECT_NE(ErrorOf("train,train").find("given twice"), std::string::npos);
   EXPECT_EQ(ErrorOf("penalty,impulse,train,wall0,wall1,wall2"), "");
+  EXPECT_EQ(ErrorOf("event:wood,train:wood,event:rubber"), "");
+}
+
+TEST(RendererSpecTest, AMaterialSetsTheEventTransientOrTheMaterialTrain) {
+  const RendererSpec event = ParseRendererSpec("event:wood");
+  EXPECT_EQ(event.renderer, RendererKind::kEvent);
+  ASSERT_TRUE(event.material.has_value());
+  EXPECT_EQ(event.material->name, "wood");
+  EXPECT_EQ(event.name, "event:wood");
+  const RendererSpec train = ParseRendererSpec("train:aluminium");
+  EXPECT_EQ(train.renderer, RendererKind::kTrain);
+  ASSERT_TRUE(train.material.has_value());
+  EXPECT_EQ(train.material->name, "aluminium");
+  EXPECT_FALSE(ParseRendererSpec("train").material.has_value());
 }
 
 }  // namespace

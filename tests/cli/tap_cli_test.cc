@@ -78,9 +78,9 @@ TEST(TapCliTest, CompareRunsAnySetOfRenderers) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("rigidtouch: error: unknown renderer 'springy'"), std::string::npos)
       << r.err;
-  r = RunCli("tap --compare penalty,train:wood --out-dir " + (dir / "bad").string());
+  r = RunCli("tap --compare penalty,train:balsa --out-dir " + (dir / "bad").string());
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("unknown material 'wood'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unknown material 'balsa'"), std::string::npos) << r.err;
   r = RunCli("tap --compare penalty --compare-walls --out-dir " + (dir / "bad").string());
   EXPECT_EQ(r.exit_code, 2);
   // a wall fixes f: a frequency the user wrote is refused, not dropped

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 namespace rigidtouch::contact {
@@ -82,6 +83,35 @@ TEST(ScheduleTest, SingleImpulseAndPenaltyAreSpecialCases) {
   WindowState never;
   int i = 0, rem = 0;
   EXPECT_FALSE(ImpulseDue(s, never, 0, &i, &rem));
+}
+
+// Eq. 8's equal shares without a material; with one, at a constant approach velocity the
+// impulses follow the envelope: p_j / p_0 = r^j, r = e^(-B n_i h), and the last share is 1
+TEST(ScheduleTest, MaterialTrainSharesFollowTheEnvelope) {
+  RenderParams r;
+  r.renderer = RendererKind::kTrain;
+  r.frequency_hz = 100.0;
+  r.t_collision_s = 0.05;
+  const double h = 1e-3;
+  const Schedule s = MakeSchedule(h, r);
+  ASSERT_EQ(s.impulses, 5);
+  for (int remaining = 1; remaining <= 5; ++remaining) {
+    EXPECT_DOUBLE_EQ(TrainShare(s, r, h, remaining), 1.0 / remaining);
+  }
+  r.material = {"wood", 15.0, 60.0, 100.0};
+  const double ratio = std::exp(-60.0 * 10 * h);
+  double left = 1.0, first = 0.0;
+  for (int j = 0; j < s.impulses; ++j) {
+    const double share = TrainShare(s, r, h, s.impulses - j);
+    ASSERT_GT(share, 0.0);
+    ASSERT_LE(share, 1.0);
+    const double p = share * left;
+    if (j == 0) first = p;
+    EXPECT_NEAR(p / first, std::pow(ratio, j), 1e-12) << "impulse " << j;
+    left -= p;
+  }
+  EXPECT_NEAR(left, 0.0, 1e-15);  // the last one stops the approach
+  EXPECT_EQ(TrainShare(s, r, h, 1), 1.0);
 }
 
 }  // namespace

@@ -12,12 +12,13 @@ namespace {
 TEST(PresetsTest, TableHoldsChai3dValues) {
   // exact values from CHAI3D 3.x device classes (see presets.cc)
   const auto presets = Presets();
-  ASSERT_EQ(presets.size(), 5u);
+  ASSERT_EQ(presets.size(), 6u);
   EXPECT_EQ(presets[0].name, "touch");
   EXPECT_EQ(presets[1].name, "omni");
   EXPECT_EQ(presets[2].name, "falcon");
   EXPECT_EQ(presets[3].name, "omega3");
   EXPECT_EQ(presets[4].name, "generic");
+  EXPECT_EQ(presets[5].name, "ideal");
 
   const DeviceLimits& touch = FindPreset("touch");
   EXPECT_DOUBLE_EQ(touch.max_force_N, 3.3);
@@ -54,7 +55,8 @@ TEST(PresetsTest, UnknownPresetListsValidNames) {
   } catch (const Error& e) {
     const std::string message = e.what();
     EXPECT_NE(message.find("'phantom'"), std::string::npos) << message;
-    EXPECT_NE(message.find("touch, omni, falcon, omega3, generic"), std::string::npos) << message;
+    EXPECT_NE(message.find("touch, omni, falcon, omega3, generic, ideal"), std::string::npos)
+        << message;
   }
   // lookup is exact: no case folding
   EXPECT_THROW(FindPreset("Touch"), Error);

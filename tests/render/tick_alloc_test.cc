@@ -2,6 +2,7 @@
 // executable (limit_malloc.h) and counted while a 100-box pile runs 10,000 ticks.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 
 #include "limit_malloc.h"
@@ -85,6 +86,48 @@ TEST(TickAllocTest, ReferenceSolverOnANonFiniteStateWarnsWithoutAllocatingOrThro
   EXPECT_TRUE(out.safe_fallback);
   EXPECT_EQ(out.force_N, Vec3::Zero());
   EXPECT_EQ(d.nimpulse, 0);
+}
+
+}  // namespace
+}  // namespace rigidtouch
+
+namespace rigidtouch {
+namespace {
+
+// the event renderer's transient and the passivity controller run in the render stage: a
+// directly coupled tool driven into the wall and out again, tick by tick, allocates nothing
+TEST(TickAllocTest, EventTransientAndPassivityControlAllocateNothing) {
+  if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
+  LoadOptions o;
+  o.render.renderer = RendererKind::kEvent;
+  o.render.material = {"test", 20.0, 60.0, 100.0};
+  o.render.passivity_control = true;
+  o.device.coupling = Coupling::kDirect;
+  o.device.position_resolution_m = 1e-5;
+  Model m = LoadModel(test::TestScene("sphere_plane.xml"), o);
+  Data d = MakeData(m);
+  TickInput in;
+  const Vec3 start = m.initial[m.tool].x_W;
+  const auto drive = [&](int s) {
+    // down at 0.2 m/s for 0.2 s, then back up
+    const double v = s < 200 ? -0.2 : 0.2;
+    in.device.sequence = static_cast<std::uint64_t>(s + 1);
+    in.device.velocity_mps = Vec3(0.0, 0.0, v);
+    in.device.position_m =
+        start + Vec3(0.0, 0.0, -0.2 * 1e-3 * std::min(s, 200) + 0.2 * 1e-3 * std::max(0, s - 200));
+    return Tick(m, d, in);
+  };
+  drive(0);  // warm-up
+  double peak_transient = 0.0, dissipated = 0.0;
+  test::LimitMalloc guard;
+  for (int s = 1; s < 400; ++s) {
+    const DeviceCommand out = drive(s);
+    peak_transient = std::max(peak_transient, out.impulsive_force_N.norm());
+    dissipated = d.passivity.dissipated_J;
+  }
+  EXPECT_EQ(guard.allocations(), 0);
+  EXPECT_GT(peak_transient, 0.0);  // the transient ran
+  EXPECT_GE(dissipated, 0.0);
 }
 
 }  // namespace

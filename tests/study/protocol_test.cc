@@ -116,6 +116,15 @@ TEST(ProtocolTest, Fnv1a64TestVectors) {
   EXPECT_EQ(Fnv1a64("foobar"), 0x85944171f73967e8ULL);
 }
 
+// the event renderer needs a material a condition cannot name: refused when the protocol loads
+TEST(ProtocolTest, EventRendererIsRefusedWithTheReason) {
+  json d = Minimal();
+  d["conditions"]["b"] = {{"renderer", "event"}};
+  const std::string e = ErrorOf(d);
+  EXPECT_NE(e.find("conditions[\"b\"].renderer"), std::string::npos) << e;
+  EXPECT_NE(e.find("needs a material"), std::string::npos) << e;
+}
+
 TEST(ProtocolTest, UnknownRendererListsTheValidOnes) {
   json d = Minimal();
   d["conditions"]["b"]["renderer"] = "trian";

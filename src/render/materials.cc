@@ -1,0 +1,80 @@
+#include "render/materials.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+
+#include "io/strict_json.h"
+#include "io/text.h"
+#include "render/limits.h"
+
+namespace rigidtouch::render {
+namespace {
+
+// assumptions (docs/renderers.md): f rises and the decay quickens from rubber to wood to
+// aluminium, as in the decaying-sinusoid fits of Okamura et al. 2001; A gives a transient of a
+// few newtons at a 0.2 m/s tap
+const std::array<Material, 3>& Table() {
+  static const std::array<Material, 3> table = {{
+      {"rubber", 10.0, 40.0, 30.0},
+      {"wood", 15.0, 60.0, 100.0},
+      {"aluminium", 25.0, 90.0, 300.0},
+  }};
+  return table;
+}
+
+double Required(const io::StrictObject& o, const std::string& key, double lo, double hi,
+                const std::string& unit) {
+  const std::optional<double> value = o.Number(key);
+  if (!value) o.FailAt(key, "missing; a material gives amplitude, decay and frequency");
+  if (!(*value >= lo && *value <= hi)) {
+    o.FailAt(key, io::FormatNumber(*value) + " is out of range: valid " + io::FormatNumber(lo) +
+                      " to " + io::FormatNumber(hi) + " " + unit);
+  }
+  return *value;
+}
+
+}  // namespace
+
+std::span<const Material> MaterialPresets() {
+  return Table();
+}
+
+Material ReadMaterial(const std::string& path) {
+  const nlohmann::json doc = io::ReadJsonFile(path, "material");
+  const io::JsonSource source(path);
+  const io::StrictObject o(
+      source, doc, "", {"name", "amplitude_Ns_per_m", "decay_per_s", "frequency_hz"}, "a material");
+  Material m;
+  m.name = o.String("name").value_or(std::filesystem::path(path).stem().string());
+  if (m.name.empty()) o.FailAt("name", "must not be empty");
+  m.amplitude_Ns_per_m = Required(o, "amplitude_Ns_per_m", 0.0, 1e4, "N/(m/s)");
+  m.decay_per_s = Required(o, "decay_per_s", 1e-3, 1e5, "1/s");
+  // the frequency's upper bound depends on the time step (Nyquist): Configure checks it
+  m.frequency_hz = Required(o, "frequency_hz", 1e-3, 1e5, "Hz");
+  return m;
+}
+
+Material ParseMaterial(std::string_view text) {
+  for (const Material& m : Table()) {
+    if (m.name == text) return m;
+  }
+  if (text.size() >= 5 && text.substr(text.size() - 5) == ".json") {
+    return ReadMaterial(std::string(text));
+  }
+  std::string names;
+  for (const Material& m : Table()) names += m.name + ", ";
+  throw Error("unknown material '" + std::string(text) + "'; valid materials: the presets " +
+              names + "or a JSON material FILE.json (docs/renderers.md)");
+}
+
+MaterialTrainParams MaterialTrain(const Material& material) {
+  MaterialTrainParams p;
+  p.frequency_hz = material.frequency_hz;
+  const double window_s = std::log(20.0) / material.decay_per_s;
+  p.t_collision_s = std::max(std::min(window_s, kMaxCollisionWindow_s), 1.0 / p.frequency_hz);
+  return p;
+}
+
+}  // namespace rigidtouch::render

@@ -1,0 +1,36 @@
+// Materials for the event renderer's contact transient (Material in rigidtouch/model.h): presets
+// and JSON files, read by one function for every subcommand that takes --material.
+#pragma once
+
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "rigidtouch/model.h"
+
+namespace rigidtouch::render {
+
+/// The presets, in a fixed order: rubber, wood, aluminium. Their A, B and f are assumptions in
+/// the range of the decaying-sinusoid fits of Okamura, Cutkosky and Dennerlein 2001 (the
+/// published tables could not be consulted; docs/renderers.md says so).
+std::span<const Material> MaterialPresets();
+
+/// Reads a JSON material: {"name": optional (default the file's stem), "amplitude_Ns_per_m",
+/// "decay_per_s", "frequency_hz"}, all three required. Throws Error "FILE: FIELD: ..." naming
+/// the field.
+Material ReadMaterial(const std::string& path);
+
+/// `text` is a preset name or a path ending in ".json". Anything else is an Error listing the
+/// presets and the file form.
+Material ParseMaterial(std::string_view text);
+
+/// A passive material train's frequency and window (docs/renderers.md): f the material's, the
+/// window three decay time constants (the envelope at 5 %, ln 20 / B), at most the method's
+/// 100 ms and at least one period 1 / f.
+struct MaterialTrainParams {
+  double frequency_hz = 0.0;
+  double t_collision_s = 0.0;
+};
+MaterialTrainParams MaterialTrain(const Material& material);
+
+}  // namespace rigidtouch::render
