@@ -12,6 +12,7 @@
 
 #include "analysis/tap_experiment.h"
 #include "command.h"
+#include "device/device_spec.h"
 #include "device/mouse_device.h"
 #include "device/presets.h"
 #include "device/replay_device.h"
@@ -251,9 +252,7 @@ void Run(const ViewFlags& f) {
   result["ticks"] = ticks;
   result["renderer_switches"] = vr.renderer_switches;
   result["renderer_switch_wait_frames"] = vr.switch_wait_frames;
-  result["renderer"] = model.render.renderer == RendererKind::kPenalty   ? "penalty"
-                       : model.render.renderer == RendererKind::kImpulse ? "impulse"
-                                                                         : "train";
+  result["renderer"] = io::RendererName(model.render.renderer);
   result["frames"] = vr.frames;
   result["display_rate_hz"] = vr.elapsed_s > 0.0 ? vr.frames / vr.elapsed_s : 0.0;
   result["impulses"] = impulses;
@@ -291,9 +290,14 @@ void Register(CLI::App& root) {
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
   app->add_option("--device", f->device,
                   "mouse (drag the tool; wheel: depth; T: tap), sim (the simulated hand's taps), "
-                  "udp://HOST:PORT (the device bridge) or replay:LOG (a --record file)")
+                  "udp://HOST:PORT (the device bridge), replay:LOG (a --record file), or a "
+                  "device (" +
+                      device::DeviceSpecHelp() +
+                      ": the simulated hand's taps on that device, as sim with --preset)")
       ->capture_default_str();
-  app->add_option("--preset", f->preset, "device preset: its limits and the simulated device")
+  app->add_option("--preset", f->preset,
+                  "the device (" + device::DeviceSpecHelp() +
+                      "): its limits and the simulated device's model")
       ->capture_default_str();
   AddRateFlag(app, f->rate_hz, "haptic loop rate [Hz]");
   app->add_option("--taps", f->taps, "taps of the simulated hand (sim)")->capture_default_str();
@@ -330,6 +334,16 @@ void Register(CLI::App& root) {
   app->add_flag("--json", f->json, "print one JSON object at the end");
   app->callback([f, app] {
     f->rate_given = app->count("--rate") > 0;
+    if (f->device != "mouse" && !IsConnection(f->device)) {
+      // a device spec (a preset name or FILE.json): the simulated hand taps on that device
+      if (app->count("--preset") > 0) {
+        throw Error("view: --device " + f->device + " and --preset " + f->preset +
+                    " both name the device; give one");
+      }
+      device::ParseDeviceSpec(f->device);  // a bad spec names its field before anything runs
+      f->preset = f->device;
+      f->device = "sim";
+    }
     if (f->device != "sim" && (app->count("--taps") + app->count("--speed")) > 0) {
       throw Error("view: --taps and --speed script the simulated hand (--device sim)");
     }

@@ -1,4 +1,5 @@
 #include "view/viewer.h"
+#include "io/config.h"
 
 #define GLFW_INCLUDE_NONE
 #include <GL/gl.h>
@@ -199,18 +200,6 @@ void Plot(const char* label, const std::vector<float>& v, ImU32 color, float max
   ImGui::PlotLines(label, v.data(), static_cast<int>(v.size()), 0, text, 0.0f, max,
                    ImVec2(360.0f, 70.0f));
   ImGui::PopStyleColor();
-}
-
-const char* RendererName(RendererKind k) {
-  switch (k) {
-    case RendererKind::kPenalty:
-      return "penalty";
-    case RendererKind::kImpulse:
-      return "impulse";
-    case RendererKind::kTrain:
-      return "train";
-  }
-  return "?";
 }
 
 void WritePng(const std::string& path, int w, int h) {
@@ -438,16 +427,16 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
     ImGui::SetNextWindowSize(ImVec2(470, 0), ImGuiCond_Always);
     ImGui::Begin("rigidtouch", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
     ImGui::Text("device %s", o.device.c_str());
-    ImGui::Text("renderer %s  e %.2f  t_c %.0f ms  f %.0f Hz", RendererName(model.render.renderer),
-                model.render.restitution, 1e3 * model.render.t_collision_s,
-                model.render.frequency_hz);
+    ImGui::Text("renderer %s  e %.2f  t_c %.0f ms  f %.0f Hz",
+                io::RendererName(model.render.renderer), model.render.restitution,
+                1e3 * model.render.t_collision_s, model.render.frequency_hz);
     if (switch_renderer) {
       const bool contact = snap.sample.tool_contacts > 0;
       ImGui::Text(contact ? "switch (after the contact)" : "switch to");
       for (const RendererKind k :
            {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
         ImGui::SameLine();
-        if (ImGui::RadioButton(RendererName(k), model.render.renderer == k)) {
+        if (ImGui::RadioButton(io::RendererName(k), model.render.renderer == k)) {
           pending = true;
           pending_kind = k;
         }
