@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <iosfwd>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "study/protocol.h"
@@ -24,6 +25,18 @@ inline constexpr std::array<double, kPerceptBands - 1> kPerceptBandEdges_hz = {4
 /// below this has no pitch: one pulse gives about 1 (a flat spectrum), two equal pulses 2, N
 /// equal evenly spaced pulses about N. A pitch needs the period repeated (docs/study.md).
 inline constexpr double kPitchPeakToMean = 2.0;
+
+/// Pitch of a transient force (TapPercept::dominant_frequency_hz and periodicity).
+struct TransientPitch {
+  double pitch_hz = 0.0;     ///< repetition rate [Hz]; 0: no pitch
+  double periodicity = 0.0;  ///< normalised autocorrelation at the period, in [0, 1]; 0: none
+};
+
+/// Pitch of the transient `x` sampled every `h_s` seconds whose spectral peak-to-mean power is
+/// `peak_to_mean`: none unless peak_to_mean > kPitchPeakToMean; otherwise the period is the lag
+/// between 2.5 and 25 ms (40-400 Hz) where the biased autocorrelation sum_k x[k] x[k + L] /
+/// sum_k x[k]^2 is highest (the shortest on ties), and none if that is not positive.
+TransientPitch PitchOfTransient(std::span<const double> x, double h_s, double peak_to_mean);
 
 /// What the hand felt during one tap, summarised from the force the device applied to the hand
 /// (normal component, world frame) from contact onset to the end of the collision window (at

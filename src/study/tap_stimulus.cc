@@ -43,14 +43,8 @@ analysis::TapExperimentConfig TapConfig(const Condition& c, const std::string& s
 
 // The transient part of the normal force over the collision window: displayed minus penalty,
 // i.e. what the impulses add after the device limit (as TapMetrics' transient spectrum).
-struct Transient {
-  double rms_N = 0.0;        // RMS, mean removed
-  double pitch_hz = 0.0;     // repetition rate at the autocorrelation's highest peak
-  double periodicity = 0.0;  // normalised autocorrelation there
-};
-
-Transient AnalyseTransient(const std::vector<TraceSample>& trace, double onset_s, double window_s) {
-  Transient t;
+std::vector<double> TransientForce(const std::vector<TraceSample>& trace, double onset_s,
+                                   double window_s) {
   std::vector<double> x;
   Vec3 n = Vec3::Zero();
   for (const TraceSample& s : trace) {
@@ -58,35 +52,17 @@ Transient AnalyseTransient(const std::vector<TraceSample>& trace, double onset_s
     if (x.empty()) n = s.wall_normal;
     x.push_back((s.device_force_N - s.penalty_force_N).dot(n));
   }
-  if (x.size() < 3 || trace.size() < 2) return t;
+  return x;
+}
+
+// RMS with the mean removed: the vibration on top of the press
+double AcRms(const std::vector<double>& x) {
+  if (x.empty()) return 0.0;
   double mean = 0.0;
   for (double v : x) mean += v / static_cast<double>(x.size());
   double power = 0.0;
-  double energy = 0.0;  // sum of squares without removing the mean: the autocorrelation's norm
-  for (double v : x) {
-    power += (v - mean) * (v - mean) / static_cast<double>(x.size());
-    energy += v * v;
-  }
-  t.rms_N = std::sqrt(power);
-  if (!(energy > 0.0)) return t;
-  // perceived vibrotactile frequency follows the interval between pulses (Birznieks & Vickery
-  // 2017), not the largest spectral bin (a comb of one-tick pulses has equal harmonics): the
-  // lag of the highest (biased) autocorrelation between 2.5 ms and 25 ms, i.e. 40-400 Hz, the
-  // band edges the spectra use; the biased estimate favours the shortest period over multiples
-  const double h = trace[1].time_s - trace[0].time_s;
-  const int lo = std::max(1, static_cast<int>(std::ceil(0.0025 / h - 1e-9)));
-  const int hi =
-      std::min(static_cast<int>(x.size()) - 1, static_cast<int>(std::floor(0.025 / h + 1e-9)));
-  for (int lag = lo; lag <= hi; ++lag) {
-    double r = 0.0;
-    for (std::size_t k = 0; k + lag < x.size(); ++k) r += x[k] * x[k + lag];
-    r /= energy;
-    if (r > t.periodicity) {
-      t.periodicity = r;
-      t.pitch_hz = 1.0 / (lag * h);
-    }
-  }
-  return t;
+  for (double v : x) power += (v - mean) * (v - mean) / static_cast<double>(x.size());
+  return std::sqrt(power);
 }
 
 class TapStimulusSource final : public StimulusSource {
@@ -109,8 +85,8 @@ class TapStimulusSource final : public StimulusSource {
     p.rate_hardness_N_per_m = m.rate_hardness_N_per_m;
     // the vibration is what the impulses add (the press is the onset cue): its band fractions
     // and its magnitude; a pitch only where the transient is periodic (a click's spectrum is flat)
-    const Transient transient = AnalyseTransient(run.trace, m.contact_onset_time_s, 0.1);
-    p.vibration_rms_N = transient.rms_N;
+    const std::vector<double> x = TransientForce(run.trace, m.contact_onset_time_s, 0.1);
+    p.vibration_rms_N = AcRms(x);
     if (p.vibration_rms_N > 0.0) {
       for (int b = 0; b < kPerceptBands; ++b) {
         const double f = m.transient_band_energy_fraction[b];
@@ -119,9 +95,11 @@ class TapStimulusSource final : public StimulusSource {
     }
     p.transient_peak_to_mean =
         std::isfinite(m.transient_peak_to_mean) ? m.transient_peak_to_mean : 0.0;
-    if (p.transient_peak_to_mean > kPitchPeakToMean && transient.periodicity > 0.0) {
-      p.dominant_frequency_hz = transient.pitch_hz;
-      p.periodicity = transient.periodicity;
+    if (run.trace.size() >= 2) {
+      const TransientPitch pitch =
+          PitchOfTransient(x, run.trace[1].time_s - run.trace[0].time_s, p.transient_peak_to_mean);
+      p.dominant_frequency_hz = pitch.pitch_hz;
+      p.periodicity = pitch.periodicity;
     }
     p.approach_speed_mps = m.approach_speed_mps;
     return p;
@@ -216,6 +194,31 @@ class DeviceWallPresenter final : public WallPresenter {
 };
 
 }  // namespace
+
+TransientPitch PitchOfTransient(std::span<const double> x, double h_s, double peak_to_mean) {
+  TransientPitch t;
+  // a click's spectrum is flat (peak over mean about 1): no pitch
+  if (!(peak_to_mean > kPitchPeakToMean) || !(h_s > 0.0) || x.size() < 3) return t;
+  double energy = 0.0;
+  for (double v : x) energy += v * v;
+  if (!(energy > 0.0)) return t;
+  // perceived vibrotactile frequency of pulses follows the interval between them (Birznieks &
+  // Vickery 2017), not the largest spectral bin (a comb of one-tick pulses has equal harmonics);
+  // the biased estimate favours the period over its multiples
+  const int lo = std::max(1, static_cast<int>(std::ceil(0.0025 / h_s - 1e-9)));
+  const int hi =
+      std::min(static_cast<int>(x.size()) - 1, static_cast<int>(std::floor(0.025 / h_s + 1e-9)));
+  for (int lag = lo; lag <= hi; ++lag) {
+    double r = 0.0;
+    for (std::size_t k = 0; k + lag < x.size(); ++k) r += x[k] * x[k + lag];
+    r /= energy;
+    if (r > t.periodicity) {
+      t.periodicity = std::min(r, 1.0);
+      t.pitch_hz = 1.0 / (lag * h_s);
+    }
+  }
+  return t;
+}
 
 std::unique_ptr<StimulusSource> MakeTapStimulusSource(const TapSourceOptions& options) {
   return std::make_unique<TapStimulusSource>(options);
