@@ -205,16 +205,19 @@ TransientPitch PitchOfTransient(std::span<const double> x, double h_s, double pe
   // perceived vibrotactile frequency of pulses follows the interval between them (Birznieks &
   // Vickery 2017), not the largest spectral bin (a comb of one-tick pulses has equal harmonics);
   // the biased estimate favours the period over its multiples
-  const int lo = std::max(1, static_cast<int>(std::ceil(0.0025 / h_s - 1e-9)));
-  const int hi =
-      std::min(static_cast<int>(x.size()) - 1, static_cast<int>(std::floor(0.025 / h_s + 1e-9)));
-  for (int lag = lo; lag <= hi; ++lag) {
+  // lags bounded in double before the conversion (any h_s > 0 stays in range)
+  const double lo_lag = std::max(1.0, std::ceil(0.0025 / h_s - 1e-9));
+  const double hi_lag = std::min(static_cast<double>(x.size() - 1), std::floor(0.025 / h_s + 1e-9));
+  if (lo_lag > hi_lag) return t;
+  const auto lo = static_cast<std::size_t>(lo_lag);
+  const auto hi = static_cast<std::size_t>(hi_lag);
+  for (std::size_t lag = lo; lag <= hi; ++lag) {
     double r = 0.0;
     for (std::size_t k = 0; k + lag < x.size(); ++k) r += x[k] * x[k + lag];
     r /= energy;
     if (r > t.periodicity) {
       t.periodicity = std::min(r, 1.0);
-      t.pitch_hz = 1.0 / (lag * h_s);
+      t.pitch_hz = 1.0 / (static_cast<double>(lag) * h_s);
     }
   }
   return t;

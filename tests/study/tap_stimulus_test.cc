@@ -77,6 +77,12 @@ TEST(TapStimulusTest, PitchOfTransientClosedForms) {
   // nothing to analyse
   EXPECT_EQ(PitchOfTransient(std::vector<double>(100, 0.0), h, 3.0).pitch_hz, 0.0);
   EXPECT_EQ(PitchOfTransient(Pulses(3, 20), 0.0, 3.0).pitch_hz, 0.0);
+  // sampled far finer or coarser than the pitch range: no lag of the window is in it
+  // (a constant correlates at every lag, so only the range keeps these at none)
+  const std::vector<double> constant(100, 1.0);
+  EXPECT_GT(PitchOfTransient(constant, h, 3.0).pitch_hz, 0.0);
+  EXPECT_EQ(PitchOfTransient(constant, 1e-15, 3.0).pitch_hz, 0.0);
+  EXPECT_EQ(PitchOfTransient(constant, 1.0, 3.0).pitch_hz, 0.0);
 }
 
 // the percept's vibration is the transient part (what the impulses add) and its pitch the
