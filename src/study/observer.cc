@@ -149,6 +149,9 @@ PerceptVector ToPerceptVector(const ObserverParams& p, const TapPercept& percept
       ok(percept.peak_force_N) && ok(percept.vibration_rms_N) && ok(percept.dominant_frequency_hz),
       "stimulus source returned a tap percept with a negative or non-finite force or "
       "frequency");
+  Require(std::isfinite(percept.periodicity) && percept.periodicity >= 0.0 &&
+              percept.periodicity <= 1.0,
+          "stimulus source returned a tap percept with a periodicity outside [0, 1]");
   double fraction_sum = 0.0;
   for (double f : percept.band_energy_fraction) {
     Require(ok(f), "stimulus source returned a negative or non-finite band energy fraction");
@@ -179,10 +182,14 @@ PerceptVector ToPerceptVector(const ObserverParams& p, const TapPercept& percept
   v[1] = sl_p_dB / p.intensity_jnd_dB;
   v[2] = sl_np_dB / p.intensity_jnd_dB;
 
+  // a pitch only where the transient is periodic; a click has none (its spectrum is flat) and
+  // sits at the pitch axis's origin with no periodicity: not at 250 Hz, not at the press's
+  // frequency
   if (percept.dominant_frequency_hz > 0.0) {
     const double salience = std::clamp(std::max(sl_p_dB, sl_np_dB) / p.pitch_salience_dB, 0.0, 1.0);
-    v[3] = salience * std::log(percept.dominant_frequency_hz / p.pacinian_best_frequency_hz) /
+    v[3] = salience * std::log(percept.dominant_frequency_hz / kPitchAxisOrigin_hz) /
            std::log1p(p.frequency_weber_fraction);
+    v[4] = salience * percept.periodicity * p.pitch_salience_dB / p.intensity_jnd_dB;
   }
   return v;
 }

@@ -1,12 +1,13 @@
 // Simulated participants: a perceptual observer that hears nothing and sees nothing, and decides
 // from the force its hand feels (TapPercept). docs/study.md gives every parameter with its source.
 //
-// Each tap is mapped to a point in a 4-dimensional perceptual space whose unit on every axis is
+// Each tap is mapped to a point in a 5-dimensional perceptual space whose unit on every axis is
 // one just-noticeable difference (JND):
-//   onset     20 log10(peak force / 1 N) / intensity JND
-//   P level   sensation level of the Pacinian channel (dB above threshold) / intensity JND
-//   NP level  sensation level of the non-Pacinian (NP I) channel / intensity JND
-//   pitch     salience * ln(dominant frequency / P best frequency) / ln(1 + Weber fraction)
+//   onset        20 log10(peak force / 1 N) / intensity JND
+//   P level      sensation level of the Pacinian channel (dB above threshold) / intensity JND
+//   NP level     sensation level of the non-Pacinian (NP I) channel / intensity JND
+//   pitch        salience * ln(pitch / kPitchAxisOrigin_hz) / ln(1 + Weber fraction); 0 without
+//   periodicity  salience * periodicity * pitch_salience_dB / intensity JND; 0 without pitch
 // Internal noise adds an independent unit normal to every axis of every tap. Each participant has
 // its own JND scale and detection threshold. The observer keeps a memory template of each wall
 // from the familiarization taps (averaged, plus encoding noise, plus a random-walk drift per
@@ -71,7 +72,12 @@ ObserverParams ParseObserverParams(const nlohmann::json& document, std::string_v
 ObserverParams LoadObserverParams(const std::string& path);
 
 /// Number of axes of the perceptual space.
-inline constexpr int kPerceptDimensions = 4;
+inline constexpr int kPerceptDimensions = 5;
+
+/// A tap without pitch (a click, or no vibration) sits here on the pitch axis: the geometric
+/// centre of the 40-400 Hz range in which the source reports a pitch, so a click is not placed
+/// at any end of the range (it is told from a pitched train by the periodicity axis) [Hz].
+inline constexpr double kPitchAxisOrigin_hz = 126.49110640673518;  // sqrt(40 * 400)
 
 /// A point in the perceptual space, in JND units of the nominal observer.
 using PerceptVector = std::array<double, kPerceptDimensions>;

@@ -200,12 +200,16 @@ std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSo
       }
       for (std::size_t t = 0; t < tests; ++t) {
         const double percent = 100.0 * correct[t] / answered[t];
-        cohort_pc[t] += percent / config.participants;
-        cohort_90[t] += (percent >= 90.0 ? 1.0 : 0.0) / config.participants;
-        cohort_50[t] += (percent <= 50.0 ? 1.0 : 0.0) / config.participants;
+        // sums first, divided once: 9 x (1 / 9) is not exactly 1
+        cohort_pc[t] += percent;
+        cohort_90[t] += percent >= 90.0 ? 1.0 : 0.0;
+        cohort_50[t] += percent <= 50.0 ? 1.0 : 0.0;
       }
     }
     for (std::size_t t = 0; t < tests; ++t) {
+      cohort_pc[t] /= config.participants;
+      cohort_90[t] /= config.participants;
+      cohort_50[t] /= config.participants;
       pc[t].push_back(cohort_pc[t]);
       at_90[t].push_back(cohort_90[t]);
       at_50[t].push_back(cohort_50[t]);

@@ -42,35 +42,28 @@ analysis::TapExperimentConfig TapConfig(const Condition& c, const std::string& s
   return config;
 }
 
-// RMS of the force minus its low-pass part (a centred 50 ms moving average, whose first null is
-// at 20 Hz): the vibratory transient the skin senses, over the collision window
-double VibrationRms(const std::vector<TraceSample>& trace, double onset_s, double window_s) {
-  std::vector<double> f;
-  std::size_t first = trace.size();
-  for (std::size_t k = 0; k < trace.size(); ++k) {
-    if (trace[k].time_s >= onset_s && first == trace.size()) first = k;
-    if (trace[k].time_s >= onset_s && trace[k].time_s < onset_s + window_s) {
-      f.push_back(trace[k].device_force_N.dot(trace[k].wall_normal));
-    }
+// The transient part of the normal force over the collision window: displayed minus penalty,
+// i.e. what the impulses add after the device limit (as TapMetrics' transient spectrum).
+std::vector<double> TransientForce(const std::vector<TraceSample>& trace, double onset_s,
+                                   double window_s) {
+  std::vector<double> x;
+  Vec3 n = Vec3::Zero();
+  for (const TraceSample& s : trace) {
+    if (s.time_s < onset_s || s.time_s >= onset_s + window_s) continue;
+    if (x.empty()) n = s.wall_normal;
+    x.push_back((s.device_force_N - s.penalty_force_N).dot(n));
   }
-  if (f.size() < 3 || trace.size() < 2) return 0.0;
-  const double h = trace[1].time_s - trace[0].time_s;
-  const int half = std::max(1, static_cast<int>(std::lround(0.025 / h)));
-  double sum2 = 0.0;
-  for (int i = 0; i < static_cast<int>(f.size()); ++i) {
-    double mean = 0.0;
-    int n = 0;
-    for (int j = i - half; j <= i + half; ++j) {
-      // outside the window the force is what the trace says (zero before contact)
-      const long k = static_cast<long>(first) + j;
-      if (k < 0 || k >= static_cast<long>(trace.size())) continue;
-      mean += trace[k].device_force_N.dot(trace[k].wall_normal);
-      ++n;
-    }
-    mean /= n;
-    sum2 += (f[i] - mean) * (f[i] - mean);
-  }
-  return std::sqrt(sum2 / f.size());
+  return x;
+}
+
+// RMS with the mean removed: the vibration on top of the press
+double AcRms(const std::vector<double>& x) {
+  if (x.empty()) return 0.0;
+  double mean = 0.0;
+  for (double v : x) mean += v / static_cast<double>(x.size());
+  double power = 0.0;
+  for (double v : x) power += (v - mean) * (v - mean) / static_cast<double>(x.size());
+  return std::sqrt(power);
 }
 
 class TapStimulusSource final : public StimulusSource {
@@ -91,9 +84,24 @@ class TapStimulusSource final : public StimulusSource {
     const analysis::TapMetrics& m = run.taps.front();
     p.peak_force_N = m.peak_force_N;
     p.rate_hardness_N_per_m = m.rate_hardness_N_per_m;
-    p.dominant_frequency_hz = m.dominant_frequency_hz;
-    for (int b = 0; b < kPerceptBands; ++b) p.band_energy_fraction[b] = m.band_energy_fraction[b];
-    p.vibration_rms_N = VibrationRms(run.trace, m.contact_onset_time_s, 0.1);
+    // the vibration is what the impulses add (the press is the onset cue): its band fractions
+    // and its magnitude; a pitch only where the transient is periodic (a click's spectrum is flat)
+    const std::vector<double> x = TransientForce(run.trace, m.contact_onset_time_s, 0.1);
+    p.vibration_rms_N = AcRms(x);
+    if (p.vibration_rms_N > 0.0) {
+      for (int b = 0; b < kPerceptBands; ++b) {
+        const double f = m.transient_band_energy_fraction[b];
+        p.band_energy_fraction[b] = std::isfinite(f) ? f : 0.0;
+      }
+    }
+    p.transient_peak_to_mean =
+        std::isfinite(m.transient_peak_to_mean) ? m.transient_peak_to_mean : 0.0;
+    if (run.trace.size() >= 2) {
+      const TransientPitch pitch =
+          PitchOfTransient(x, run.trace[1].time_s - run.trace[0].time_s, p.transient_peak_to_mean);
+      p.dominant_frequency_hz = pitch.pitch_hz;
+      p.periodicity = pitch.periodicity;
+    }
     p.approach_speed_mps = m.approach_speed_mps;
     return p;
   }
@@ -192,6 +200,34 @@ class DeviceWallPresenter final : public WallPresenter {
 };
 
 }  // namespace
+
+TransientPitch PitchOfTransient(std::span<const double> x, double h_s, double peak_to_mean) {
+  TransientPitch t;
+  // a click's spectrum is flat (peak over mean about 1): no pitch
+  if (!(peak_to_mean > kPitchPeakToMean) || !(h_s > 0.0) || x.size() < 3) return t;
+  double energy = 0.0;
+  for (double v : x) energy += v * v;
+  if (!(energy > 0.0)) return t;
+  // perceived vibrotactile frequency of pulses follows the interval between them (Birznieks &
+  // Vickery 2017), not the largest spectral bin (a comb of one-tick pulses has equal harmonics);
+  // the biased estimate favours the period over its multiples
+  // lags bounded in double before the conversion (any h_s > 0 stays in range)
+  const double lo_lag = std::max(1.0, std::ceil(0.0025 / h_s - 1e-9));
+  const double hi_lag = std::min(static_cast<double>(x.size() - 1), std::floor(0.025 / h_s + 1e-9));
+  if (lo_lag > hi_lag) return t;
+  const auto lo = static_cast<std::size_t>(lo_lag);
+  const auto hi = static_cast<std::size_t>(hi_lag);
+  for (std::size_t lag = lo; lag <= hi; ++lag) {
+    double r = 0.0;
+    for (std::size_t k = 0; k + lag < x.size(); ++k) r += x[k] * x[k + lag];
+    r /= energy;
+    if (r > t.periodicity) {
+      t.periodicity = std::min(r, 1.0);
+      t.pitch_hz = 1.0 / (static_cast<double>(lag) * h_s);
+    }
+  }
+  return t;
+}
 
 std::unique_ptr<StimulusSource> MakeTapStimulusSource(const TapSourceOptions& options) {
   return std::make_unique<TapStimulusSource>(options);

@@ -84,8 +84,10 @@ TEST(ObserverTest, PerceptVectorClosedForm) {
   EXPECT_NEAR(v[1], sl_p / 2.3, 1e-12);
   // NP at 200 Hz is far below threshold here: 0 dB SL
   EXPECT_EQ(v[2], 0.0);
-  // salient (SL >= 10 dB): full pitch cue
-  EXPECT_NEAR(v[3], std::log(200.0 / 250.0) / std::log(1.2), 1e-12);
+  // salient (SL >= 10 dB): full pitch cue, from the pitch axis's origin sqrt(40 * 400) Hz; no
+  // periodicity given: a pitch without a periodicity cue
+  EXPECT_NEAR(v[3], std::log(200.0 / std::sqrt(40.0 * 400.0)) / std::log(1.2), 1e-12);
+  EXPECT_EQ(v[4], 0.0);
 
   TapPercept silent;
   silent.peak_force_N = 0.001;  // below the onset floor
@@ -95,9 +97,50 @@ TEST(ObserverTest, PerceptVectorClosedForm) {
   EXPECT_EQ(s[1], 0.0);
   EXPECT_EQ(s[2], 0.0);
   EXPECT_EQ(s[3], 0.0);  // an imperceptible vibration has no pitch
+  EXPECT_EQ(s[4], 0.0);
 
   TapPercept bad = tap;
   bad.peak_force_N = std::nan("");
+  EXPECT_THROW(ToPerceptVector(p, bad), Error);
+}
+
+// a click has no pitch: it is not encoded as 250 Hz (the old encoding put "no vibration" at the
+// P channel's best frequency) nor as the press's frequency, and a periodic train is told from it
+// by its periodicity
+TEST(ObserverTest, ClickHasNoPitchAndATrainIsToldFromIt) {
+  const ObserverParams p;
+  TapPercept click;
+  click.peak_force_N = 3.3;
+  click.vibration_rms_N = 100.0 * p.vibration_threshold_rms_N;  // 40 dB: any pitch is salient
+  click.band_energy_fraction = {0.08, 0.11, 0.61, 0.2};         // flat spectrum's shares
+  TapPercept train = click;
+  train.dominant_frequency_hz = 250.0;
+  train.periodicity = 0.9;
+  TapPercept low = train;
+  low.dominant_frequency_hz = 50.0;
+  const PerceptVector c = ToPerceptVector(p, click);
+  const PerceptVector t = ToPerceptVector(p, train);
+  const PerceptVector l = ToPerceptVector(p, low);
+  // the click sits at the pitch origin with no periodicity
+  EXPECT_EQ(c[3], 0.0);
+  EXPECT_EQ(c[4], 0.0);
+  // the trains: pitch in Weber steps from the origin, periodicity 0.9 x 10 dB / 2.3 dB
+  const double origin = std::sqrt(40.0 * 400.0);
+  EXPECT_NEAR(t[3], std::log(250.0 / origin) / std::log(1.2), 1e-12);
+  EXPECT_NEAR(l[3], std::log(50.0 / origin) / std::log(1.2), 1e-12);
+  EXPECT_NEAR(t[4], 0.9 * 10.0 / 2.3, 1e-12);
+  EXPECT_NEAR(l[4], 0.9 * 10.0 / 2.3, 1e-12);
+  // identical vibration but for the pitch: the click differs from the 250 Hz train (it did not
+  // under the old encoding) and is nearer to the pitch range's centre than either train is to the
+  // other, so a click is not a low or a high pitch
+  const double click_250 = PerceptDistance(c, t);
+  const double click_50 = PerceptDistance(c, l);
+  EXPECT_GT(click_250, 3.0);
+  EXPECT_LT(click_250, PerceptDistance(t, l));
+  EXPECT_LT(click_50, PerceptDistance(t, l));
+  // a percept with a periodicity outside [0, 1] is refused
+  TapPercept bad = train;
+  bad.periodicity = 1.5;
   EXPECT_THROW(ToPerceptVector(p, bad), Error);
 }
 

@@ -50,6 +50,7 @@ class ToyStimulusSource : public StimulusSource {
       p.band_energy_fraction = {0.0, 0.0, 0.0, 0.0};
       p.band_energy_fraction[band] = 1.0;
       p.dominant_frequency_hz = f;
+      p.periodicity = 1.0;  // an ideal train
     }
     p.peak_force_N = std::max(pulse_N, penalty_N);
     p.vibration_rms_N = pulse_N * std::sqrt(pulses * kStep_s / kSpan_s);
