@@ -60,8 +60,9 @@ std::vector<Scene> LargeBenchmarkScenes(const std::string& scenes_dir, double sc
   std::vector<Scene> scenes;
   // the pile's box and spacing on 10 x 10 grids (scenes/make_pile.py); fewer measured steps, as
   // the peers take 5-20 ms (Bullet) and more (MuJoCo) per step
-  for (const auto& [name, steps] : {std::pair<const char*, int>{"pile400", 1000},
-                                    std::pair<const char*, int>{"pile1000", 500}}) {
+  for (const auto& [name, steps] :
+       {std::pair<const char*, int>{"pile400", 1000}, std::pair<const char*, int>{"pile1000", 500},
+        std::pair<const char*, int>{"pile2000", 300}}) {
     Scene pile;
     pile.name = name;
     pile.mjcf_path = scenes_dir + "/" + name + ".xml";

@@ -108,7 +108,7 @@ ModelPtr LoadSmall(const std::string& file) {
 }
 
 TEST(SceneFiles, LargePilesArePilesBoxesOnTenByTenGrids) {
-  for (const int nz : {4, 10}) {
+  for (const int nz : {4, 10, 20}) {
     const std::string file = "pile" + std::to_string(100 * nz) + ".xml";
     const ModelPtr model = LoadSmall(file);
     ASSERT_NE(model, nullptr);
@@ -130,11 +130,12 @@ TEST(SceneFiles, LargePilesArePilesBoxesOnTenByTenGrids) {
   }
 }
 
-TEST(BenchmarkScenes, LargeScenesArePile400AndPile1000WithThePilesGate) {
+TEST(BenchmarkScenes, LargeScenesArePile400To2000WithThePilesGate) {
   const std::vector<Scene> scenes = LargeBenchmarkScenes(RIGIDTOUCH_SCENES);
-  ASSERT_EQ(scenes.size(), 2u);
+  ASSERT_EQ(scenes.size(), 3u);
   EXPECT_EQ(scenes[0].name, "pile400");
   EXPECT_EQ(scenes[1].name, "pile1000");
+  EXPECT_EQ(scenes[2].name, "pile2000");
   for (const Scene& scene : scenes) {
     EXPECT_EQ(scene.kind, SceneKind::kSteady);
     EXPECT_EQ(scene.max_penetration_m, 0.001);
