@@ -72,8 +72,8 @@ mjModel* CompileWithoutSolverSizes(const std::string& path, char* error, int err
   const std::string name = std::filesystem::path(path).filename().string();
   // MuJoCo's virtual file system keeps names without their folder, of fewer than mjMAXVFSNAME
   // characters; a file it cannot hold is compiled from disk as it is
-  if (!in || xml.empty() || name.empty() || name.size() >= mjMAXVFSNAME ||
-      RootEndTag(xml) == std::string::npos) {
+  if (!in || xml.empty() || xml.size() > (1u << 30) || name.empty() ||
+      name.size() >= mjMAXVFSNAME || RootEndTag(xml) == std::string::npos) {
     return mj_loadXML(path.c_str(), nullptr, error, error_size);
   }
   auto vfs = std::make_unique<mjVFS>();
