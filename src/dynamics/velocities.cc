@@ -23,66 +23,7 @@ void VelocityScratch::Reserve(int nbody, int max_contacts, int max_group_bodies)
   implicit.resize(max_contacts);
   implicit_start.assign(nbody + 1, 0);
   group_solver.Reserve(max_group_bodies, max_contacts);
-  // a group of two or more bodies each: at most nbody / 2 groups, and no more than 256 scratches
-  // (about 0.2 MB each)
-  const int nkept = max_group_bodies > 1 ? std::min(256, nbody / 2 + 1) : 0;
-  kept.resize(nkept);
-  for (GroupSolverScratch& k : kept) {
-    k.Reserve(std::min(kKeptBodies, max_group_bodies), std::min(kKeptContacts, max_contacts));
-  }
-  kept_owner.assign(nkept, -1);
-  kept_of_body.assign(nbody, -1);
-  kept_next = 0;
 }
-
-void VelocityScratch::ForgetFactors() {
-  group_solver.ForgetFactor();
-  for (GroupSolverScratch& k : kept) k.ForgetFactor();
-  std::fill(kept_owner.begin(), kept_owner.end(), -1);
-  std::fill(kept_of_body.begin(), kept_of_body.end(), -1);
-  kept_next = 0;
-}
-
-void VelocityScratch::SetReuseFactor(bool reuse) {
-  group_solver.lagged.reuse_factor = reuse;
-  for (GroupSolverScratch& k : kept) k.lagged.reuse_factor = reuse;
-}
-
-long VelocityScratch::LaggedSolves() const {
-  long n = group_solver.lagged.lagged_solves;
-  for (const GroupSolverScratch& k : kept) n += k.lagged.lagged_solves;
-  return n;
-}
-
-long VelocityScratch::Factorisations() const {
-  long n = group_solver.factorisations;
-  for (const GroupSolverScratch& k : kept) n += k.factorisations;
-  return n;
-}
-
-namespace {
-
-// the scratch that solves a group of these bodies and `ncontact` implicit contacts: its own kept
-// one if it fits, else the shared one
-GroupSolverScratch& ScratchFor(VelocityScratch& s, std::span<const int> bodies, int ncontact) {
-  if (s.kept.empty() || static_cast<int>(bodies.size()) > s.kept.front().max_bodies ||
-      ncontact > s.kept.front().max_contacts) {
-    return s.group_solver;
-  }
-  const int key = *std::min_element(bodies.begin(), bodies.end());
-  int k = s.kept_of_body[key];
-  if (k < 0) {
-    k = s.kept_next;
-    s.kept_next = (s.kept_next + 1) % static_cast<int>(s.kept.size());
-    if (s.kept_owner[k] >= 0) s.kept_of_body[s.kept_owner[k]] = -1;
-    s.kept_owner[k] = key;
-    s.kept_of_body[key] = k;
-    s.kept[k].ForgetFactor();
-  }
-  return s.kept[k];
-}
-
-}  // namespace
 
 void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& user,
                          VelocityScratch& scratch) {
@@ -112,7 +53,7 @@ void UpdateVelocities(const Model& model, Data& data, const contact::Groups& gro
     if (end > begin) {
       const std::span<ImplicitContact> implicit(scratch.implicit.data() + begin, end - begin);
       solved = SolveGroupVelocities(model, data, bodies, groups.slot, implicit, scratch.force_W,
-                                    scratch.torque_W, ScratchFor(scratch, bodies, end - begin));
+                                    scratch.torque_W, scratch.group_solver);
       if (solved) {
         // report the implicit forces at the new velocities
         for (const ImplicitContact& ic : implicit) {

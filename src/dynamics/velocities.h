@@ -12,37 +12,15 @@
 
 namespace rigidtouch::dynamics {
 
-/// Largest group (bodies and contacts) solved in a kept scratch of its own.
-inline constexpr int kKeptBodies = 32;
-inline constexpr int kKeptContacts = 16 * kKeptBodies;
-
 /// Explicit forces of this tick and the implicit contacts of each group, sized once by Reserve.
 struct VelocityScratch {
   std::vector<Vec3> force_W, torque_W;    // (nbody) explicit force [N] and torque [N m]
   std::vector<ImplicitContact> implicit;  // (max_contacts) implicit contacts, group by group
   std::vector<int> implicit_start;        // (nbody + 1) group g's: [start[g], start[g + 1])
-  GroupSolverScratch group_solver;        // groups larger than a kept scratch holds
-
-  // Small groups solve in a scratch of their own, kept over steps with its factor (lagged_factor.h)
-  // and ordering: a pile's columns are separate groups, and one shared scratch kept only the
-  // last group's factor, so every column factored afresh every step (issue 19). A group is known
-  // by its smallest body; a scratch is handed out in turn, the oldest owner losing it (its next
-  // solve factors afresh, as without the cache). Deterministic: it depends only on the groups.
-  std::vector<GroupSolverScratch> kept;  // (KeptScratchCount) each for kKeptBodies bodies
-  std::vector<int> kept_owner;           // (kept) smallest body of the group it serves, or -1
-  std::vector<int> kept_of_body;         // (nbody) the kept scratch of the group it is smallest in
-  int kept_next = 0;                     // the next scratch handed out
+  GroupSolverScratch group_solver;
 
   /// Sizes every buffer; the only allocating call.
   void Reserve(int nbody, int max_contacts, int max_group_bodies);
-  /// Drops every kept factor and owner (a run from the start then repeats bit for bit).
-  void ForgetFactors();
-  /// Whether group solves may reuse a kept factor (LaggedFactor::reuse_factor), in every scratch.
-  void SetReuseFactor(bool reuse);
-  /// Counters summed over every scratch since Reserve: solves by a kept factor, and
-  /// factorisations.
-  long LaggedSolves() const;
-  long Factorisations() const;
   /// Adds a contact force f_on_a acting +on a and -on b at offsets r_a, r_b.
   void AddContactForce(const Contact& c, const Vec3& f_on_a, const Vec3& r_a, const Vec3& r_b) {
     if (c.body_a >= 0) {

@@ -76,7 +76,7 @@ void ResetState(const Model& model, Data& data) {
   data.nimpulse = 0;
   if (data.workspace) {
     data.workspace->collision.Reset(model);
-    data.workspace->velocity.ForgetFactors();
+    data.workspace->velocity.group_solver.ForgetFactor();
   }
 }
 

