@@ -1,9 +1,11 @@
 #include "bench/bullet_engine.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "bench/mujoco_engine.h"
+#include "io/mjcf_compile.h"
 
 namespace rigidtouch::bench {
 namespace {
@@ -117,8 +119,16 @@ btRigidBody* BulletEngine::AddBody(double mass_kg, const btVector3& inertia_kgm2
 }
 
 void BulletEngine::Load(const Scene& scene) {
-  // the same compiled model MuJoCo runs: sizes, poses, masses and inertias
-  auto model_ptr = LoadMjcf(scene.mjcf_path);
+  // the same compiled model MuJoCo runs: sizes, poses, masses and inertias; compiled without
+  // MuJoCo's solver sizes (Bullet needs none of them, and a file sized for MuJoCo's 1000-box pile
+  // would need gigabytes for an mjData)
+  std::array<char, 1024> error{};
+  std::unique_ptr<mjModel, void (*)(mjModel*)> model_ptr(
+      io::CompileWithoutSolverSizes(scene.mjcf_path, error.data(), static_cast<int>(error.size())),
+      &mj_deleteModel);
+  if (!model_ptr) {
+    throw Error("scene " + scene.mjcf_path + " does not load in MuJoCo: " + error.data());
+  }
   const mjModel& model = *model_ptr;
   std::unique_ptr<mjData, void (*)(mjData*)> data(mj_makeData(&model), &mj_deleteData);
   mj_forward(&model, data.get());

@@ -53,4 +53,24 @@ std::vector<Scene> BenchmarkScenes(const std::string& scenes_dir, double scale) 
   return scenes;
 }
 
+std::vector<Scene> LargeBenchmarkScenes(const std::string& scenes_dir, double scale) {
+  if (!(scale > 0.0 && scale <= 1.0)) {
+    throw Error("benchmark scale " + std::to_string(scale) + " is out of range (0, 1]");
+  }
+  std::vector<Scene> scenes;
+  // the pile's box and spacing on 10 x 10 grids (scenes/make_pile.py); fewer measured steps, as
+  // the peers take 5-20 ms (Bullet) and more (MuJoCo) per step
+  for (const auto& [name, steps] :
+       {std::pair<const char*, int>{"pile400", 1000}, std::pair<const char*, int>{"pile1000", 500},
+        std::pair<const char*, int>{"pile2000", 300}}) {
+    Scene pile;
+    pile.name = name;
+    pile.mjcf_path = scenes_dir + "/" + name + ".xml";
+    pile.measured_steps = std::max(10, static_cast<int>(std::lround(steps * scale)));
+    pile.max_penetration_m = 0.001;
+    scenes.push_back(pile);
+  }
+  return scenes;
+}
+
 }  // namespace rigidtouch::bench

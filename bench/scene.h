@@ -56,4 +56,8 @@ std::string DefaultScenesDir();
 /// stay as specified. Throws `rigidtouch::Error` when `scale` is out of range.
 std::vector<Scene> BenchmarkScenes(const std::string& scenes_dir, double scale = 1.0);
 
+/// The large scenes, run only when asked for (`--rigidtouch_large`): pile400, pile1000 and
+/// pile2000 (the pile's boxes on 10 x 10 x 4, x 10 and x 20 grids), steady, with the pile's gates.
+std::vector<Scene> LargeBenchmarkScenes(const std::string& scenes_dir, double scale = 1.0);
+
 }  // namespace rigidtouch::bench

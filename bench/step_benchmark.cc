@@ -7,6 +7,11 @@
 //   --rigidtouch_interleave=N instead of Google Benchmark's runs, measure every engine of a scene
 //                             in turns of N steps (strikes), the engines' order rotating: each
 //                             engine then sees the same stretches of the machine's speed
+//   --rigidtouch_large        also the large scenes pile400 and pile1000 (minutes: the peers
+//                             take 5 ms to seconds per step there)
+//   --rigidtouch_only=A,B     only the scenes named (both modes; e.g. pile400,pile1000)
+//   --rigidtouch_engines=A,B  interleaved mode: only these engines (e.g. rigidtouch,bullet: MuJoCo
+//                             2.2 cannot hold pile1000's or pile2000's contacts)
 // With --benchmark_repetitions=N --benchmark_enable_random_interleaving=true every scene and
 // engine runs N times in random order and the tables pool the repetitions: each engine's steps
 // then spread over the same stretch of a shared machine's changing speed, though at the scale of
@@ -86,13 +91,18 @@ std::string FlagValue(int argc, char** argv, const std::string& flag) {
 
 // every engine on every scene in turns of `block` measurements (MeasureInterleaved); an engine
 // whose scene does not load is reported and left out
-std::vector<RunResult> RunInterleaved(const std::vector<Scene>& scenes, int block) {
+std::vector<RunResult> RunInterleaved(const std::vector<Scene>& scenes, int block,
+                                      const std::string& only_engines) {
   std::vector<RunResult> results;
   for (const Scene& scene : scenes) {
     std::vector<std::unique_ptr<Engine>> engines;
     std::vector<std::unique_ptr<SceneRun>> runs;
     std::vector<SceneRun*> prepared;
     for (const EngineEntry& entry : Engines()) {
+      if (!only_engines.empty() &&
+          ("," + only_engines + ",").find("," + entry.name + ",") == std::string::npos) {
+        continue;
+      }
       engines.push_back(entry.make());
       runs.push_back(std::make_unique<SceneRun>(*engines.back(), scene));
       try {
@@ -129,6 +139,10 @@ int main(int argc, char** argv) {
   if (scenes_dir.empty()) scenes_dir = DefaultScenesDir();
   const std::string scale_text = FlagValue(argc, argv, "rigidtouch_scale");
   const std::string interleave_text = FlagValue(argc, argv, "rigidtouch_interleave");
+  bool large = false;
+  for (int i = 1; i < argc; ++i) large |= std::string(argv[i]) == "--rigidtouch_large";
+  const std::string only = FlagValue(argc, argv, "rigidtouch_only");
+  const std::string only_engines = FlagValue(argc, argv, "rigidtouch_engines");
   DropFlags(argc, argv);
   int interleave = 0;
   if (!interleave_text.empty()) {
@@ -142,7 +156,23 @@ int main(int argc, char** argv) {
 
   static std::vector<Scene> scenes;
   try {
-    scenes = BenchmarkScenes(scenes_dir, scale_text.empty() ? 1.0 : std::atof(scale_text.c_str()));
+    const double scale = scale_text.empty() ? 1.0 : std::atof(scale_text.c_str());
+    scenes = BenchmarkScenes(scenes_dir, scale);
+    if (large || !only.empty()) {
+      for (Scene& scene : LargeBenchmarkScenes(scenes_dir, scale)) scenes.push_back(scene);
+    }
+    if (!only.empty()) {
+      const std::string list = "," + only + ",";
+      std::vector<Scene> kept;
+      for (const Scene& scene : scenes) {
+        if (list.find("," + scene.name + ",") != std::string::npos) kept.push_back(scene);
+      }
+      if (kept.empty()) {
+        std::cerr << "error: --rigidtouch_only=" << only << " names no benchmark scene\n";
+        return 2;
+      }
+      scenes = kept;
+    }
   } catch (const rigidtouch::Error& error) {
     std::cerr << "error: " << error.what() << "\n";
     return 2;
@@ -162,7 +192,7 @@ int main(int argc, char** argv) {
   if (interleave > 0) {
     std::cout << "interleaved: every engine of a scene in turns of " << interleave
               << " measured steps (strikes)\n";
-    Results() = RunInterleaved(scenes, interleave);
+    Results() = RunInterleaved(scenes, interleave, only_engines);
   } else {
     benchmark::RunSpecifiedBenchmarks();
   }

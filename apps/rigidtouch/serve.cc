@@ -37,6 +37,7 @@ struct ServeFlags {
   double duration_s = 0.0;
   bool realtime = false;
   double spin_us = 0.0;
+  int cpu = -1;
   double watchdog_s = 0.05;
   double test_drop = 0.0;
   std::string key_file;  // udp: empty means the per-user default key, created on first use
@@ -129,6 +130,7 @@ void Run(const ServeFlags& f) {
   lo.realtime_priority = f.realtime;
   lo.lock_memory = f.realtime;
   lo.spin_us = f.spin_us;
+  lo.cpu = f.cpu;
   loop::ValidateLoopOptions(lo);
   if (!(f.startup_timeout_s > 0.0) || !std::isfinite(f.startup_timeout_s)) {
     throw Error("serve: --startup-timeout must be > 0 s, finite");
@@ -138,6 +140,10 @@ void Run(const ServeFlags& f) {
   if (!f.trace.empty()) {
     io::CheckOutputPath(f.trace, "trace file");  // before the session, not after it
     traces = std::make_unique<loop::TraceQueue>(1 << 16, loop::VectorSink(&samples));
+    // the trace writer keeps off the loop's CPU
+    if (f.cpu >= 0 && !traces->AvoidCpu(f.cpu)) {
+      std::cerr << "rigidtouch: warning: could not keep the trace writer off CPU " << f.cpu << "\n";
+    }
   }
   // the writer thread formats and writes the rows; the loop only pushes a copy (never blocks)
   std::unique_ptr<io::RecordFileWriter> record_file;
@@ -147,6 +153,10 @@ void Run(const ServeFlags& f) {
     records = std::make_unique<loop::RecordQueue>(
         1 << 16,
         [w = record_file.get()](std::span<const io::RecordSample> batch) { w->Append(batch); });
+    if (f.cpu >= 0 && !records->AvoidCpu(f.cpu)) {
+      std::cerr << "rigidtouch: warning: could not keep the record writer off CPU " << f.cpu
+                << "\n";
+    }
   }
   const std::atomic<bool>& stop = loop::InstallStopSignalHandlers();
   nlohmann::json result;
@@ -314,6 +324,10 @@ void Register(CLI::App& root) {
       ->check(InRange(0.0, INFINITY, "s"));
   app->add_flag("--realtime", f->realtime, "SCHED_FIFO and locked memory when allowed");
   app->add_option("--spin-us", f->spin_us, "busy-wait before each deadline [us]");
+  app->add_option("--cpu", f->cpu,
+                  "pin the loop thread to this CPU (the trace writer runs on the others); -1: "
+                  "not pinned")
+      ->capture_default_str();
   app->add_option("--watchdog", f->watchdog_s, "no fresh device state for this long: zero force")
       ->capture_default_str();
   app->add_option("--startup-timeout", f->startup_timeout_s,

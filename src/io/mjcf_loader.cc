@@ -11,8 +11,11 @@
 #include <sstream>
 #include <string>
 
+#include "dynamics/kinematics.h"
 #include "geometry/capacity.h"
+#include "geometry/collision.h"
 #include "io/mjcf_checks.h"
+#include "io/mjcf_compile.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -392,22 +395,34 @@ void InitialState(const mjModel* m, const std::string& path, Model& model) {
   }
 }
 
-// MuJoCo's collision detection on the initial state: free bodies that start inside each other (or
-// inside a static geom) by more than kMaxInitialOverlap are a scene error, since the penalty
-// contact would fling them apart on the first tick
-void CheckInitialOverlap(const mjModel* m, const std::string& path) {
-  std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(m), mj_deleteData);
-  if (!d) throw Error("scene file '" + path + "': MuJoCo could not allocate its data");
-  const int key = mj_name2id(m, mjOBJ_KEY, "initial");
-  if (key >= 0) mj_resetDataKeyframe(m, d.get(), key);
-  mj_fwdPosition(m, d.get());
-  for (int i = 0; i < d->ncon; ++i) {
-    const mjContact& c = d->contact[i];
-    const bool both_static = m->body_weldid[m->geom_bodyid[c.geom1]] == 0 &&
-                             m->body_weldid[m->geom_bodyid[c.geom2]] == 0;
-    if (both_static || !(c.dist < -kMaxInitialOverlap)) continue;
-    throw Error("scene file '" + path + "': geoms '" + MjName(m, mjOBJ_GEOM, c.geom1) + "' and '" +
-                MjName(m, mjOBJ_GEOM, c.geom2) + "' overlap by " + Num(-c.dist) +
+std::string GeomName(const mjModel* m, const GeomModel& g) {
+  return g.mj_geom >= 0 ? MjName(m, mjOBJ_GEOM, g.mj_geom) : g.name;
+}
+
+// rigidtouch's own collision detection on the initial state (sized from the scene, as the tick's
+// is; MuJoCo's mj_collision would need its contact buffer and a stack of nbody^2 / 2 numbers):
+// free bodies that start inside each other (or inside a static geom) by more than
+// kMaxInitialOverlap are a scene error, since the penalty contact would fling them apart on the
+// first tick
+void CheckInitialOverlap(const Model& model, const std::string& path) {
+  Data data;
+  data.bodies = model.initial;
+  data.R_WB.resize(model.bodies.size());
+  dynamics::ComputeKinematics(data);
+  data.contacts.resize(model.max_contacts);
+  data.previous.resize(model.max_contacts);
+  data.previous_runs.resize(model.max_contacts);
+  geometry::CollisionScratch scratch;
+  scratch.Reserve(model);
+  geometry::DetectContacts(model, data, scratch);
+  for (int i = 0; i < data.ncontact; ++i) {
+    const Contact& c = data.contacts[i];
+    if (!(c.depth_m > kMaxInitialOverlap)) continue;
+    // in MuJoCo's geom order, as the message was when MuJoCo's collision made this check
+    const int g1 = std::min(c.geom_a, c.geom_b), g2 = std::max(c.geom_a, c.geom_b);
+    const mjModel* m = model.collision.get();
+    throw Error("scene file '" + path + "': geoms '" + GeomName(m, model.geoms[g1]) + "' and '" +
+                GeomName(m, model.geoms[g2]) + "' overlap by " + Num(c.depth_m) +
                 " m at the start (more than " + Num(kMaxInitialOverlap) +
                 " m); move them apart in the scene or its keyframe 'initial'");
   }
@@ -421,7 +436,8 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
     throw Error("scene file '" + path + "' does not exist or is not a regular file");
   }
   char error[1024] = "";
-  mjModel* raw = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  // compiled without MuJoCo's solver sizes (nconmax, njmax, nstack): rigidtouch sizes its own
+  mjModel* raw = io::CompileWithoutSolverSizes(path, error, sizeof(error));
   if (raw == nullptr) {
     throw Error("scene file '" + path + "': MuJoCo could not compile it: " + error);
   }
@@ -445,7 +461,6 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   CheckPairs(m, path, model.load_warnings);
   model.tool = FindTool(model, path, options.tool_name);
   InitialState(m, path, model);
-  CheckInitialOverlap(m, path);
   model.contact = options.contact;
   model.render = options.render;
   model.device = options.device;
@@ -454,6 +469,7 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
                                ? std::min<int>(options.max_group_bodies, model.bodies.size())
                                : static_cast<int>(model.bodies.size());
   Configure(model);
+  CheckInitialOverlap(model, path);
   return model;
 }
 

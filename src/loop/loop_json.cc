@@ -20,6 +20,7 @@ nlohmann::json ToJson(const LoopStats& stats) {
       {"wakeup_latency_max_s", stats.wakeup_latency_max_s},
       {"realtime_priority_active", stats.realtime_priority_active},
       {"memory_locked", stats.memory_locked},
+      {"pinned_cpu", stats.pinned_cpu},
       {"stop_requested", stats.stop_requested},
       {"warnings", stats.warnings},
   };

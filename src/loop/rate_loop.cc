@@ -66,6 +66,20 @@ class RealtimeScope {
         }
       }
     }
+    if (options.cpu >= 0) {
+      cpu_set_t one;
+      CPU_ZERO(&one);
+      CPU_SET(options.cpu, &one);
+      const int got = pthread_getaffinity_np(pthread_self(), sizeof(old_cpus_), &old_cpus_);
+      const int error = got != 0 ? got : pthread_setaffinity_np(pthread_self(), sizeof(one), &one);
+      if (error == 0) {
+        pinned_ = true;
+        stats->pinned_cpu = options.cpu;
+      } else {
+        stats->warnings.push_back("could not pin the loop to CPU " + std::to_string(options.cpu) +
+                                  ": " + std::strerror(error) + "; running unpinned");
+      }
+    }
     if (options.lock_memory) {
       if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
         locked_ = true;
@@ -80,6 +94,7 @@ class RealtimeScope {
     }
   }
   ~RealtimeScope() {
+    if (pinned_) pthread_setaffinity_np(pthread_self(), sizeof(old_cpus_), &old_cpus_);
     if (policy_changed_) pthread_setschedparam(pthread_self(), old_policy_, &old_param_);
     if (locked_) munlockall();
   }
@@ -91,6 +106,8 @@ class RealtimeScope {
   sched_param old_param_{};
   bool policy_changed_ = false;
   bool locked_ = false;
+  cpu_set_t old_cpus_{};
+  bool pinned_ = false;
 };
 
 }  // namespace
@@ -112,6 +129,9 @@ void ValidateLoopOptions(const LoopOptions& options) {
   }
   if (options.fifo_priority < 1 || options.fifo_priority > 99) {
     ThrowField("fifo_priority", options.fifo_priority, "[1, 99]");
+  }
+  if (options.cpu < -1 || options.cpu >= CPU_SETSIZE) {
+    ThrowField("cpu", options.cpu, "[-1, " + std::to_string(CPU_SETSIZE) + ") (-1: not pinned)");
   }
 }
 

@@ -25,6 +25,9 @@ struct LoopOptions {
   bool lock_memory = false;        // try mlockall(MCL_CURRENT | MCL_FUTURE) during Run
   double spin_us = 0.0;            // busy-wait this long before each deadline, in [0, period)
   int fifo_priority = 80;          // SCHED_FIFO priority when realtime_priority, in [1, 99]
+  // pin the calling thread to this CPU during Run (-1: not pinned), in [-1, CPU_SETSIZE); a CPU
+  // the process may not use is a warning, not an error (the loop then runs unpinned)
+  int cpu = -1;
 };
 
 /// Throws Error naming the field, its value and the valid range when an option is invalid.
@@ -49,6 +52,7 @@ struct LoopStats {
   double wakeup_latency_max_s = 0.0;        // largest delay from a deadline to its wake-up
   bool realtime_priority_active = false;    // SCHED_FIFO was set for this run
   bool memory_locked = false;               // mlockall succeeded for this run
+  int pinned_cpu = -1;                      // the CPU the loop thread was pinned to, or -1
   bool stop_requested = false;              // the run ended on a stop request
   std::vector<std::string> warnings;        // e.g. "could not set SCHED_FIFO: ..."
 };

@@ -1,5 +1,8 @@
 #include "loop/trace_queue.h"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -38,6 +41,16 @@ SampleQueue<Sample>::SampleQueue(std::size_t capacity, Sink sink, double idle_pe
       batch_(std::min(capacity, kMaxBatch)) {
   if (!sink_) throw Error("trace queue: the sink is empty");
   writer_ = std::thread([this] { WriterMain(); });
+}
+
+template <typename Sample>
+bool SampleQueue<Sample>::AvoidCpu(int cpu) {
+  if (cpu < 0 || cpu >= CPU_SETSIZE || !writer_.joinable()) return false;
+  cpu_set_t cpus;
+  if (sched_getaffinity(0, sizeof(cpus), &cpus) != 0) return false;
+  CPU_CLR(cpu, &cpus);
+  if (CPU_COUNT(&cpus) == 0) return false;
+  return pthread_setaffinity_np(writer_.native_handle(), sizeof(cpus), &cpus) == 0;
 }
 
 template <typename Sample>

@@ -56,6 +56,11 @@ class SampleQueue {
   /// Rethrows the sink's exception, once, if it threw.
   void Close();
 
+  /// Keeps the writer thread off `cpu` (the haptic loop's, when it is pinned there): the writer
+  /// may then run on every other CPU the process may use. False (nothing changed) if the system
+  /// refuses or no other CPU is left.
+  bool AvoidCpu(int cpu);
+
   /// Current counts (approximate while the queue is running).
   TraceQueueStats stats() const;
 

@@ -6,6 +6,7 @@
 
 #include "bench/mujoco_engine.h"
 #include "bench/scene.h"
+#include "io/mjcf_compile.h"
 
 namespace rigidtouch::bench {
 namespace {
@@ -94,6 +95,54 @@ TEST(SceneFiles, PileIsAFiveByFiveByFourGrid) {
   // room for the settled pile's ~500 contacts (measured) without MuJoCo's contact-full warning
   EXPECT_GE(model->nconmax, 1000);
   EXPECT_GE(model->njmax, 4 * 1000);
+}
+
+// the large piles, compiled as rigidtouch and the Bullet adapter compile them (without MuJoCo's
+// solver sizes: their mjData alone is 2 GB)
+ModelPtr LoadSmall(const std::string& file) {
+  char error[1000] = "";
+  const std::string path = std::string(RIGIDTOUCH_SCENES) + "/" + file;
+  ModelPtr model(io::CompileWithoutSolverSizes(path, error, sizeof(error)), &mj_deleteModel);
+  EXPECT_NE(model, nullptr) << error;
+  return model;
+}
+
+TEST(SceneFiles, LargePilesArePilesBoxesOnTenByTenGrids) {
+  for (const int nz : {4, 10, 20}) {
+    const std::string file = "pile" + std::to_string(100 * nz) + ".xml";
+    const ModelPtr model = LoadSmall(file);
+    ASSERT_NE(model, nullptr);
+    ExpectCommonSetup(*model);
+    EXPECT_EQ(model->nbody, 100 * nz + 2) << file;
+    for (int z = 0; z < nz; ++z) {
+      for (int y = 0; y < 10; ++y) {
+        for (int x = 0; x < 10; ++x) {
+          ExpectBox(*model, x + 10 * y + 100 * z,
+                    Vec3(-0.2295 + 0.051 * x, -0.2295 + 0.051 * y, 0.025 + 0.051 * z));
+        }
+      }
+    }
+    // 2 mm above the top box of column (4, 4), as the pile's tool above its centre column
+    const int tool = MjBodyId(*model, "tool", file);
+    EXPECT_NEAR(model->body_pos[3 * tool + 0], -0.0255, kTolerance);
+    EXPECT_NEAR(model->body_pos[3 * tool + 1], -0.0255, kTolerance);
+    EXPECT_NEAR(ToolStartZ(*model), 0.025 + 0.051 * (nz - 1) + 0.025 + 0.002 + 0.005, kTolerance);
+  }
+}
+
+TEST(BenchmarkScenes, LargeScenesArePile400To2000WithThePilesGate) {
+  const std::vector<Scene> scenes = LargeBenchmarkScenes(RIGIDTOUCH_SCENES);
+  ASSERT_EQ(scenes.size(), 3u);
+  EXPECT_EQ(scenes[0].name, "pile400");
+  EXPECT_EQ(scenes[1].name, "pile1000");
+  EXPECT_EQ(scenes[2].name, "pile2000");
+  for (const Scene& scene : scenes) {
+    EXPECT_EQ(scene.kind, SceneKind::kSteady);
+    EXPECT_EQ(scene.max_penetration_m, 0.001);
+    EXPECT_EQ(scene.tool_force_N, Vec3(0, 0, -2));
+    EXPECT_GT(scene.measured_steps, 0);
+  }
+  EXPECT_THROW(LargeBenchmarkScenes("scenes", 0.0), Error);
 }
 
 TEST(SceneFiles, MissingFileThrowsNamingIt) {

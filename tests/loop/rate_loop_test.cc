@@ -228,6 +228,40 @@ TEST(RateLoop, RealtimeRequestsEitherTakeEffectOrWarn) {
   EXPECT_NE(policy_after, SCHED_FIFO);
 }
 
+TEST(RateLoop, PinningKeepsTheLoopOnItsCpuAndRestoresTheAffinity) {
+  LoopOptions options;
+  options.cpu = CPU_SETSIZE;
+  EXPECT_NE(MessageOf(options).find("cpu"), std::string::npos);
+  options.cpu = -2;
+  EXPECT_NE(MessageOf(options).find("cpu"), std::string::npos);
+
+  cpu_set_t before;
+  ASSERT_EQ(pthread_getaffinity_np(pthread_self(), sizeof(before), &before), 0);
+  int target = -1;  // the last CPU this process may use
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (CPU_ISSET(c, &before)) target = c;
+  }
+  ASSERT_GE(target, 0);
+  options.rate_hz = 1000.0;
+  options.duration_s = 0.02;
+  options.cpu = target;
+  RateLoop loop(options);
+  bool elsewhere = false;
+  const LoopStats stats = loop.Run([&](std::int64_t, double) {
+    elsewhere |= sched_getcpu() != target;
+    return true;
+  });
+  if (stats.pinned_cpu == target) {
+    EXPECT_FALSE(elsewhere);
+  } else {  // refused: said so
+    ASSERT_EQ(stats.warnings.size(), 1u);
+    EXPECT_NE(stats.warnings[0].find("could not pin"), std::string::npos);
+  }
+  cpu_set_t after;
+  ASSERT_EQ(pthread_getaffinity_np(pthread_self(), sizeof(after), &after), 0);
+  EXPECT_TRUE(CPU_EQUAL(&before, &after));
+}
+
 TEST(RateLoop, AllocationCounterSeesAllocations) {
   if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
   // the check below is only meaningful if the counter works
