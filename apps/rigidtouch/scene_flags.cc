@@ -5,8 +5,10 @@
 #include <iostream>
 
 #include "io/config.h"
+#include "io/output_file.h"
 #include "io/resources.h"
 #include "io/text.h"
+#include "loop/loop_json.h"
 #include "render/limits.h"
 #include "render/materials.h"
 
@@ -285,6 +287,26 @@ DeviceChoice ResolveDevice(const std::optional<std::string>& device,
   c.spec_text = spec.value_or("touch");
   c.spec = device::ParseDeviceSpec(c.spec_text);
   return c;
+}
+
+RecordOutput OpenRecord(const std::string& path, double rate_hz) {
+  RecordOutput r;
+  if (path.empty()) return r;
+  r.file = std::make_unique<io::RecordFileWriter>(path, rate_hz);
+  r.queue = std::make_unique<loop::RecordQueue>(
+      1 << 16, [w = r.file.get()](std::span<const io::RecordSample> batch) { w->Append(batch); });
+  return r;
+}
+
+nlohmann::json FinishRecord(RecordOutput& record, const std::string& path) {
+  record.queue->Close();
+  const loop::TraceQueueStats st = record.queue->stats();
+  if (st.dropped > 0) {
+    throw io::OutputError("cannot write record file '" + path + "': " + std::to_string(st.dropped) +
+                          " ticks were dropped because the writer fell behind");
+  }
+  record.file->Commit();
+  return loop::ToJson(st);
 }
 
 }  // namespace rigidtouch::cli

@@ -13,6 +13,8 @@
 #include "analysis/tap_experiment.h"
 #include "device/device_spec.h"
 #include "device/presets.h"
+#include "io/device_record.h"
+#include "loop/trace_queue.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::cli {
@@ -117,6 +119,19 @@ DeviceChoice ResolveDevice(const std::optional<std::string>& device,
 
 /// Whether `text` is a connection (sim or udp://...) rather than a device spec.
 bool IsConnection(const std::string& text);
+
+/// `--record LOG` of serve and view: the record file and the queue its writer thread drains (the
+/// haptic loop only pushes a copy of each tick and never blocks). Both null without a path.
+struct RecordOutput {
+  std::unique_ptr<io::RecordFileWriter> file;
+  std::unique_ptr<loop::RecordQueue> queue;
+};
+RecordOutput OpenRecord(const std::string& path, double rate_hz);
+
+/// Closes the queue (rethrowing a failed write: exit status 4) and keeps the file only when no
+/// tick was dropped, since a record with a gap cannot be replayed tick for tick. The queue's
+/// counts as JSON.
+nlohmann::json FinishRecord(RecordOutput& record, const std::string& path);
 
 /// JSON array of a Vec3.
 inline nlohmann::json Json(const Vec3& v) {

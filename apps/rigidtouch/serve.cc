@@ -146,17 +146,10 @@ void Run(const ServeFlags& f) {
     }
   }
   // the writer thread formats and writes the rows; the loop only pushes a copy (never blocks)
-  std::unique_ptr<io::RecordFileWriter> record_file;
-  std::unique_ptr<loop::RecordQueue> records;
-  if (!f.record.empty()) {
-    record_file = std::make_unique<io::RecordFileWriter>(f.record, rate_hz);
-    records = std::make_unique<loop::RecordQueue>(
-        1 << 16,
-        [w = record_file.get()](std::span<const io::RecordSample> batch) { w->Append(batch); });
-    if (f.cpu >= 0 && !records->AvoidCpu(f.cpu)) {
-      std::cerr << "rigidtouch: warning: could not keep the record writer off CPU " << f.cpu
-                << "\n";
-    }
+  RecordOutput record = OpenRecord(f.record, rate_hz);
+  loop::RecordQueue* records = record.queue.get();
+  if (records && f.cpu >= 0 && !records->AvoidCpu(f.cpu)) {
+    std::cerr << "rigidtouch: warning: could not keep the record writer off CPU " << f.cpu << "\n";
   }
   const std::atomic<bool>& stop = loop::InstallStopSignalHandlers();
   nlohmann::json result;
@@ -188,13 +181,12 @@ void Run(const ServeFlags& f) {
         f.duration_s > 0.0 ? std::llround(f.duration_s * rate_hz) : dev.size();
     Data data = MakeData(model);
     if (f.replay_pace == "max") {
-      r = loop::RunHapticTicks(model, data, dev, rate_hz, ticks, &stop, traces.get(),
-                               records.get());
+      r = loop::RunHapticTicks(model, data, dev, rate_hz, ticks, &stop, traces.get(), records);
     } else {
       // without --duration the loop runs until the record ends (the device says so), so a
       // skipped deadline does not cut the last ticks off
       lo.duration_s = f.duration_s;
-      r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records.get());
+      r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records);
     }
     result = RenderJson(model, data);
     result["device"] = {{"kind", "replay"},
@@ -217,7 +209,7 @@ void Run(const ServeFlags& f) {
     Configure(model);
     lo.duration_s = f.duration_s > 0.0 ? f.duration_s : setup.simulated->duration_s();
     Data data = MakeData(model);
-    r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get(), records.get());
+    r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get(), records);
     result = RenderJson(model, data);
     result["device"] = {{"kind", "simulated"},
                         {"preset", preset.name},
@@ -260,7 +252,7 @@ void Run(const ServeFlags& f) {
     Configure(model);
     lo.duration_s = f.duration_s;
     Data data = MakeData(model);
-    r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records.get());
+    r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records);
     result = RenderJson(model, data);
     result["device"] = {{"kind", "udp"},
                         {"server", connect},
@@ -288,16 +280,7 @@ void Run(const ServeFlags& f) {
     result["trace"] = f.trace;
   }
   if (records) {
-    records->Close();  // rethrows a failed write (exit status 4)
-    const loop::TraceQueueStats st = records->stats();
-    if (st.dropped > 0) {
-      // a record with a gap cannot be replayed tick for tick: keep nothing
-      throw io::OutputError("cannot write record file '" + f.record +
-                            "': " + std::to_string(st.dropped) +
-                            " ticks were dropped because the writer fell behind");
-    }
-    record_file->Commit();
-    result["record_queue"] = loop::ToJson(st);
+    result["record_queue"] = FinishRecord(record, f.record);
     result["record"] = f.record;
   }
   PrintResult(result, f.json);

@@ -172,14 +172,8 @@ void Run(const ViewFlags& f) {
   device::TightenDeviceParams(model.device, setup.device);
   Configure(model);
 
-  std::unique_ptr<io::RecordFileWriter> record_file;
-  std::unique_ptr<loop::RecordQueue> records;
-  if (!f.record.empty()) {
-    record_file = std::make_unique<io::RecordFileWriter>(f.record, rate_hz);
-    records = std::make_unique<loop::RecordQueue>(
-        1 << 16,
-        [w = record_file.get()](std::span<const io::RecordSample> batch) { w->Append(batch); });
-  }
+  RecordOutput record = OpenRecord(f.record, rate_hz);
+  loop::RecordQueue* records = record.queue.get();
   // the scope queue holds 0.25 s of ticks between two frames
   view::ViewFeed feed(rate_hz, static_cast<std::size_t>(std::max(1024.0, 0.25 * rate_hz)));
   Data data = MakeData(model);
@@ -200,7 +194,7 @@ void Run(const ViewFlags& f) {
     haptic = std::thread([&] {
       try {
         // stops when the window closes, the frames are drawn or the renderer is switched
-        r = loop::RunHapticLoop(model, data, *dev, lo, &stop, nullptr, records.get(), &feed);
+        r = loop::RunHapticLoop(model, data, *dev, lo, &stop, nullptr, records, &feed);
       } catch (...) {
         loop_error = std::current_exception();
       }
@@ -263,14 +257,7 @@ void Run(const ViewFlags& f) {
   result["warnings"] = WarningsJson(data);
   if (!f.screenshot.empty()) result["screenshot"] = f.screenshot;
   if (records) {
-    records->Close();
-    const loop::TraceQueueStats st = records->stats();
-    if (st.dropped > 0) {
-      throw io::OutputError("cannot write record file '" + f.record +
-                            "': " + std::to_string(st.dropped) +
-                            " ticks were dropped because the writer fell behind");
-    }
-    record_file->Commit();
+    result["record_queue"] = FinishRecord(record, f.record);
     result["record"] = f.record;
   }
   if (f.json) {

@@ -491,6 +491,24 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
     glfwSwapBuffers(window);
     next_frame += frame_period;
     std::this_thread::sleep_until(next_frame);
+    if (o.frames > 0) {
+      // a scripted run is paced by the loop's time as well: frame k shows the world at k / 60 s
+      // of loop time however slowly a loaded machine draws, so a tap scripted at a frame lands
+      // at the same place in the scope every run; a loop that has ended (or stalls for 0.2 s)
+      // is not waited for
+      const double frame_time_s = static_cast<double>(frame + 1) / o.display_hz;
+      double seen_s = feed.Latest().sample.time_s;
+      auto seen_at = Clock::now();
+      while (seen_s < frame_time_s && Clock::now() - seen_at < std::chrono::milliseconds(200)) {
+        std::this_thread::sleep_for(std::chrono::microseconds(500));
+        const double now_s = feed.Latest().sample.time_s;
+        if (now_s != seen_s) {
+          seen_s = now_s;
+          seen_at = Clock::now();
+        }
+      }
+      next_frame = std::max(next_frame, Clock::now());
+    }
   }
   result.elapsed_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return result;
