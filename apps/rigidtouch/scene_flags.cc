@@ -163,13 +163,12 @@ void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double r
         " s: here the time step is the device's period; drop it " + "or set the rate instead");
   }
   o.timestep_s = h;
-  if (!s.Given("contact.stiffness_N_per_m") && preset.max_stiffness_N_per_m > 0.0) {
-    o.contact.stiffness_N_per_m = preset.max_stiffness_N_per_m;
+  if (!s.Given("contact.stiffness_N_per_m")) {
+    o.contact.stiffness_N_per_m =
+        device::DefaultWall(preset, h, o.contact.stiffness_N_per_m).stiffness_N_per_m;
   }
   if (!s.Given("contact.damping_Ns_per_m")) {
-    const double kh = o.contact.stiffness_N_per_m * h;
-    o.contact.damping_Ns_per_m =
-        preset.max_damping_Ns_per_m > 0.0 ? std::min(kh, preset.max_damping_Ns_per_m) : kh;
+    o.contact.damping_Ns_per_m = device::DefaultDamping(preset, h, o.contact.stiffness_N_per_m);
   }
   if (s.Given("device.max_force_N")) {
     const double mine = o.device.max_force_N;  // 0: no limit of the user's own

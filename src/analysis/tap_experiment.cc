@@ -162,15 +162,14 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
 
   LoadOptions load = config.load;
   load.timestep_s = h;
-  // a device with no stiffness limit (ideal, or a spec's 0) keeps the contact law's own
+  // a device with no stiffness limit (ideal, or a spec's 0) keeps the coupling's own
   const auto capped = [](double limit, double otherwise) {
     return limit > 0.0 ? limit : otherwise;
   };
   load.contact.stiffness_N_per_m = config.stiffness_N_per_m.value_or(
-      capped(limits.max_stiffness_N_per_m, load.contact.stiffness_N_per_m));
-  const double k = load.contact.stiffness_N_per_m;
+      device::DefaultWall(limits, h, load.contact.stiffness_N_per_m).stiffness_N_per_m);
   load.contact.damping_Ns_per_m = config.damping_Ns_per_m.value_or(
-      limits.max_damping_Ns_per_m > 0.0 ? std::min(k * h, limits.max_damping_Ns_per_m) : k * h);
+      device::DefaultDamping(limits, h, load.contact.stiffness_N_per_m));
   load.device.max_force_N = limits.max_force_N;
   load.device.position_resolution_m = config.device_model.value_or(spec.model).encoder_resolution_m;
   if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;

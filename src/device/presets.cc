@@ -1,5 +1,6 @@
 #include "device/presets.h"
 
+#include <algorithm>
 #include <array>
 #include <string>
 
@@ -57,6 +58,22 @@ void TightenDeviceParams(DeviceParams& params, const DeviceLimits& limits) {
       render::StricterLimit(params.max_stiffness_N_per_m, limits.max_stiffness_N_per_m);
   params.max_damping_Ns_per_m =
       render::StricterLimit(params.max_damping_Ns_per_m, limits.max_damping_Ns_per_m);
+}
+
+Wall DefaultWall(const DeviceLimits& limits, double h, double law_stiffness) {
+  const double k =
+      limits.max_stiffness_N_per_m > 0.0 ? limits.max_stiffness_N_per_m : law_stiffness;
+  return {k, DefaultDamping(limits, h, k)};
+}
+
+double DefaultDamping(const DeviceLimits& limits, double h, double k) {
+  // k h is what a sampled device can add without eating its own physical damping (Colgate and
+  // Brown's b > K T / 2 + |B|); an ideal device has no such bound, and k h alone lets the spring
+  // throw a 0.6 kg tool back out inside the window
+  if (limits.max_damping_Ns_per_m > 0.0) return std::min(k * h, limits.max_damping_Ns_per_m);
+  // a device that states a stiffness limit but no damping limit keeps the sampled bound
+  if (limits.max_stiffness_N_per_m > 0.0) return k * h;
+  return k * kUnlimitedDampingTime;
 }
 
 }  // namespace rigidtouch::device

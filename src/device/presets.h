@@ -24,4 +24,24 @@ const DeviceLimits& FindPreset(std::string_view name);
 /// it to check the rendered stiffness and damping against the result.
 void TightenDeviceParams(DeviceParams& params, const DeviceLimits& limits);
 
+/// A contact's stiffness [N/m] and damping [N s/m].
+struct Wall {
+  double stiffness_N_per_m = 0.0;
+  double damping_Ns_per_m = 0.0;
+};
+
+/// The wall a device displays when the user sets neither stiffness nor damping, at time step `h`:
+/// its stiffness limit, else `law_stiffness` (the contact law's default) when it has none; the
+/// damping from DefaultDamping.
+Wall DefaultWall(const DeviceLimits& limits, double h, double law_stiffness);
+
+/// The default damping for stiffness `k` at time step `h`: `k h` capped at the device's damping
+/// limit (`k h` when only that limit is unknown); on a device with neither a stiffness nor a
+/// damping limit (ideal, or a spec's 0 and 0) `k` times kUnlimitedDampingTime, a wall damped
+/// enough to hold the tool through the 100 ms collision window (docs/devices.md).
+double DefaultDamping(const DeviceLimits& limits, double h, double k);
+
+/// b / k of the default wall of a device without limits [s] (docs/decisions.md).
+inline constexpr double kUnlimitedDampingTime = 0.02;
+
 }  // namespace rigidtouch::device

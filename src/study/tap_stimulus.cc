@@ -165,15 +165,10 @@ class DeviceWallPresenter final : public WallPresenter {
     load.render = ToRenderParams(condition);
     load.device.coupling = Coupling::kDirect;
     load.timestep_s = h;
-    // a device without a stiffness or damping limit (0) keeps the contact law's default
-    if (preset.max_stiffness_N_per_m > 0.0) {
-      load.contact.stiffness_N_per_m = preset.max_stiffness_N_per_m;
-    }
-    load.contact.stiffness_N_per_m =
-        condition.stiffness_N_per_m.value_or(load.contact.stiffness_N_per_m);
-    const double kh = load.contact.stiffness_N_per_m * h;
+    load.contact.stiffness_N_per_m = condition.stiffness_N_per_m.value_or(
+        device::DefaultWall(preset, h, load.contact.stiffness_N_per_m).stiffness_N_per_m);
     load.contact.damping_Ns_per_m = condition.damping_Ns_per_m.value_or(
-        preset.max_damping_Ns_per_m > 0.0 ? std::min(kh, preset.max_damping_Ns_per_m) : kh);
+        device::DefaultDamping(preset, h, load.contact.stiffness_N_per_m));
     device::TightenDeviceParams(load.device, preset);
     const std::string scene = condition.scene          ? *condition.scene
                               : options_.scene.empty() ? io::ShippedFile("scenes/wall.xml")

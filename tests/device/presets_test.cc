@@ -63,5 +63,23 @@ TEST(PresetsTest, UnknownPresetListsValidNames) {
   EXPECT_THROW(FindPreset(""), Error);
 }
 
+// the default wall: a device's own stiffness and k h capped at its damping; the ideal device
+// (no limits) the contact law's stiffness and k times 20 ms
+TEST(PresetsTest, DefaultWallFollowsTheDevicesLimits) {
+  const double h = 0.001;
+  const Wall touch = DefaultWall(FindPreset("touch"), h, 2000.0);
+  EXPECT_EQ(touch.stiffness_N_per_m, 400.0);
+  EXPECT_DOUBLE_EQ(touch.damping_Ns_per_m, 0.4);  // k h = 0.4 under the Touch's 4 N s/m
+  const Wall omega = DefaultWall(FindPreset("omega3"), 0.01, 2000.0);
+  EXPECT_EQ(omega.stiffness_N_per_m, 5000.0);
+  EXPECT_EQ(omega.damping_Ns_per_m, 30.0);  // k h = 50 capped at the omega.3's 30 N s/m
+  const Wall ideal = DefaultWall(FindPreset("ideal"), h, 2000.0);
+  EXPECT_EQ(ideal.stiffness_N_per_m, 2000.0);
+  EXPECT_DOUBLE_EQ(ideal.damping_Ns_per_m, 40.0);
+  // a stiffness limit without a damping limit keeps the sampled bound k h
+  DeviceLimits stiff_only{"lab", 5.0, 1500.0, 0.0};
+  EXPECT_DOUBLE_EQ(DefaultDamping(stiff_only, h, 1500.0), 1.5);
+}
+
 }  // namespace
 }  // namespace rigidtouch::device
