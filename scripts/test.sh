@@ -12,6 +12,7 @@ jobs=$(nproc 2>/dev/null || echo 2)
 echo "== format check"
 files=$(git ls-files '*.h' '*.cc' 2>/dev/null || true)
 if [ -n "$files" ]; then clang-format --dry-run --Werror $files; fi
+bash scripts/check-function-length.sh  # no function over 120 lines in src/, apps/, python/
 
 echo "== release build, -Wall -Wextra -Werror"
 # the Python module is built for Debian's interpreter, where its packages are (not a pyenv's)

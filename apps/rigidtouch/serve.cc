@@ -104,15 +104,11 @@ void SetPlausibility(const ServeFlags& f, DeviceParams& d) {
   d.plausible_speed_mps = f.max_device_speed_mps;
 }
 
-void Run(const ServeFlags& f) {
-  const DeviceChoice choice = ResolveDevice(f.device, f.connect, f.preset);
-  const std::string connect = choice.connect.empty() ? "sim" : choice.connect;
-  const device::DeviceLimits& preset = choice.spec.limits;
-  // a replay runs at the recorded rate: the recorded states are one period apart
-  const bool replay = connect.starts_with(kReplayPrefix);
-  std::optional<io::Record> recorded;
+// a replay runs at the recorded rate: the recorded states are one period apart
+double ReadServeRecord(const ServeFlags& f, const std::string& connect,
+                       std::optional<io::Record>& recorded) {
   double rate_hz = f.rate_hz;
-  if (replay) {
+  if (connect.starts_with(kReplayPrefix)) {
     const std::string log = connect.substr(kReplayPrefix.size());
     if (log.empty()) throw Error("serve: --connect replay:LOG needs the record file's path");
     recorded = io::ReadRecord(log);
@@ -125,6 +121,140 @@ void Run(const ServeFlags& f) {
     }
     rate_hz = recorded->rate_hz;
   }
+  return rate_hz;
+}
+
+// what the three device paths share: the flags, the device, the loop and its writers
+struct ServeRun {
+  const ServeFlags& f;
+  const DeviceChoice& choice;
+  const std::string& connect;
+  double rate_hz;
+  loop::LoopOptions& lo;
+  const std::atomic<bool>& stop;
+  loop::TraceQueue* traces;
+  loop::RecordQueue* records;
+};
+
+// replays a --record session through the model the simulated path builds
+nlohmann::json ServeReplay(const ServeRun& s, io::Record& recorded, loop::HapticLoopResult& r) {
+  const device::DeviceLimits& preset = s.choice.spec.limits;
+  // the model is built as on the simulated path, so a session recorded there replays through
+  // the same model; the tool starts where the recorded handle did
+  analysis::TapExperimentConfig c =
+      TapConfig(s.f.scene, s.choice.spec_text, s.rate_hz, s.f.speed_mps, s.f.taps);
+  c.load.device.coupling = Coupling::kDirect;
+  analysis::TapSetup setup = analysis::PrepareTap(c);
+  Model& model = setup.model;
+  PrintLoadWarnings(model);
+  device::ReplayDevice dev(std::move(recorded.samples), setup.device);
+  model.initial[model.tool].x_W = dev.first_state().position_m;
+  device::TightenDeviceParams(model.device, dev.limits());
+  SetPlausibility(s.f, model.device);
+  Configure(model);
+  const std::int64_t ticks =
+      s.f.duration_s > 0.0 ? std::llround(s.f.duration_s * s.rate_hz) : dev.size();
+  Data data = MakeData(model);
+  if (s.f.replay_pace == "max") {
+    r = loop::RunHapticTicks(model, data, dev, s.rate_hz, ticks, &s.stop, s.traces, s.records);
+  } else {
+    // without --duration the loop runs until the record ends (the device says so), so a
+    // skipped deadline does not cut the last ticks off
+    s.lo.duration_s = s.f.duration_s;
+    r = loop::RunHapticLoop(model, data, dev, s.lo, &s.stop, s.traces, s.records);
+  }
+  nlohmann::json result = RenderJson(model, data);
+  result["device"] = {{"kind", "replay"},
+                      {"record", s.connect.substr(kReplayPrefix.size())},
+                      {"pace", s.f.replay_pace},
+                      {"preset", preset.name},
+                      {"spec", s.choice.spec_text},
+                      {"recorded_ticks", dev.size()},
+                      {"replayed_ticks", dev.position()}};
+  return result;
+}
+
+// the in-process simulated device: the preset's model and a simulated hand's taps
+nlohmann::json ServeSim(const ServeRun& s, loop::HapticLoopResult& r) {
+  const device::DeviceLimits& preset = s.choice.spec.limits;
+  analysis::TapExperimentConfig c =
+      TapConfig(s.f.scene, s.choice.spec_text, s.rate_hz, s.f.speed_mps, s.f.taps);
+  c.load.device.coupling = Coupling::kDirect;
+  analysis::TapSetup setup = analysis::PrepareTap(c);
+  Model& model = setup.model;
+  PrintLoadWarnings(model);
+  device::TightenDeviceParams(model.device, setup.simulated->limits());
+  SetPlausibility(s.f, model.device);
+  // refuses a stiffness or damping the device cannot display
+  Configure(model);
+  s.lo.duration_s = s.f.duration_s > 0.0 ? s.f.duration_s : setup.simulated->duration_s();
+  Data data = MakeData(model);
+  r = loop::RunHapticLoop(model, data, *setup.simulated, s.lo, &s.stop, s.traces, s.records);
+  nlohmann::json result = RenderJson(model, data);
+  result["device"] = {{"kind", "simulated"},
+                      {"preset", preset.name},
+                      {"spec", s.choice.spec_text},
+                      {"energy_to_user_J", setup.simulated->energy_to_user_J()}};
+  return result;
+}
+
+// the UDP bridge to a device server; false when interrupted before the device answered
+bool ServeUdp(const ServeRun& s, nlohmann::json& result, loop::HapticLoopResult& r) {
+  const device::DeviceLimits& preset = s.choice.spec.limits;
+  // the wall defaults to what the device can display, as on the simulated path (and the tap
+  // experiment): the preset's stiffness, damping k h capped at the preset's
+  Settings settings = ResolveSettings(s.f.scene);
+  ApplyDevicePreset(settings, preset, s.rate_hz);
+  LoadOptions load = settings.load;
+  load.device.coupling = Coupling::kDirect;
+  load.device.position_resolution_m = s.choice.spec.model.encoder_resolution_m;
+  device::TightenDeviceParams(load.device, preset);
+  SetPlausibility(s.f, load.device);
+  const std::string scene =
+      s.f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : s.f.scene.scene;
+  // Configure refuses what the preset cannot display
+  Model model = LoadModel(scene, load);
+  // the tool is the end effector: the spec's apparent mass plus a modelled hand's
+  analysis::UseDeviceAndHandMass(model, s.choice.spec.model, device::HandParams{});
+  Configure(model);
+  PrintLoadWarnings(model);
+  device::UdpDeviceOptions o;
+  o.server = s.connect;
+  o.watchdog_s = s.f.watchdog_s;
+  o.limits = preset;
+  o.key_file = s.f.key_file;
+  o.test_loss.incoming_fraction = s.f.test_drop;
+  o.test_loss.outgoing_fraction = s.f.test_drop;
+  device::UdpDevice dev(o);
+  if (!loop::AwaitFirstState(dev, s.f.startup_timeout_s, &s.stop)) {
+    // interrupted before the device answered: nothing was rendered
+    if (s.stop.load()) return false;
+    std::cerr << "rigidtouch: error: serve: no state from the device at " << s.connect << " within "
+              << s.f.startup_timeout_s << " s (--startup-timeout); is the device server running?\n";
+    throw CLI::RuntimeError(kExitNoDevice);
+  }
+  // the device's own limits, known once its session has started, tighten the preset's
+  device::TightenDeviceParams(model.device, dev.limits());
+  Configure(model);
+  s.lo.duration_s = s.f.duration_s;
+  Data data = MakeData(model);
+  r = loop::RunHapticLoop(model, data, dev, s.lo, &s.stop, s.traces, s.records);
+  result = RenderJson(model, data);
+  result["device"] = {{"kind", "udp"},
+                      {"server", s.connect},
+                      {"preset", preset.name},
+                      {"spec", s.choice.spec_text},
+                      {"link", ToJson(dev.counters())},
+                      {"watchdog_tripped", dev.watchdog_tripped()}};
+  return true;
+}
+
+void Run(const ServeFlags& f) {
+  const DeviceChoice choice = ResolveDevice(f.device, f.connect, f.preset);
+  const std::string connect = choice.connect.empty() ? "sim" : choice.connect;
+  const bool replay = connect.starts_with(kReplayPrefix);
+  std::optional<io::Record> recorded;
+  const double rate_hz = ReadServeRecord(f, connect, recorded);
   loop::LoopOptions lo;
   lo.rate_hz = rate_hz;
   lo.realtime_priority = f.realtime;
@@ -163,103 +293,13 @@ void Run(const ServeFlags& f) {
     RefuseUnused(settings,
                  {"device.coupling_stiffness_N_per_m", "device.coupling_damping_Ns_per_m"}, why);
   }
+  const ServeRun s{f, choice, connect, rate_hz, lo, stop, traces.get(), records};
   if (replay) {
-    // the model is built as on the simulated path, so a session recorded there replays through
-    // the same model; the tool starts where the recorded handle did
-    analysis::TapExperimentConfig c =
-        TapConfig(f.scene, choice.spec_text, rate_hz, f.speed_mps, f.taps);
-    c.load.device.coupling = Coupling::kDirect;
-    analysis::TapSetup setup = analysis::PrepareTap(c);
-    Model& model = setup.model;
-    PrintLoadWarnings(model);
-    device::ReplayDevice dev(std::move(recorded->samples), setup.device);
-    model.initial[model.tool].x_W = dev.first_state().position_m;
-    device::TightenDeviceParams(model.device, dev.limits());
-    SetPlausibility(f, model.device);
-    Configure(model);
-    const std::int64_t ticks =
-        f.duration_s > 0.0 ? std::llround(f.duration_s * rate_hz) : dev.size();
-    Data data = MakeData(model);
-    if (f.replay_pace == "max") {
-      r = loop::RunHapticTicks(model, data, dev, rate_hz, ticks, &stop, traces.get(), records);
-    } else {
-      // without --duration the loop runs until the record ends (the device says so), so a
-      // skipped deadline does not cut the last ticks off
-      lo.duration_s = f.duration_s;
-      r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records);
-    }
-    result = RenderJson(model, data);
-    result["device"] = {{"kind", "replay"},
-                        {"record", connect.substr(kReplayPrefix.size())},
-                        {"pace", f.replay_pace},
-                        {"preset", preset.name},
-                        {"spec", choice.spec_text},
-                        {"recorded_ticks", dev.size()},
-                        {"replayed_ticks", dev.position()}};
+    result = ServeReplay(s, *recorded, r);
   } else if (connect == "sim") {
-    analysis::TapExperimentConfig c =
-        TapConfig(f.scene, choice.spec_text, rate_hz, f.speed_mps, f.taps);
-    c.load.device.coupling = Coupling::kDirect;
-    analysis::TapSetup setup = analysis::PrepareTap(c);
-    Model& model = setup.model;
-    PrintLoadWarnings(model);
-    device::TightenDeviceParams(model.device, setup.simulated->limits());
-    SetPlausibility(f, model.device);
-    // refuses a stiffness or damping the device cannot display
-    Configure(model);
-    lo.duration_s = f.duration_s > 0.0 ? f.duration_s : setup.simulated->duration_s();
-    Data data = MakeData(model);
-    r = loop::RunHapticLoop(model, data, *setup.simulated, lo, &stop, traces.get(), records);
-    result = RenderJson(model, data);
-    result["device"] = {{"kind", "simulated"},
-                        {"preset", preset.name},
-                        {"spec", choice.spec_text},
-                        {"energy_to_user_J", setup.simulated->energy_to_user_J()}};
-  } else {
-    // the wall defaults to what the device can display, as on the simulated path (and the tap
-    // experiment): the preset's stiffness, damping k h capped at the preset's
-    Settings settings = ResolveSettings(f.scene);
-    ApplyDevicePreset(settings, preset, rate_hz);
-    LoadOptions load = settings.load;
-    load.device.coupling = Coupling::kDirect;
-    load.device.position_resolution_m = choice.spec.model.encoder_resolution_m;
-    device::TightenDeviceParams(load.device, preset);
-    SetPlausibility(f, load.device);
-    const std::string scene =
-        f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : f.scene.scene;
-    // Configure refuses what the preset cannot display
-    Model model = LoadModel(scene, load);
-    // the tool is the end effector: the spec's apparent mass plus a modelled hand's
-    analysis::UseDeviceAndHandMass(model, choice.spec.model, device::HandParams{});
-    Configure(model);
-    PrintLoadWarnings(model);
-    device::UdpDeviceOptions o;
-    o.server = connect;
-    o.watchdog_s = f.watchdog_s;
-    o.limits = preset;
-    o.key_file = f.key_file;
-    o.test_loss.incoming_fraction = f.test_drop;
-    o.test_loss.outgoing_fraction = f.test_drop;
-    device::UdpDevice dev(o);
-    if (!loop::AwaitFirstState(dev, f.startup_timeout_s, &stop)) {
-      if (stop.load()) return;  // interrupted before the device answered: nothing was rendered
-      std::cerr << "rigidtouch: error: serve: no state from the device at " << connect << " within "
-                << f.startup_timeout_s << " s (--startup-timeout); is the device server running?\n";
-      throw CLI::RuntimeError(kExitNoDevice);
-    }
-    // the device's own limits, known once its session has started, tighten the preset's
-    device::TightenDeviceParams(model.device, dev.limits());
-    Configure(model);
-    lo.duration_s = f.duration_s;
-    Data data = MakeData(model);
-    r = loop::RunHapticLoop(model, data, dev, lo, &stop, traces.get(), records);
-    result = RenderJson(model, data);
-    result["device"] = {{"kind", "udp"},
-                        {"server", connect},
-                        {"preset", preset.name},
-                        {"spec", choice.spec_text},
-                        {"link", ToJson(dev.counters())},
-                        {"watchdog_tripped", dev.watchdog_tripped()}};
+    result = ServeSim(s, r);
+  } else if (!ServeUdp(s, result, r)) {
+    return;  // interrupted before the device answered: nothing was rendered
   }
   result["loop"] = loop::ToJson(r.timing);
   result["impulses"] = r.impulses;

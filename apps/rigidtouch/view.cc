@@ -81,7 +81,8 @@ std::vector<std::pair<double, double>> ParsePath(const std::string& text) {
   return out;
 }
 
-void Run(const ViewFlags& f) {
+// the flags that do not go together, before anything is opened
+void CheckViewFlags(const ViewFlags& f) {
   const bool replay = f.device.starts_with(kReplayPrefix);
   const bool udp = f.device.starts_with("udp://");
   if (f.device != "mouse" && f.device != "sim" && !replay && !udp) {
@@ -95,9 +96,12 @@ void Run(const ViewFlags& f) {
   if (f.device != "mouse" && (!f.mouse_path.empty() || f.tap_frame >= 0)) {
     throw Error("view: --mouse-path and --tap-at-frame drive --device mouse only");
   }
-  std::optional<io::Record> recorded;
+}
+
+// a replay runs at its record's rate (an explicit --rate must agree); the others at --rate
+double ReadReplayRecord(const ViewFlags& f, std::optional<io::Record>& recorded) {
   double rate_hz = f.rate_hz;
-  if (replay) {
+  if (f.device.starts_with(kReplayPrefix)) {
     const std::string log = f.device.substr(kReplayPrefix.size());
     recorded = io::ReadRecord(log);
     if (f.rate_given && f.rate_hz != recorded->rate_hz) {
@@ -108,6 +112,10 @@ void Run(const ViewFlags& f) {
     }
     rate_hz = recorded->rate_hz;
   }
+  return rate_hz;
+}
+
+view::ViewerOptions MakeViewerOptions(const ViewFlags& f, double rate_hz) {
   view::ViewerOptions vo;
   vo.frames = f.frames;
   vo.hidden = f.frames > 0;
@@ -124,6 +132,98 @@ void Run(const ViewFlags& f) {
   vo.switch_frame = f.switch_frame;
   vo.switch_at_contact = f.switch_at_contact;
   if (f.switch_frame >= 0 || f.switch_at_contact) vo.switch_to = io::ParseRenderer(f.switch_to);
+  return vo;
+}
+
+// the device the loop drives: owned here unless it is the tap setup's simulated one
+struct ViewDevice {
+  std::unique_ptr<device::Device> owned;
+  device::MouseDevice* mouse = nullptr;
+  device::Device* dev = nullptr;
+};
+
+// opens --device; the replay's first position and the UDP device's announced limits go into the
+// model, and the simulated hand's script sets the loop's duration
+ViewDevice OpenViewDevice(const ViewFlags& f, analysis::TapSetup& setup,
+                          std::optional<io::Record>& recorded, loop::LoopOptions& lo) {
+  Model& model = setup.model;
+  ViewDevice d;
+  d.dev = setup.simulated.get();
+  if (f.device == "mouse") {
+    auto m = std::make_unique<device::MouseDevice>(setup.device, device::MouseDeviceParams{},
+                                                   model.initial[model.tool].x_W);
+    d.mouse = m.get();
+    d.owned = std::move(m);
+  } else if (f.device.starts_with(kReplayPrefix)) {
+    auto r = std::make_unique<device::ReplayDevice>(std::move(recorded->samples), setup.device);
+    model.initial[model.tool].x_W = r->first_state().position_m;
+    d.owned = std::move(r);
+  } else if (f.device.starts_with("udp://")) {
+    // the UDP bridge as in serve: the preset's limits until the device announces its own
+    device::UdpDeviceOptions uo;
+    uo.server = f.device;
+    uo.limits = setup.device;
+    uo.key_file = f.key_file;
+    auto u = std::make_unique<device::UdpDevice>(uo);
+    if (!loop::AwaitFirstState(*u, f.startup_timeout_s, nullptr)) {
+      std::cerr << "rigidtouch: error: view: no state from the device at " << f.device << " within "
+                << f.startup_timeout_s << " s (--startup-timeout); is the device server running?\n";
+      throw CLI::RuntimeError(kExitNoDevice);
+    }
+    device::TightenDeviceParams(model.device, u->limits());
+    d.owned = std::move(u);
+  } else {
+    lo.duration_s = setup.simulated->duration_s();
+  }
+  if (d.owned) d.dev = d.owned.get();
+  return d;
+}
+
+// what the loop segments add up to (a renderer switch ends one segment and starts the next)
+struct LoopTotals {
+  std::int64_t impulses = 0, ticks = 0;
+  double max_force_N = 0.0;
+  bool finite = true;
+};
+
+void PrintViewResult(const ViewFlags& f, const Model& model, const Data& data,
+                     const loop::HapticLoopResult& r, const LoopTotals& totals,
+                     const view::ViewerResult& vr, RecordOutput& record) {
+  nlohmann::json result;
+  result["loop"] = loop::ToJson(r.timing);  // the last segment's timing
+  result["ticks"] = totals.ticks;
+  result["renderer_switches"] = vr.renderer_switches;
+  result["renderer_switch_wait_frames"] = vr.switch_wait_frames;
+  result["renderer"] = io::RendererName(model.render.renderer);
+  result["frames"] = vr.frames;
+  result["display_rate_hz"] = vr.elapsed_s > 0.0 ? vr.frames / vr.elapsed_s : 0.0;
+  result["impulses"] = totals.impulses;
+  result["max_force_N"] = totals.max_force_N;
+  result["force_limit_N"] = r.force_limit_N;
+  result["finite"] = totals.finite;
+  result["device"] = f.device;
+  result["warnings"] = WarningsJson(data);
+  if (!f.screenshot.empty()) result["screenshot"] = f.screenshot;
+  if (record.queue) {
+    result["record_queue"] = FinishRecord(record, f.record);
+    result["record"] = f.record;
+  }
+  if (f.json) {
+    std::cout << result.dump() << "\n";
+  } else {
+    const auto& t = result["loop"];
+    std::cout << "frames " << vr.frames << " in " << vr.elapsed_s << " s; loop ticks " << t["ticks"]
+              << " at " << t["achieved_rate_hz"] << " Hz, period error p99 "
+              << 1e6 * t["period_error_p99_s"].get<double>() << " us, max "
+              << 1e6 * t["period_error_max_s"].get<double>() << " us\n";
+  }
+}
+
+void Run(const ViewFlags& f) {
+  CheckViewFlags(f);
+  std::optional<io::Record> recorded;
+  const double rate_hz = ReadReplayRecord(f, recorded);
+  const view::ViewerOptions vo = MakeViewerOptions(f, rate_hz);
 
   loop::LoopOptions lo;
   lo.rate_hz = rate_hz;
@@ -137,38 +237,8 @@ void Run(const ViewFlags& f) {
   analysis::TapSetup setup = analysis::PrepareTap(c);
   Model& model = setup.model;
   PrintLoadWarnings(model);
-  std::unique_ptr<device::Device> owned;
-  device::MouseDevice* mouse = nullptr;
-  device::Device* dev = setup.simulated.get();
-  if (f.device == "mouse") {
-    auto m = std::make_unique<device::MouseDevice>(setup.device, device::MouseDeviceParams{},
-                                                   model.initial[model.tool].x_W);
-    mouse = m.get();
-    owned = std::move(m);
-    dev = owned.get();
-  } else if (replay) {
-    auto r = std::make_unique<device::ReplayDevice>(std::move(recorded->samples), setup.device);
-    model.initial[model.tool].x_W = r->first_state().position_m;
-    owned = std::move(r);
-    dev = owned.get();
-  } else if (udp) {
-    // the UDP bridge as in serve: the preset's limits until the device announces its own
-    device::UdpDeviceOptions uo;
-    uo.server = f.device;
-    uo.limits = setup.device;
-    uo.key_file = f.key_file;
-    auto u = std::make_unique<device::UdpDevice>(uo);
-    if (!loop::AwaitFirstState(*u, f.startup_timeout_s, nullptr)) {
-      std::cerr << "rigidtouch: error: view: no state from the device at " << f.device << " within "
-                << f.startup_timeout_s << " s (--startup-timeout); is the device server running?\n";
-      throw CLI::RuntimeError(kExitNoDevice);
-    }
-    device::TightenDeviceParams(model.device, u->limits());
-    owned = std::move(u);
-    dev = owned.get();
-  } else {
-    lo.duration_s = setup.simulated->duration_s();
-  }
+  const ViewDevice vd = OpenViewDevice(f, setup, recorded, lo);
+  device::Device* dev = vd.dev;
   device::TightenDeviceParams(model.device, setup.device);
   Configure(model);
 
@@ -179,9 +249,7 @@ void Run(const ViewFlags& f) {
   Data data = MakeData(model);
   std::atomic<bool> stop{false};
   loop::HapticLoopResult r;  // the current segment's (a renderer switch starts a new one)
-  std::int64_t impulses = 0, ticks = 0;
-  double max_force_N = 0.0;
-  bool finite = true;
+  LoopTotals totals;
   std::exception_ptr loop_error;
   std::thread haptic;
   const double sim_duration_s = lo.duration_s;
@@ -203,10 +271,10 @@ void Run(const ViewFlags& f) {
   const auto halt = [&] {
     stop.store(true);
     haptic.join();
-    impulses += r.impulses;
-    ticks += r.timing.ticks;
-    max_force_N = std::max(max_force_N, r.max_force_N);
-    finite = finite && r.finite;
+    totals.impulses += r.impulses;
+    totals.ticks += r.timing.ticks;
+    totals.max_force_N = std::max(totals.max_force_N, r.max_force_N);
+    totals.finite = totals.finite && r.finite;
   };
   // between two loop runs on the same Data: the model's renderer changes only while the haptic
   // thread is stopped, and only when no contact is active (checked on the stopped state)
@@ -233,7 +301,7 @@ void Run(const ViewFlags& f) {
   view::ViewerResult vr;
   std::exception_ptr view_error;
   try {
-    vr = view::RunViewer(model, feed, mouse, vo, switch_renderer);
+    vr = view::RunViewer(model, feed, vd.mouse, vo, switch_renderer);
   } catch (...) {
     view_error = std::current_exception();
   }
@@ -241,34 +309,7 @@ void Run(const ViewFlags& f) {
   if (view_error) std::rethrow_exception(view_error);
   if (loop_error) std::rethrow_exception(loop_error);
 
-  nlohmann::json result;
-  result["loop"] = loop::ToJson(r.timing);  // the last segment's timing
-  result["ticks"] = ticks;
-  result["renderer_switches"] = vr.renderer_switches;
-  result["renderer_switch_wait_frames"] = vr.switch_wait_frames;
-  result["renderer"] = io::RendererName(model.render.renderer);
-  result["frames"] = vr.frames;
-  result["display_rate_hz"] = vr.elapsed_s > 0.0 ? vr.frames / vr.elapsed_s : 0.0;
-  result["impulses"] = impulses;
-  result["max_force_N"] = max_force_N;
-  result["force_limit_N"] = r.force_limit_N;
-  result["finite"] = finite;
-  result["device"] = f.device;
-  result["warnings"] = WarningsJson(data);
-  if (!f.screenshot.empty()) result["screenshot"] = f.screenshot;
-  if (records) {
-    result["record_queue"] = FinishRecord(record, f.record);
-    result["record"] = f.record;
-  }
-  if (f.json) {
-    std::cout << result.dump() << "\n";
-  } else {
-    const auto& t = result["loop"];
-    std::cout << "frames " << vr.frames << " in " << vr.elapsed_s << " s; loop ticks " << t["ticks"]
-              << " at " << t["achieved_rate_hz"] << " Hz, period error p99 "
-              << 1e6 * t["period_error_p99_s"].get<double>() << " us, max "
-              << 1e6 * t["period_error_max_s"].get<double>() << " us\n";
-  }
+  PrintViewResult(f, model, data, r, totals, vr, record);
 }
 
 void Register(CLI::App& root) {

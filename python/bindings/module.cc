@@ -190,9 +190,9 @@ py::object AnalyzeLogs(const std::vector<std::string>& paths) {
   return ToPython(report);
 }
 
-}  // namespace
-
-void DefineModule(py::module_& m) {
+// the module's docstring, and Python exceptions for the library's errors: ValueError for bad
+// input, OutputError (an OSError) for a file that cannot be written
+void DefineDocAndErrors(py::module_& m) {
   m.doc() =
       "rigidtouch's engine from Python: haptic rendering of rigid contact (penalty feedback plus "
       "passive collision impulses). SI units throughout, the unit in every name.";
@@ -207,7 +207,10 @@ void DefineModule(py::module_& m) {
       PyErr_SetString(PyExc_ValueError, e.what());
     }
   });
+}
 
+// the parameter sections of a scene: contact law, rendering, device, load options
+void DefineParams(py::module_& m) {
   py::class_<ContactParams>(m, "ContactParams",
                             "Penalty contact law (tick stage 4); every field in SI units.")
       .def(py::init<>())
@@ -285,7 +288,10 @@ void DefineModule(py::module_& m) {
                      "contact capacity; 0: what the scene can produce")
       .def_readwrite("max_group_bodies", &LoadOptions::max_group_bodies,
                      "bodies per contact group; 0: every body");
+}
 
+// the loaded scene
+void DefineModel(py::module_& m) {
   py::class_<Model>(m, "Model",
                     "A loaded scene: everything constant while it runs. Change its contact, "
                     "render and device sections with configure().")
@@ -332,7 +338,10 @@ void DefineModule(py::module_& m) {
       .def_readonly("max_contacts", &Model::max_contacts, "contact capacity")
       .def_readonly("load_warnings", &Model::load_warnings,
                     "problems found at load that do not stop the scene, one sentence each");
+}
 
+// the running state, with array views into it
+void DefineData(py::module_& m) {
   py::class_<Data>(m, "Data",
                    "All mutable state of a running scene. Arrays are views into it (no copy): "
                    "they change with every tick.")
@@ -391,7 +400,10 @@ void DefineModule(py::module_& m) {
       .def_property_readonly(
           "warnings", [](const Data& d) { return WarningsDict(d.warnings); },
           "warnings counted so far {name: ticks}");
+}
 
+// loading, configuring and stepping a scene
+void DefineTick(py::module_& m) {
   m.def(
       "load_model",
       [](const std::string& path, std::optional<LoadOptions> options, const std::string& config) {
@@ -449,8 +461,10 @@ void DefineModule(py::module_& m) {
       "the GIL, as `rigidtouch simulate` does.");
   m.def("kinetic_energy", &KineticEnergy, "model"_a, "data"_a,
         "Total kinetic energy of the dynamic bodies [J].");
+}
 
-  // the simulated hand and device
+// the simulated hand and device
+void DefineSimulatedDevice(py::module_& m) {
   py::class_<device::SimulatedDevice>(
       m, "SimulatedDevice",
       "A simulated hand holding a simulated haptic device, scripted to tap a wall: read() gives "
@@ -520,7 +534,10 @@ void DefineModule(py::module_& m) {
                              "energy the device delivered to the user so far [J]")
       .def_property_readonly("duration_s", &device::SimulatedDevice::duration_s,
                              "length of the scripted taps [s]");
+}
 
+// the CLI's tap experiment and study analyses in process
+void DefineTapAndStudy(py::module_& m) {
   m.def(
       "_prepare_tap",
       [](const std::vector<std::string>& args) {
@@ -556,6 +573,18 @@ void DefineModule(py::module_& m) {
         "correct [%], d', exact binomial tests per test and participant).");
   m.def("analyze_logs", &AnalyzeLogs, "logs"_a,
         "Analyses study session logs of one protocol, as `rigidtouch study analyze --json`.");
+}
+
+}  // namespace
+
+void DefineModule(py::module_& m) {
+  DefineDocAndErrors(m);
+  DefineParams(m);
+  DefineModel(m);
+  DefineData(m);
+  DefineTick(m);
+  DefineSimulatedDevice(m);
+  DefineTapAndStudy(m);
 }
 
 }  // namespace rigidtouch::python

@@ -220,15 +220,8 @@ void ToolContactWarnings(const Model& model, std::vector<std::string>& warnings)
               "is", warnings);
 }
 
-}  // namespace
-
-void Configure(Model& model) {
-  RequireFinite("timestep_s", model.timestep_s, render::kMinTimestep_s, render::kMaxTimestep_s,
-                "0 < h <= " + io::FormatNumber(render::kMaxTimestep_s) + " s (at least " +
-                    io::FormatNumber(render::kMinTimestep_s * 1e6) + " us)");
-  Require(std::isfinite(model.timestep_s) && model.timestep_s > 0.0, "timestep_s", model.timestep_s,
-          "h > 0");
-  const ContactParams& c = model.contact;
+// contact law parameters (the tool's and the scene's)
+void RequireContact(const ContactParams& c) {
   RequireFinite("stiffness_N_per_m", c.stiffness_N_per_m, 0.0, kInf, "k >= 0 N/m, finite");
   RequireFinite("damping_Ns_per_m", c.damping_Ns_per_m, 0.0, kInf, "b >= 0 N s/m, finite");
   RequireFinite("scene_stiffness_N_per_m", c.scene_stiffness_N_per_m, 0.0, kInf,
@@ -245,7 +238,10 @@ void Configure(Model& model) {
   }
   RequireFinite("tangential_ratio", c.tangential_ratio, 0.0, kInf, ">= 0");
   RequireFinite("onset_speed_mps", c.onset_speed_mps, 0.0, kInf, ">= 0 m/s");
+}
 
+// the renderer's parameters, which depend on the renderer kind and on h (a material's Nyquist)
+void RequireRender(const Model& model) {
   const RenderParams& r = model.render;
   RequireFinite("restitution", r.restitution, render::kMinRestitution, render::kMaxRestitution,
                 io::FormatNumber(render::kMinRestitution) +
@@ -297,8 +293,12 @@ void Configure(Model& model) {
                 " is used only by the event and train renderers; the " +
                 io::RendererName(r.renderer) + " renderer takes none");
   }
-  model.schedule = contact::MakeSchedule(model.timestep_s, r);
+}
 
+// the device port, and the laws it renders against what the device can display
+void RequireDevice(const Model& model) {
+  const ContactParams& c = model.contact;
+  const RenderParams& r = model.render;
   const DeviceParams& d = model.device;
   RequireFinite("max_force_N", d.max_force_N, 0.0, kInf, ">= 0 N (0: unlimited)");
   RequireFinite("coupling_stiffness_N_per_m", d.coupling_stiffness_N_per_m, 0.0, kInf, ">= 0 N/m");
@@ -333,6 +333,21 @@ void Configure(Model& model) {
     RequireDisplayable("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m,
                        "max_damping_Ns_per_m", d.max_damping_Ns_per_m, "N s/m", why);
   }
+}
+
+}  // namespace
+
+void Configure(Model& model) {
+  RequireFinite("timestep_s", model.timestep_s, render::kMinTimestep_s, render::kMaxTimestep_s,
+                "0 < h <= " + io::FormatNumber(render::kMaxTimestep_s) + " s (at least " +
+                    io::FormatNumber(render::kMinTimestep_s * 1e6) + " us)");
+  Require(std::isfinite(model.timestep_s) && model.timestep_s > 0.0, "timestep_s", model.timestep_s,
+          "h > 0");
+  RequireContact(model.contact);
+  RequireRender(model);
+  model.schedule = contact::MakeSchedule(model.timestep_s, model.render);
+
+  RequireDevice(model);
   Require(model.tool >= 0 && model.tool < static_cast<int>(model.bodies.size()), "tool", model.tool,
           "an index of a free body");
   for (auto& b : model.bodies) {
