@@ -20,6 +20,8 @@
 
 #include "io/output_file.h"
 #include "rigidtouch/data.h"
+#include "view/camera.h"
+#include "view/scene_gl.h"
 
 namespace rigidtouch::view {
 namespace {
@@ -37,52 +39,25 @@ constexpr ImU32 kContactColor = IM_COL32(255, 0, 255, 255);
 constexpr ImU32 kNormalColor = IM_COL32(255, 255, 0, 255);
 constexpr ImU32 kForceColor = IM_COL32(0, 255, 0, 255);
 
-// a fixed perspective camera looking at the tool's start from the front and above
-struct Camera {
-  Vec3 eye, f, r, u;
-  double focal_px = 1.0, cx = 0.0, cy = 0.0;
+ImVec2 Pixel(double x, double y) {
+  return ImVec2(static_cast<float>(x), static_cast<float>(y));
+}
 
-  Camera(const Vec3& target, double distance_m, double width, double height) {
-    const double elevation = 25.0 * std::numbers::pi / 180.0;
-    eye = target + distance_m * Vec3(0.0, -std::cos(elevation), std::sin(elevation));
-    f = (target - eye).normalized();
-    r = f.cross(Vec3::UnitZ()).normalized();
-    u = r.cross(f);
-    cx = 0.5 * width;
-    cy = 0.5 * height;
-    focal_px = cy / std::tan(0.5 * 45.0 * std::numbers::pi / 180.0);
-  }
-  double Depth(const Vec3& p) const { return (p - eye).dot(f); }
-  // false behind the near plane
-  bool Project(const Vec3& p, ImVec2& out) const {
-    const Vec3 v = p - eye;
-    const double z = v.dot(f);
-    if (z < 0.01) return false;
-    out = ImVec2(static_cast<float>(cx + focal_px * v.dot(r) / z),
-                 static_cast<float>(cy - focal_px * v.dot(u) / z));
-    return true;
-  }
-  // the point at depth `z` under pixel (x, y)
-  Vec3 Unproject(double x, double y, double z) const {
-    return eye + z * f + ((x - cx) * z / focal_px) * r - ((y - cy) * z / focal_px) * u;
-  }
-};
-
-ImU32 Shade(ImU32 c, double k) {
-  const auto ch = [&](int shift) {
-    return static_cast<ImU32>(std::clamp(((c >> shift) & 0xff) * k, 0.0, 255.0)) << shift;
-  };
-  return ch(IM_COL32_R_SHIFT) | ch(IM_COL32_G_SHIFT) | ch(IM_COL32_B_SHIFT) | (c & IM_COL32_A_MASK);
+bool Project(const Camera& cam, const Vec3& p, ImVec2& out) {
+  double x = 0.0, y = 0.0;
+  if (!cam.Project(p, x, y)) return false;
+  out = Pixel(x, y);
+  return true;
 }
 
 void Line(ImDrawList* dl, const Camera& cam, const Vec3& a, const Vec3& b, ImU32 c, float w) {
   ImVec2 pa, pb;
-  if (cam.Project(a, pa) && cam.Project(b, pb)) dl->AddLine(pa, pb, c, w);
+  if (Project(cam, a, pa) && Project(cam, b, pb)) dl->AddLine(pa, pb, c, w);
 }
 
 void Arrow(ImDrawList* dl, const Camera& cam, const Vec3& from, const Vec3& to, ImU32 c) {
   ImVec2 a, b;
-  if (!cam.Project(from, a) || !cam.Project(to, b)) return;
+  if (!Project(cam, from, a) || !Project(cam, to, b)) return;
   dl->AddLine(a, b, c, 3.0f);
   const float dx = b.x - a.x, dy = b.y - a.y, n = std::sqrt(dx * dx + dy * dy);
   if (n < 4.0f) return;
@@ -91,73 +66,9 @@ void Arrow(ImDrawList* dl, const Camera& cam, const Vec3& from, const Vec3& to, 
                         ImVec2(b.x - s * ux - 0.5f * s * uy, b.y - s * uy + 0.5f * s * ux), c);
 }
 
-void Disc(ImDrawList* dl, const Camera& cam, const Vec3& centre, double radius_m, ImU32 c,
-          bool filled) {
-  ImVec2 p;
-  if (!cam.Project(centre, p)) return;
-  const float r = static_cast<float>(cam.focal_px * radius_m / cam.Depth(centre));
-  if (filled) {
-    dl->AddCircleFilled(p, r, c, 32);
-    // a highlight towards the light, so a sphere reads as one
-    dl->AddCircleFilled(ImVec2(p.x - 0.3f * r, p.y - 0.3f * r), 0.35f * r, Shade(c, 1.25), 16);
-  } else {
-    dl->AddCircle(p, r, c, 32, 1.5f);
-  }
-}
-
-void DrawBox(ImDrawList* dl, const Camera& cam, const Vec3& pos, const Mat3& R, const Vec3& half,
-             ImU32 c) {
-  Vec3 corner[8];
-  for (int k = 0; k < 8; ++k) {
-    const Vec3 s((k & 1) ? 1.0 : -1.0, (k & 2) ? 1.0 : -1.0, (k & 4) ? 1.0 : -1.0);
-    corner[k] = pos + R * s.cwiseProduct(half);
-  }
-  // faces as corner indices, counter-clockwise seen from outside, with their outward axes
-  static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
-                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
-  static constexpr int kAxis[6] = {-1, 1, -2, 2, -3, 3};
-  const Vec3 light = Vec3(0.3, -0.5, 1.0).normalized();
-  for (int i = 0; i < 6; ++i) {
-    const int a = std::abs(kAxis[i]) - 1;
-    const Vec3 n = (kAxis[i] > 0 ? 1.0 : -1.0) * R.col(a);
-    const Vec3 centre = pos + n * half[a];
-    if ((centre - cam.eye).dot(n) >= 0.0) continue;  // faces away from the camera
-    ImVec2 p[4];
-    bool ok = true;
-    for (int k = 0; k < 4; ++k) ok = ok && cam.Project(corner[kFaces[i][k]], p[k]);
-    if (!ok) continue;
-    dl->AddQuadFilled(p[0], p[1], p[2], p[3], Shade(c, 0.55 + 0.45 * std::max(0.0, n.dot(light))));
-    dl->AddQuad(p[0], p[1], p[2], p[3], Shade(c, 0.4), 1.0f);
-  }
-}
-
-void DrawCapsule(ImDrawList* dl, const Camera& cam, const Vec3& pos, const Mat3& R, double radius,
-                 double half_length, ImU32 c) {
-  const Vec3 a = pos - half_length * R.col(2), b = pos + half_length * R.col(2);
-  ImVec2 pa, pb;
-  if (!cam.Project(a, pa) || !cam.Project(b, pb)) return;
-  const float w = static_cast<float>(2.0 * cam.focal_px * radius / cam.Depth(pos));
-  dl->AddLine(pa, pb, c, w);
-  Disc(dl, cam, a, radius, c, true);
-  Disc(dl, cam, b, radius, c, true);
-}
-
-void DrawPlane(ImDrawList* dl, const Camera& cam, const Vec3& pos, const Mat3& R, const Vec3& size,
-               const Vec3& around, double half) {
-  // a grid of 1 cm cells (5 cm for large scenes) around the scene (an MJCF plane of size 0 is
-  // infinite)
-  const double step = half > 0.3 ? 0.05 : 0.01;
-  const Vec3 local = R.transpose() * (around - pos);
-  const double hx = size.x() > 0.0 ? std::min(size.x(), half) : half;
-  const double hy = size.y() > 0.0 ? std::min(size.y(), half) : half;
-  const double ox = std::round(local.x() / step) * step, oy = std::round(local.y() / step) * step;
-  for (double t = -half; t <= half + 1e-9; t += step) {
-    const float w = std::abs(std::fmod(std::abs(t + ox) + 1e-9, 5 * step)) < 2e-9 ? 2.0f : 1.0f;
-    Line(dl, cam, pos + R * Vec3(ox + t, oy - hy, 0), pos + R * Vec3(ox + t, oy + hy, 0),
-         kFloorColor, w);
-    Line(dl, cam, pos + R * Vec3(ox - hx, oy + t, 0), pos + R * Vec3(ox + hx, oy + t, 0),
-         kFloorColor, w);
-  }
+Rgb ToRgb(ImU32 c) {
+  const auto ch = [&](int shift) { return static_cast<float>((c >> shift) & 0xff) / 255.0f; };
+  return {ch(IM_COL32_R_SHIFT), ch(IM_COL32_G_SHIFT), ch(IM_COL32_B_SHIFT)};
 }
 
 struct Scope {
@@ -225,72 +136,253 @@ void WritePng(const std::string& path, int w, int h) {
   io::WriteFileAtomically(path, png, "screenshot");
 }
 
+// the window with its OpenGL 3.3 context (a depth buffer too: the window's back buffer is what
+// --screenshot reads, hidden or not) and Dear ImGui on it; each part undone by its destructor, in
+// reverse order, also when a later one fails
+struct GlfwLibrary {
+  GlfwLibrary() {
+    if (!glfwInit()) {
+      throw Error("view: cannot open a window (no display? set DISPLAY or run under xvfb-run)");
+    }
+  }
+  ~GlfwLibrary() { glfwTerminate(); }
+};
+
+struct GlfwWindow {
+  GLFWwindow* w = nullptr;
+  explicit GlfwWindow(const ViewerOptions& o) {
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_DEPTH_BITS, 24);
+    glfwWindowHint(GLFW_VISIBLE, o.hidden ? GLFW_FALSE : GLFW_TRUE);
+    w = glfwCreateWindow(o.width_px, o.height_px, "rigidtouch view", nullptr, nullptr);
+    if (w == nullptr) throw Error("view: cannot create an OpenGL 3.3 window with a depth buffer");
+    glfwMakeContextCurrent(w);
+    glfwSwapInterval(0);  // RunViewer paces the frames
+  }
+  ~GlfwWindow() { glfwDestroyWindow(w); }
+};
+
+struct ImGuiSession {
+  explicit ImGuiSession(GLFWwindow* window) {
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
+    ImGui::StyleColorsDark();
+    ImGuiStyle& style = ImGui::GetStyle();
+    // exact colours in the screenshots: no blending of lines or of the panel with the scene
+    style.AntiAliasedLines = false;
+    style.AntiAliasedLinesUseTex = false;
+    style.AntiAliasedFill = false;
+    style.Colors[ImGuiCol_WindowBg].w = 1.0f;
+    style.Colors[ImGuiCol_FrameBg] = ImVec4(0.12f, 0.14f, 0.18f, 1.0f);
+    ImGui_ImplGlfw_InitForOpenGL(window, true);
+    ImGui_ImplOpenGL3_Init("#version 330");
+  }
+  ~ImGuiSession() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+};
+
+// what the viewer carries from frame to frame besides the scope
+struct FrameState {
+  Vec3 target = Vec3::Zero();  // the handle's target
+  double target_depth = 0.0;   // its depth from the camera (the wheel moves it)
+  bool pending = false;        // a switch was asked for and waits for no contact
+  RendererKind pending_kind = RendererKind::kTrain;
+  std::string switch_message;
+};
+
+// the handle's target: the scripted path or the cursor, in the view plane; wheel: depth; T: tap
+void SteerMouse(device::MouseDevice& mouse, const ViewerOptions& o, int frame, const Camera& cam,
+                int w, int h, FrameState& st) {
+  const ImGuiIO& io = ImGui::GetIO();
+  bool have = false;
+  double mx = 0.0, my = 0.0;
+  if (!o.mouse_path.empty()) {
+    const double s = o.frames > 1 ? static_cast<double>(frame) / (o.frames - 1) : 1.0;
+    const double at = s * static_cast<double>(o.mouse_path.size() - 1);
+    const std::size_t i = std::min(static_cast<std::size_t>(at), o.mouse_path.size() - 1);
+    const std::size_t j = std::min(i + 1, o.mouse_path.size() - 1);
+    const double a = at - static_cast<double>(i);
+    mx = (1 - a) * o.mouse_path[i].first + a * o.mouse_path[j].first;
+    my = (1 - a) * o.mouse_path[i].second + a * o.mouse_path[j].second;
+    have = true;
+  } else if (!io.WantCaptureMouse && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+    mx = io.MousePos.x * (static_cast<double>(w) / io.DisplaySize.x);
+    my = io.MousePos.y * (static_cast<double>(h) / io.DisplaySize.y);
+    have = true;
+  }
+  if (!io.WantCaptureMouse && io.MouseWheel != 0.0f) {
+    st.target_depth += 0.005 * io.MouseWheel;  // 5 mm per notch, into the screen
+  }
+  if (have) st.target = cam.Unproject(mx, my, st.target_depth);
+  mouse.SetTarget(st.target);
+  if (frame == o.tap_frame || (!io.WantCaptureKeyboard && ImGui::IsKeyPressed(GLFW_KEY_T))) {
+    mouse.RequestTap();
+  }
+}
+
+// a renderer switch, asked for by the script or the panel, happens between ticks while no
+// contact is active
+void SwitchWhenFree(const ViewerOptions& o, int frame, ViewFeed& feed,
+                    const RendererSwitch& switch_renderer, FrameState& st, ViewerResult& result) {
+  if (frame == o.switch_frame || (o.switch_at_contact && result.renderer_switches == 0 &&
+                                  !st.pending && feed.Latest().sample.tool_contacts > 0)) {
+    st.pending = true;
+    st.pending_kind = o.switch_to;
+  }
+  if (st.pending && feed.Latest().sample.tool_contacts > 0) ++result.switch_wait_frames;
+  if (st.pending && switch_renderer && feed.Latest().sample.tool_contacts == 0) {
+    const std::optional<std::string> done = switch_renderer(st.pending_kind);
+    if (done) {
+      st.switch_message = *done;
+      if (done->empty()) ++result.renderer_switches;
+      st.pending = false;
+    }
+  }
+}
+
+// every geom, shaded, in its current pose (the initial one before the first tick), with depth
+// testing: no order to sort; the tool in its own colour
+void DrawGeoms(SceneRenderer& scene, const Model& model, const ViewSnapshot& snap) {
+  for (std::size_t gi = 0; gi < model.geoms.size(); ++gi) {
+    const GeomModel& g = model.geoms[gi];
+    Vec3 pos;
+    Quat q;
+    if (g.body < 0) {
+      pos = g.pos_B;
+      q = g.quat_B;
+    } else if (snap.step < 0 || g.body >= snap.nbody) {
+      const BodyState& b = model.initial[g.body];
+      pos = b.x_W + b.q_WB * g.pos_B;
+      q = b.q_WB * g.quat_B;
+    } else {
+      pos = snap.x_W[g.body] + snap.q_WB[g.body] * g.pos_B;
+      q = snap.q_WB[g.body] * g.quat_B;
+    }
+    const ImU32 c = g.body == model.tool ? kToolColor : g.body < 0 ? kStaticColor : kBodyColor;
+    scene.DrawGeom(static_cast<int>(gi), pos, q.toRotationMatrix(), ToRgb(c));
+  }
+}
+
+// over the shaded scene, never hidden by it: contacts and their normals (1 cm), then the device
+// force (1 cm per N)
+void DrawOverlays(const Camera& cam, const ViewSnapshot& snap) {
+  ImDrawList* dl = ImGui::GetBackgroundDrawList();
+  for (int k = 0; k < snap.ncontact; ++k) {
+    const ContactView& cv = snap.contacts[k];
+    ImVec2 q;
+    if (Project(cam, cv.p_W, q)) dl->AddCircleFilled(q, 3.0f, kContactColor, 8);
+    Line(dl, cam, cv.p_W, cv.p_W + 0.01 * cv.n_W, kNormalColor, 1.5f);
+  }
+  if (snap.step >= 0) {
+    const Vec3 tool = snap.sample.tool_position_m;
+    Arrow(dl, cam, tool, tool + 0.01 * snap.sample.device_force_N, kForceColor);
+  }
+}
+
+void PanelSwitch(const Model& model, const ViewSnapshot& snap, FrameState& st) {
+  const bool contact = snap.sample.tool_contacts > 0;
+  ImGui::Text(contact ? "switch (after the contact)" : "switch to");
+  for (const RendererKind k :
+       {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
+    ImGui::SameLine();
+    if (ImGui::RadioButton(io::RendererName(k), model.render.renderer == k)) {
+      st.pending = true;
+      st.pending_kind = k;
+    }
+  }
+  if (st.pending) ImGui::TextDisabled("waiting for no contact to switch");
+  if (!st.switch_message.empty()) {
+    ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "%s", st.switch_message.c_str());
+  }
+}
+
+void PanelWarnings(const ViewSnapshot& snap) {
+  bool any = false;
+  for (int k = 0; k < static_cast<int>(Warning::kCount) && k < 32; ++k) {
+    if ((snap.warnings >> k) & 1u) {
+      ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "warning: %s",
+                         WarningName(static_cast<Warning>(k)));
+      any = true;
+    }
+  }
+  if (snap.scope_dropped > 0) {
+    ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "scope dropped %llu ticks",
+                       static_cast<unsigned long long>(snap.scope_dropped));
+    any = true;
+  }
+  if (!any) ImGui::Text("no warnings");
+}
+
+// the panel: device, renderer (switchable), wall, loop timing, the tick's numbers, the scope and
+// the warnings
+void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& snap,
+               const Scope& scope, bool can_switch, bool has_mouse, FrameState& st) {
+  const float force_scale =
+      static_cast<float>(model.device.max_force_N > 0.0 ? model.device.max_force_N : 5.0);
+  ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(470, 0), ImGuiCond_Always);
+  ImGui::Begin("rigidtouch", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
+  ImGui::Text("device %s", o.device.c_str());
+  ImGui::Text("renderer %s  e %.2f  t_c %.0f ms  f %.0f Hz",
+              io::RendererName(model.render.renderer), model.render.restitution,
+              1e3 * model.render.t_collision_s, model.render.frequency_hz);
+  if (can_switch) PanelSwitch(model, snap, st);
+  ImGui::Text("wall k %.0f N/m  b %.2f N s/m  force limit %.2f N", model.contact.stiffness_N_per_m,
+              model.contact.damping_Ns_per_m, model.device.max_force_N);
+  ImGui::Text("loop %.0f Hz asked, %.1f Hz measured", o.rate_hz, snap.measured_rate_hz);
+  ImGui::Text("period error over 1 s: mean %.1f us, max %.1f us", 1e6 * snap.period_error_mean_s,
+              1e6 * snap.period_error_max_s);
+  ImGui::Text("t %.3f s  tool contacts %d  penetration %.2f mm", snap.time_s,
+              snap.sample.tool_contacts, 1e3 * snap.sample.penetration_m);
+  ImGui::Text("force %.2f N (penalty %.2f, impulsive %.2f)", snap.sample.device_force_N.norm(),
+              snap.sample.penalty_force_N.norm(), snap.sample.impulsive_force_N.norm());
+  ImGui::Separator();
+  ImGui::Text("last %.1f s", o.scope_window_s);
+  Plot("total N", scope.total, kTotalColor, force_scale, nullptr);
+  Plot("penalty N", scope.penalty, kPenaltyColor, force_scale, nullptr);
+  Plot("impulsive N", scope.impulsive, kImpulsiveColor, force_scale, nullptr);
+  Plot("penetr. mm", scope.penetration_mm, kPenetrationColor, 5.0f, nullptr);
+  ImGui::Separator();
+  PanelWarnings(snap);
+  if (has_mouse) ImGui::TextDisabled("drag: move the tool  wheel: depth  T: tap");
+  ImGui::End();
+}
+
+// A scripted run is paced by the loop's time as well: frame k shows the world at k / 60 s of loop
+// time however slowly a loaded machine draws, so a tap scripted at a frame lands at the same place
+// in the scope every run; a loop that has ended (or stalls for 0.2 s) is not waited for.
+void WaitForLoop(ViewFeed& feed, double frame_time_s) {
+  using Clock = std::chrono::steady_clock;
+  double seen_s = feed.Latest().sample.time_s;
+  auto seen_at = Clock::now();
+  while (seen_s < frame_time_s && Clock::now() - seen_at < std::chrono::milliseconds(200)) {
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+    const double now_s = feed.Latest().sample.time_s;
+    if (now_s != seen_s) {
+      seen_s = now_s;
+      seen_at = Clock::now();
+    }
+  }
+}
+
 }  // namespace
 
 ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* mouse,
                        const ViewerOptions& o, const RendererSwitch& switch_renderer) {
   if (!o.screenshot.empty()) io::CheckOutputPath(o.screenshot, "screenshot");
-  if (!glfwInit()) {
-    throw Error("view: cannot open a window (no display? set DISPLAY or run under xvfb-run)");
-  }
-  struct GlfwGuard {
-    ~GlfwGuard() { glfwTerminate(); }
-  } glfw_guard;
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_VISIBLE, o.hidden ? GLFW_FALSE : GLFW_TRUE);
-  GLFWwindow* window =
-      glfwCreateWindow(o.width_px, o.height_px, "rigidtouch view", nullptr, nullptr);
-  if (window == nullptr) throw Error("view: cannot create an OpenGL 3.3 window");
-  struct WindowGuard {
-    GLFWwindow* w;
-    ~WindowGuard() { glfwDestroyWindow(w); }
-  } window_guard{window};
-  glfwMakeContextCurrent(window);
-  glfwSwapInterval(0);  // the loop below paces the frames
-
-  ImGui::CreateContext();
-  struct ImGuiGuard {
-    ~ImGuiGuard() {
-      ImGui_ImplOpenGL3_Shutdown();
-      ImGui_ImplGlfw_Shutdown();
-      ImGui::DestroyContext();
-    }
-  };
-  ImGuiIO& io = ImGui::GetIO();
-  io.IniFilename = nullptr;  // no imgui.ini next to the user's files
-  ImGui::StyleColorsDark();
-  ImGuiStyle& style = ImGui::GetStyle();
-  // exact colours in the screenshots: no blending of lines or of the panel with the scene
-  style.AntiAliasedLines = false;
-  style.AntiAliasedLinesUseTex = false;
-  style.AntiAliasedFill = false;
-  style.Colors[ImGuiCol_WindowBg].w = 1.0f;
-  style.Colors[ImGuiCol_FrameBg] = ImVec4(0.12f, 0.14f, 0.18f, 1.0f);
-  ImGui_ImplGlfw_InitForOpenGL(window, true);
-  ImGui_ImplOpenGL3_Init("#version 330");
-  ImGuiGuard imgui_guard;
-
-  const Vec3 start = model.initial[model.tool].x_W;
-  // the camera frames every geom but planes: their bounding sphere, seen from at least 0.2 m
-  Vec3 lo = start, hi = start;
-  for (const GeomModel& g : model.geoms) {
-    if (g.type == GeomType::kPlane) continue;
-    const Vec3 c = g.body < 0
-                       ? g.pos_B
-                       : Vec3(model.initial[g.body].x_W + model.initial[g.body].q_WB * g.pos_B);
-    lo = lo.cwiseMin(c - Vec3::Constant(g.rbound_m));
-    hi = hi.cwiseMax(c + Vec3::Constant(g.rbound_m));
-  }
-  const Vec3 centre = 0.5 * (lo + hi);
-  const double scene_radius = 0.5 * (hi - lo).norm();
-  const double distance = std::max(0.2, 3.0 * scene_radius);
-  const double grid_half = std::max(0.15, 1.5 * scene_radius);
-  double target_depth = 0.0;
-  Vec3 target = start;
+  const GlfwLibrary glfw;
+  const GlfwWindow window(o);
+  const ImGuiSession imgui(window.w);
+  const SceneFrame frame_of = FrameScene(model);
+  SceneRenderer scene(model, frame_of);
+  FrameState st;
+  st.target = model.initial[model.tool].x_W;
   Scope scope(static_cast<std::size_t>(std::max(2.0, std::round(o.scope_window_s * o.rate_hz))));
-  const double force_scale = model.device.max_force_N > 0.0 ? model.device.max_force_N : 5.0;
 
   ViewerResult result;
   using Clock = std::chrono::steady_clock;
@@ -298,215 +390,44 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
   const auto frame_period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / o.display_hz));
   auto next_frame = t0;
-  std::vector<int> order;
-  bool pending = false;  // a switch was asked for and waits for no contact
-  RendererKind pending_kind = RendererKind::kTrain;
-  std::string switch_message;
   for (int frame = 0; o.frames <= 0 || frame < o.frames; ++frame) {
     glfwPollEvents();
-    if (glfwWindowShouldClose(window) || (o.stop != nullptr && o.stop->load())) {
+    if (glfwWindowShouldClose(window.w) || (o.stop != nullptr && o.stop->load())) {
       result.closed_by_user = true;
       break;
     }
     int w = 0, h = 0;
-    glfwGetFramebufferSize(window, &w, &h);
-    const Camera cam(centre, distance, w, h);
-    if (target_depth == 0.0) target_depth = cam.Depth(start);
+    glfwGetFramebufferSize(window.w, &w, &h);
+    const Camera cam(frame_of.centre, frame_of.distance_m, w, h);
+    if (st.target_depth == 0.0) st.target_depth = cam.Depth(model.initial[model.tool].x_W);
 
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
-
-    // the handle's target: the scripted path or the cursor, in the view plane; wheel: depth
-    if (mouse != nullptr) {
-      bool have = false;
-      double mx = 0.0, my = 0.0;
-      if (!o.mouse_path.empty()) {
-        const double s = o.frames > 1 ? static_cast<double>(frame) / (o.frames - 1) : 1.0;
-        const double at = s * static_cast<double>(o.mouse_path.size() - 1);
-        const std::size_t i = std::min(static_cast<std::size_t>(at), o.mouse_path.size() - 1);
-        const std::size_t j = std::min(i + 1, o.mouse_path.size() - 1);
-        const double a = at - static_cast<double>(i);
-        mx = (1 - a) * o.mouse_path[i].first + a * o.mouse_path[j].first;
-        my = (1 - a) * o.mouse_path[i].second + a * o.mouse_path[j].second;
-        have = true;
-      } else if (!io.WantCaptureMouse && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
-        mx = io.MousePos.x * (static_cast<double>(w) / io.DisplaySize.x);
-        my = io.MousePos.y * (static_cast<double>(h) / io.DisplaySize.y);
-        have = true;
-      }
-      if (!io.WantCaptureMouse && io.MouseWheel != 0.0f) {
-        target_depth += 0.005 * io.MouseWheel;  // 5 mm per notch, into the screen
-      }
-      if (have) target = cam.Unproject(mx, my, target_depth);
-      mouse->SetTarget(target);
-      if (frame == o.tap_frame || (!io.WantCaptureKeyboard && ImGui::IsKeyPressed(GLFW_KEY_T))) {
-        mouse->RequestTap();
-      }
-    }
-
-    if (frame == o.switch_frame || (o.switch_at_contact && result.renderer_switches == 0 &&
-                                    !pending && feed.Latest().sample.tool_contacts > 0)) {
-      pending = true;
-      pending_kind = o.switch_to;
-    }
-    // a renderer switch happens between ticks while no contact is active
-    if (pending && feed.Latest().sample.tool_contacts > 0) ++result.switch_wait_frames;
-    if (pending && switch_renderer && feed.Latest().sample.tool_contacts == 0) {
-      const std::optional<std::string> done = switch_renderer(pending_kind);
-      if (done) {
-        switch_message = *done;
-        if (done->empty()) ++result.renderer_switches;
-        pending = false;
-      }
-    }
+    if (mouse != nullptr) SteerMouse(*mouse, o, frame, cam, w, h, st);
+    SwitchWhenFree(o, frame, feed, switch_renderer, st, result);
     const ViewSnapshot& snap = feed.Latest();
     scope.Drain(feed);
-    ImDrawList* dl = ImGui::GetBackgroundDrawList();
-
-    // geoms far to near (painter's order), the tool's in its own colour
-    order.resize(model.geoms.size());
-    for (std::size_t g = 0; g < order.size(); ++g) order[g] = static_cast<int>(g);
-    const auto pose = [&](const GeomModel& g, Vec3& pos, Mat3& R) {
-      if (g.body < 0 || snap.step < 0 || g.body >= snap.nbody) {
-        const BodyState& b = g.body < 0 ? BodyState{} : model.initial[g.body];
-        pos = g.body < 0 ? g.pos_B : b.x_W + b.q_WB * g.pos_B;
-        R = (g.body < 0 ? g.quat_B : b.q_WB * g.quat_B).toRotationMatrix();
-        return;
-      }
-      pos = snap.x_W[g.body] + snap.q_WB[g.body] * g.pos_B;
-      R = (snap.q_WB[g.body] * g.quat_B).toRotationMatrix();
-    };
-    std::vector<double> depth(model.geoms.size());
-    for (std::size_t g = 0; g < model.geoms.size(); ++g) {
-      Vec3 p;
-      Mat3 R;
-      pose(model.geoms[g], p, R);
-      depth[g] = model.geoms[g].type == GeomType::kPlane ? 1e9 : cam.Depth(p);
-    }
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return depth[a] > depth[b]; });
-    for (const int gi : order) {
-      const GeomModel& g = model.geoms[gi];
-      Vec3 p;
-      Mat3 R;
-      pose(g, p, R);
-      const ImU32 c = g.body == model.tool ? kToolColor : g.body < 0 ? kStaticColor : kBodyColor;
-      switch (g.type) {
-        case GeomType::kPlane:
-          DrawPlane(dl, cam, p, R, g.size, centre, grid_half);
-          break;
-        case GeomType::kSphere:
-          Disc(dl, cam, p, g.size.x(), c, true);
-          break;
-        case GeomType::kCapsule:
-          DrawCapsule(dl, cam, p, R, g.size.x(), g.size.y(), c);
-          break;
-        case GeomType::kBox:
-          DrawBox(dl, cam, p, R, g.size, c);
-          break;
-        case GeomType::kMesh:
-          // drawn as its bounding sphere's outline (the viewer does not keep the mesh's faces)
-          Disc(dl, cam, p, g.rbound_m, c, false);
-          break;
-      }
-    }
-    // contacts and their normals (1 cm), then the device force (1 cm per N)
-    for (int k = 0; k < snap.ncontact; ++k) {
-      const ContactView& cv = snap.contacts[k];
-      ImVec2 q;
-      if (cam.Project(cv.p_W, q)) dl->AddCircleFilled(q, 3.0f, kContactColor, 8);
-      Line(dl, cam, cv.p_W, cv.p_W + 0.01 * cv.n_W, kNormalColor, 1.5f);
-    }
-    if (snap.step >= 0) {
-      const Vec3 tool = snap.sample.tool_position_m;
-      Arrow(dl, cam, tool, tool + 0.01 * snap.sample.device_force_N, kForceColor);
-    }
-
-    // the panel
-    ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_Always);
-    ImGui::SetNextWindowSize(ImVec2(470, 0), ImGuiCond_Always);
-    ImGui::Begin("rigidtouch", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
-    ImGui::Text("device %s", o.device.c_str());
-    ImGui::Text("renderer %s  e %.2f  t_c %.0f ms  f %.0f Hz",
-                io::RendererName(model.render.renderer), model.render.restitution,
-                1e3 * model.render.t_collision_s, model.render.frequency_hz);
-    if (switch_renderer) {
-      const bool contact = snap.sample.tool_contacts > 0;
-      ImGui::Text(contact ? "switch (after the contact)" : "switch to");
-      for (const RendererKind k :
-           {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
-        ImGui::SameLine();
-        if (ImGui::RadioButton(io::RendererName(k), model.render.renderer == k)) {
-          pending = true;
-          pending_kind = k;
-        }
-      }
-      if (pending) ImGui::TextDisabled("waiting for no contact to switch");
-      if (!switch_message.empty()) {
-        ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "%s", switch_message.c_str());
-      }
-    }
-    ImGui::Text("wall k %.0f N/m  b %.2f N s/m  force limit %.2f N",
-                model.contact.stiffness_N_per_m, model.contact.damping_Ns_per_m,
-                model.device.max_force_N);
-    ImGui::Text("loop %.0f Hz asked, %.1f Hz measured", o.rate_hz, snap.measured_rate_hz);
-    ImGui::Text("period error over 1 s: mean %.1f us, max %.1f us", 1e6 * snap.period_error_mean_s,
-                1e6 * snap.period_error_max_s);
-    ImGui::Text("t %.3f s  tool contacts %d  penetration %.2f mm", snap.time_s,
-                snap.sample.tool_contacts, 1e3 * snap.sample.penetration_m);
-    ImGui::Text("force %.2f N (penalty %.2f, impulsive %.2f)", snap.sample.device_force_N.norm(),
-                snap.sample.penalty_force_N.norm(), snap.sample.impulsive_force_N.norm());
-    ImGui::Separator();
-    ImGui::Text("last %.1f s", o.scope_window_s);
-    Plot("total N", scope.total, kTotalColor, static_cast<float>(force_scale), nullptr);
-    Plot("penalty N", scope.penalty, kPenaltyColor, static_cast<float>(force_scale), nullptr);
-    Plot("impulsive N", scope.impulsive, kImpulsiveColor, static_cast<float>(force_scale), nullptr);
-    Plot("penetr. mm", scope.penetration_mm, kPenetrationColor, 5.0f, nullptr);
-    ImGui::Separator();
-    bool any = false;
-    for (int k = 0; k < static_cast<int>(Warning::kCount) && k < 32; ++k) {
-      if ((snap.warnings >> k) & 1u) {
-        ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "warning: %s",
-                           WarningName(static_cast<Warning>(k)));
-        any = true;
-      }
-    }
-    if (snap.scope_dropped > 0) {
-      ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "scope dropped %llu ticks",
-                         static_cast<unsigned long long>(snap.scope_dropped));
-      any = true;
-    }
-    if (!any) ImGui::Text("no warnings");
-    if (mouse != nullptr) ImGui::TextDisabled("drag: move the tool  wheel: depth  T: tap");
-    ImGui::End();
-
+    DrawOverlays(cam, snap);
+    DrawPanel(model, o, snap, scope, static_cast<bool>(switch_renderer), mouse != nullptr, st);
     ImGui::Render();
+
     glViewport(0, 0, w, h);
     glClearColor(0.08f, 0.09f, 0.11f, 1.0f);
-    glClear(GL_COLOR_BUFFER_BIT);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    scene.Begin(cam, frame_of.far_m);
+    DrawGeoms(scene, model, snap);
+    scene.End(ToRgb(kFloorColor));
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     ++result.frames;
     const bool last = o.frames > 0 && frame + 1 == o.frames;
     if (last && !o.screenshot.empty()) WritePng(o.screenshot, w, h);
-    glfwSwapBuffers(window);
+    glfwSwapBuffers(window.w);
     next_frame += frame_period;
     std::this_thread::sleep_until(next_frame);
     if (o.frames > 0) {
-      // a scripted run is paced by the loop's time as well: frame k shows the world at k / 60 s
-      // of loop time however slowly a loaded machine draws, so a tap scripted at a frame lands
-      // at the same place in the scope every run; a loop that has ended (or stalls for 0.2 s)
-      // is not waited for
-      const double frame_time_s = static_cast<double>(frame + 1) / o.display_hz;
-      double seen_s = feed.Latest().sample.time_s;
-      auto seen_at = Clock::now();
-      while (seen_s < frame_time_s && Clock::now() - seen_at < std::chrono::milliseconds(200)) {
-        std::this_thread::sleep_for(std::chrono::microseconds(500));
-        const double now_s = feed.Latest().sample.time_s;
-        if (now_s != seen_s) {
-          seen_s = now_s;
-          seen_at = Clock::now();
-        }
-      }
+      WaitForLoop(feed, static_cast<double>(frame + 1) / o.display_hz);
       next_frame = std::max(next_frame, Clock::now());
     }
   }

@@ -1,18 +1,24 @@
 // `rigidtouch view` headless under Xvfb with Mesa's software OpenGL: the screenshot shows the
 // scene (the floor's grid, the tool), the tool where the scripted cursor took it, and the scope's
-// impulsive-force trace with a train's spikes during a tap (flat for penalty rendering). The
-// colours are the viewer's fixed ones (src/view/viewer.cc), drawn without anti-aliasing.
+// impulsive-force trace with a train's spikes during a tap (flat for penalty rendering); every geom
+// type drawn as its own shape, nearer geoms hiding farther ones. The colours are the viewer's fixed
+// ones (src/view/viewer.cc), drawn without anti-aliasing; a geom's pixels are its colour times a
+// light factor in [0.45, 1] (src/view/scene_gl.cc), the floor's and the panel's exact.
 #include <gtest/gtest.h>
 #include <stb_image.h>
 
 #include <signal.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <string>
 
+#include "analysis/tap_experiment.h"
 #include "cli/cli_util.h"
 #include "io/device_record.h"
+#include "view/camera.h"
 
 namespace rigidtouch::test {
 namespace {
@@ -31,6 +37,27 @@ struct Image {
   bool Is(int x, int y, int r, int g, int b) const {
     const unsigned char* p = &rgb[3 * (static_cast<std::size_t>(y) * w + x)];
     return p[0] == r && p[1] == g && p[2] == b;
+  }
+  // the colour c times a light factor k in [0.4, 1], each channel to within 2 of rounding
+  bool IsShadeOf(int x, int y, const int c[3]) const {
+    if (x < 0 || y < 0 || x >= w || y >= h) return false;
+    const unsigned char* p = &rgb[3 * (static_cast<std::size_t>(y) * w + x)];
+    const int m = c[0] >= c[1] && c[0] >= c[2] ? 0 : c[1] >= c[2] ? 1 : 2;
+    const double k = static_cast<double>(p[m]) / c[m];
+    if (k < 0.4 || k > 1.0 + 1e-9) return false;
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(p[i] - k * c[i]) > 2.0) return false;
+    }
+    return true;
+  }
+  // whether any pixel within `r` of (x, y) is a shade of c
+  bool AnyShadeNear(int x, int y, const int c[3], int r = 2) const {
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        if (IsShadeOf(x + dx, y + dy, c)) return true;
+      }
+    }
+    return false;
   }
 };
 
@@ -51,11 +78,12 @@ struct Blob {
   int top = 1 << 30, bottom = -1;
 };
 
-Blob Find(const Image& im, int r, int g, int b, int x0 = 0) {
+Blob Find(const Image& im, int r, int g, int b, int x0 = 0, bool shaded = false) {
   Blob out;
+  const int c[3] = {r, g, b};
   for (int y = 0; y < im.h; ++y) {
     for (int x = x0; x < im.w; ++x) {
-      if (!im.Is(x, y, r, g, b)) continue;
+      if (!(shaded ? im.IsShadeOf(x, y, c) : im.Is(x, y, r, g, b))) continue;
       ++out.count;
       out.cx += x;
       out.cy += y;
@@ -81,6 +109,7 @@ Image View(const std::string& args, const std::string& png) {
 }
 
 constexpr int kTool[3] = {255, 140, 0}, kFloor[3] = {90, 90, 90}, kImpulsive[3] = {255, 0, 0};
+constexpr int kStatic[3] = {150, 160, 175};
 
 TEST(ViewCliTest, SceneIsDrawnAndTheToolFollowsTheScriptedMouse) {
   if (!HaveXvfb())
@@ -94,8 +123,8 @@ TEST(ViewCliTest, SceneIsDrawnAndTheToolFollowsTheScriptedMouse) {
   ASSERT_EQ(moved.w, 1280);
   const Blob floor = Find(still, kFloor[0], kFloor[1], kFloor[2], 480);  // right of the panel
   EXPECT_GT(floor.count, 5000);                                          // the grid
-  const Blob a = Find(still, kTool[0], kTool[1], kTool[2], 480);
-  const Blob b = Find(moved, kTool[0], kTool[1], kTool[2], 480);
+  const Blob a = Find(still, kTool[0], kTool[1], kTool[2], 480, true);
+  const Blob b = Find(moved, kTool[0], kTool[1], kTool[2], 480, true);
   ASSERT_GT(a.count, 200);  // the 5 mm sphere seen from 0.2 m: a disc of about 20 px radius
   ASSERT_GT(b.count, 200);
   EXPECT_NEAR(a.cx, 640.0, 5.0);  // under the cursor
@@ -177,6 +206,136 @@ TEST(ViewCliTest, DrivesTheUdpBridge) {
   EXPECT_GT(j["max_force_N"].get<double>(), 1.0);  // the hand reached the wall
   EXPECT_LE(j["max_force_N"].get<double>(), 3.3);  // the Touch's limit
   EXPECT_TRUE(j["finite"].get<bool>());
+  std::filesystem::remove_all(dir);
+}
+
+// the model as `view` builds it (the tool's start above the wall, as for a tap) and the viewer's
+// camera for it in a 1280 x 720 window
+Model ViewModel(const std::string& scene) {
+  analysis::TapExperimentConfig c;
+  c.scene_path = scene;
+  c.load.device.coupling = Coupling::kDirect;
+  return analysis::PrepareTap(c).model;
+}
+
+struct SceneView {
+  Model model;
+  view::Camera cam;
+  explicit SceneView(const std::string& scene)
+      : model(ViewModel(scene)),
+        cam(view::FrameScene(model).centre, view::FrameScene(model).distance_m, 1280, 720) {}
+  // the pixel of a point in the world, right of the panel (which covers x < 480)
+  std::pair<int, int> Pixel(const Vec3& p) const {
+    double x = 0.0, y = 0.0;
+    EXPECT_TRUE(cam.Project(p, x, y));
+    EXPECT_GT(x, 490.0);
+    return {static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y))};
+  }
+  const GeomModel& Geom(const std::string& name) const {
+    for (const GeomModel& g : model.geoms) {
+      if (g.name == name) return g;
+    }
+    throw Error("no geom " + name);
+  }
+  // a point on the circle (in the view plane) of the geom's bounding sphere, at angle a from
+  // the screen's right, and scaled by s: where the bounding sphere's outline was drawn at s = 1
+  Vec3 OnBound(const GeomModel& g, double a_deg, double s) const {
+    const double a = a_deg * std::numbers::pi / 180.0;
+    return g.pos_B + s * g.rbound_m * (std::cos(a) * cam.r + std::sin(a) * cam.u);
+  }
+};
+
+// a cylinder, an ellipsoid and a mesh (tests/scenes/view_shapes.xml) are drawn as their shapes: on
+// the screen where the shape is, and not over the rest of their bounding sphere's disc (nor on its
+// outline, where the viewer once drew them)
+TEST(ViewCliTest, CylinderEllipsoidAndMeshAreDrawnAsTheirShapes) {
+  if (!HaveXvfb())
+    GTEST_SKIP()
+        << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
+  const auto dir = TempDir("view_shapes");
+  const std::string scene = std::string(RIGIDTOUCH_SOURCE_DIR) + "/tests/scenes/view_shapes.xml";
+  const Image im = View("--scene " + scene, (dir / "shapes.png").string());
+  ASSERT_EQ(im.w, 1280);
+  const SceneView sv(scene);
+  const auto on = [&](const Vec3& p, const char* what) {
+    const auto [x, y] = sv.Pixel(p);
+    EXPECT_TRUE(im.IsShadeOf(x, y, kStatic)) << what << " at " << x << "," << y;
+  };
+  const auto off = [&](const Vec3& p, const char* what) {
+    const auto [x, y] = sv.Pixel(p);
+    EXPECT_FALSE(im.AnyShadeNear(x, y, kStatic)) << what << " at " << x << "," << y;
+  };
+  // the cylinder: radius 4 mm, 8 cm long along x, centred at (0.05, 0, 0.05); its bounding sphere
+  // has a radius of 4 cm
+  const GeomModel& cyl = sv.Geom("cylinder");
+  for (double t = -0.9; t <= 0.9 + 1e-9; t += 0.15) {
+    on(cyl.pos_B + Vec3(0.04 * t, 0.0, 0.0), "cylinder's axis");
+  }
+  for (const double a : {45.0, 90.0, 135.0, 225.0, 270.0, 315.0}) {
+    off(sv.OnBound(cyl, a, 0.6), "inside the cylinder's bounding disc, off its axis");
+  }
+  // (straight above and below, its bounding circle reaches the ellipsoid and the prism)
+  for (const double a : {30.0, 45.0, 135.0, 150.0, 210.0, 225.0, 315.0, 330.0}) {
+    off(sv.OnBound(cyl, a, 1.0), "the cylinder's bounding circle, off its axis");
+  }
+  // the ellipsoid: half-axes 30, 8, 8 mm at (0.05, 0, 0.1)
+  const GeomModel& ell = sv.Geom("ellipsoid");
+  for (const double x : {-0.024, -0.012, 0.0, 0.012, 0.024})
+    on(ell.pos_B + Vec3(x, 0, 0), "ellipsoid");
+  for (const double a : {45.0, 90.0, 135.0, 225.0, 270.0, 315.0}) {
+    off(sv.OnBound(ell, a, 0.6), "inside the ellipsoid's bounding disc, off the ellipsoid");
+    off(sv.OnBound(ell, a, 1.0), "the ellipsoid's bounding circle, off the ellipsoid");
+  }
+  // the prism: a triangle 6 cm wide and 3 cm high (apex up) in the x-z plane, 6 mm thick, its
+  // base's centre at (0.05, 0, -0.015); the mesh's centre (pos_B) is the triangle's centroid
+  const GeomModel& prism = sv.Geom("prism");
+  const Vec3 base(0.05, 0.0, -0.015);
+  for (const Vec3& d : {Vec3(0, 0, 0.01), Vec3(-0.02, 0, 0.004), Vec3(0.02, 0, 0.004),
+                        Vec3(0, 0, 0.025), Vec3(0, 0, 0.002)}) {
+    on(base + d, "prism");
+  }
+  // over the triangle's slopes: the corners of its bounding square above the base
+  for (const double x : {-0.025, 0.025}) off(base + Vec3(x, 0, 0.027), "beside the prism's apex");
+  for (const double a : {45.0, 135.0})
+    off(sv.OnBound(prism, a, 1.0), "the prism's bounding circle");
+  std::filesystem::remove_all(dir);
+}
+
+// a nearer geom hides a farther one wherever they overlap on the screen, whatever the order they
+// are drawn in: tests/scenes/view_depth.xml puts a static box (drawn first) in front of the
+// tool's larger box
+TEST(ViewCliTest, NearerBoxHidesTheOneBehind) {
+  if (!HaveXvfb())
+    GTEST_SKIP()
+        << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
+  const auto dir = TempDir("view_depth");
+  const std::string scene = std::string(RIGIDTOUCH_SOURCE_DIR) + "/tests/scenes/view_depth.xml";
+  const Image im = View("--scene " + scene, (dir / "depth.png").string());
+  ASSERT_EQ(im.w, 1280);
+  const SceneView sv(scene);
+  // the front box's front face (y = -0.025, x in [-0.02, 0.02], z in [0.01, 0.05]) on the screen,
+  // 3 px inside its edges
+  const auto [left_top, top] = sv.Pixel(Vec3(-0.02, -0.025, 0.05));
+  const auto [right_top, top2] = sv.Pixel(Vec3(0.02, -0.025, 0.05));
+  const auto [left_bottom, bottom] = sv.Pixel(Vec3(-0.02, -0.025, 0.01));
+  const auto [right_bottom, bottom2] = sv.Pixel(Vec3(0.02, -0.025, 0.01));
+  const int x0 = std::max(left_top, left_bottom) + 3, x1 = std::min(right_top, right_bottom) - 3;
+  const int y0 = std::max(top, top2) + 3, y1 = std::min(bottom, bottom2) - 3;
+  ASSERT_GT(x1 - x0, 50);
+  ASSERT_GT(y1 - y0, 50);
+  long front = 0, back = 0, n = 0;
+  for (int y = y0; y <= y1; ++y) {
+    for (int x = x0; x <= x1; ++x) {
+      ++n;
+      front += im.IsShadeOf(x, y, kStatic) ? 1 : 0;
+      back += im.IsShadeOf(x, y, kTool) ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(back, 0) << "of " << n << " pixels";  // the tool's box is behind all of it
+  EXPECT_EQ(front, n);
+  // and the tool's box shows where nothing is in front of it: above the front box
+  const auto [ax, ay] = sv.Pixel(Vec3(0.0, 0.025, 0.055));
+  EXPECT_TRUE(im.IsShadeOf(ax, ay, kTool)) << ax << "," << ay;
   std::filesystem::remove_all(dir);
 }
 
