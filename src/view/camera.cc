@@ -27,13 +27,14 @@ SceneFrame FrameScene(const Model& model) {
   return s;
 }
 
-Camera::Camera(const Vec3& target, double distance_m, double width_px, double height_px) {
+Camera::Camera(const Vec3& target, double distance_m, double width, double height, double left_px)
+    : width_px(std::max(width, 1.0)), height_px(std::max(height, 1.0)) {
   const double elevation = 25.0 * std::numbers::pi / 180.0;
   eye = target + distance_m * Vec3(0.0, -std::cos(elevation), std::sin(elevation));
   f = (target - eye).normalized();
   r = f.cross(Vec3::UnitZ()).normalized();
   u = r.cross(f);
-  cx = 0.5 * width_px;
+  cx = 0.5 * (std::clamp(left_px, 0.0, width_px - 1.0) + width_px);
   cy = 0.5 * height_px;
   focal_px = cy / std::tan(0.5 * 45.0 * std::numbers::pi / 180.0);  // 45 degrees vertically
 }
@@ -52,14 +53,16 @@ Vec3 Camera::Unproject(double x, double y, double z) const {
 }
 
 std::array<float, 16> Camera::ViewProjection(double far_m) const {
-  // clip = P V p with V's rows (r, u, -f) about the eye; x_ndc = (focal / cx) (v.r) / z gives
-  // Project's x = cx (1 + x_ndc), and y likewise (OpenGL's rows run bottom up, the pixel's y down)
+  // clip = P V p with V's rows (r, u, -f) about the eye and w = z: x_ndc = (2 focal / W) (v.r) /
+  // z + 2 cx / W - 1 gives Project's x = W (1 + x_ndc) / 2 for a principal point cx anywhere in
+  // the window, and y likewise (OpenGL's rows run bottom up, the pixel's y down)
   const double n = kNear, fa = std::max(far_m, 2.0 * kNear);
-  const double sx = focal_px / cx, sy = focal_px / cy;
   const double a = (fa + n) / (fa - n), b = 2.0 * fa * n / (fa - n);
   Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
-  P(0, 0) = sx;
-  P(1, 1) = sy;
+  P(0, 0) = 2.0 * focal_px / width_px;
+  P(0, 2) = 1.0 - 2.0 * cx / width_px;  // times the view's z (= -depth): the shifted centre
+  P(1, 1) = 2.0 * focal_px / height_px;
+  P(1, 2) = 2.0 * cy / height_px - 1.0;
   P(2, 2) = -a;
   P(2, 3) = -b;
   P(3, 2) = -1.0;
@@ -76,6 +79,11 @@ std::array<float, 16> Camera::ViewProjection(double far_m) const {
     for (int k = 0; k < 4; ++k) out[4 * c + k] = static_cast<float>(M(k, c));
   }
   return out;
+}
+
+Camera ViewerCamera(const SceneFrame& frame, double width_px, double height_px) {
+  const double left = width_px >= 2.0 * kPanelRightPx ? kPanelRightPx : 0.0;
+  return Camera(frame.centre, frame.distance_m, width_px, height_px, left);
 }
 
 }  // namespace rigidtouch::view

@@ -23,9 +23,14 @@ SceneFrame FrameScene(const Model& model);
 struct Camera {
   Vec3 eye, f, r, u;  // position, forward, right, up
   double focal_px = 1.0, cx = 0.0, cy = 0.0;
+
+  double width_px = 1.0, height_px = 1.0;
   static constexpr double kNear = 0.01;  // m, the near clipping plane
 
-  Camera(const Vec3& target, double distance_m, double width_px, double height_px);
+  /// Looks at `target` from `distance_m`; the target lands in the middle of the part of the
+  /// window right of `left_px` (0: the whole window).
+  Camera(const Vec3& target, double distance_m, double width_px, double height_px,
+         double left_px = 0.0);
   double Depth(const Vec3& p) const { return (p - eye).dot(f); }
   /// The pixel (x right, y down from the top left corner) of `p`; false behind the near plane.
   bool Project(const Vec3& p, double& x, double& y) const;
@@ -35,5 +40,12 @@ struct Camera {
   /// Project, with depth from kNear to `far_m`.
   std::array<float, 16> ViewProjection(double far_m) const;
 };
+
+/// The right edge of the viewer's panel [px]: the panel is 470 px wide, 10 px from the left.
+inline constexpr double kPanelRightPx = 490.0;
+
+/// The viewer's camera for a window of this size: the scene framed right of the panel when the
+/// window is at least twice as wide as the panel, else in the middle of the window.
+Camera ViewerCamera(const SceneFrame& frame, double width_px, double height_px);
 
 }  // namespace rigidtouch::view

@@ -325,28 +325,42 @@ void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& s
   const float force_scale =
       static_cast<float>(model.device.max_force_N > 0.0 ? model.device.max_force_N : 5.0);
   ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_Always);
-  ImGui::SetNextWindowSize(ImVec2(470, 0), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(kPanelRightPx) - 20.0f, 0), ImGuiCond_Always);
   ImGui::Begin("rigidtouch", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
   ImGui::Text("device %s", o.device.c_str());
   ImGui::Text("renderer %s  e %.2f  t_c %.0f ms  f %.0f Hz",
               io::RendererName(model.render.renderer), model.render.restitution,
               1e3 * model.render.t_collision_s, model.render.frequency_hz);
   if (can_switch) PanelSwitch(model, snap, st);
-  ImGui::Text("wall k %.0f N/m  b %.2f N s/m  force limit %.2f N", model.contact.stiffness_N_per_m,
-              model.contact.damping_Ns_per_m, model.device.max_force_N);
-  ImGui::Text("loop %.0f Hz asked, %.1f Hz measured", o.rate_hz, snap.measured_rate_hz);
-  ImGui::Text("period error over 1 s: mean %.1f us, max %.1f us", 1e6 * snap.period_error_mean_s,
-              1e6 * snap.period_error_max_s);
+  if (model.device.max_force_N > 0.0) {
+    ImGui::Text("wall k %.0f N/m  b %.2f N s/m  force limit %.2f N",
+                model.contact.stiffness_N_per_m, model.contact.damping_Ns_per_m,
+                model.device.max_force_N);
+  } else {
+    ImGui::Text("wall k %.0f N/m  b %.2f N s/m  no force limit", model.contact.stiffness_N_per_m,
+                model.contact.damping_Ns_per_m);
+  }
+  if (snap.measured_rate_hz > 0.0) {
+    ImGui::Text("loop %.0f Hz asked, %.1f Hz measured", o.rate_hz, snap.measured_rate_hz);
+    ImGui::Text("period error over 1 s: mean %.1f us, max %.1f us", 1e6 * snap.period_error_mean_s,
+                1e6 * snap.period_error_max_s);
+  } else {  // the haptic thread reports its rate and period error once a second
+    ImGui::Text("loop %.0f Hz asked", o.rate_hz);
+    ImGui::Text("rate and period error: after the first second");
+  }
   ImGui::Text("t %.3f s  tool contacts %d  penetration %.2f mm", snap.time_s,
               snap.sample.tool_contacts, 1e3 * snap.sample.penetration_m);
   ImGui::Text("force %.2f N (penalty %.2f, impulsive %.2f)", snap.sample.device_force_N.norm(),
               snap.sample.penalty_force_N.norm(), snap.sample.impulsive_force_N.norm());
   ImGui::Separator();
   ImGui::Text("last %.1f s", o.scope_window_s);
-  Plot("total N", scope.total, kTotalColor, force_scale, nullptr);
-  Plot("penalty N", scope.penalty, kPenaltyColor, force_scale, nullptr);
-  Plot("impulsive N", scope.impulsive, kImpulsiveColor, force_scale, nullptr);
-  Plot("penetr. mm", scope.penetration_mm, kPenetrationColor, 5.0f, nullptr);
+  // each trace's full scale written over it: the force panels span 0 to the device's limit
+  char force_range[48];
+  std::snprintf(force_range, sizeof force_range, "0 to %.2f N", force_scale);
+  Plot("total N", scope.total, kTotalColor, force_scale, force_range);
+  Plot("penalty N", scope.penalty, kPenaltyColor, force_scale, force_range);
+  Plot("impulsive N", scope.impulsive, kImpulsiveColor, force_scale, force_range);
+  Plot("penetr. mm", scope.penetration_mm, kPenetrationColor, 5.0f, "0 to 5 mm");
   ImGui::Separator();
   PanelWarnings(snap);
   if (has_mouse) ImGui::TextDisabled("drag: move the tool  wheel: depth  T: tap");
@@ -398,7 +412,7 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
     }
     int w = 0, h = 0;
     glfwGetFramebufferSize(window.w, &w, &h);
-    const Camera cam(frame_of.centre, frame_of.distance_m, w, h);
+    const Camera cam = ViewerCamera(frame_of, w, h);
     if (st.target_depth == 0.0) st.target_depth = cam.Depth(model.initial[model.tool].x_W);
 
     ImGui_ImplOpenGL3_NewFrame();

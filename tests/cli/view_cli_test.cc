@@ -222,8 +222,7 @@ struct SceneView {
   Model model;
   view::Camera cam;
   explicit SceneView(const std::string& scene)
-      : model(ViewModel(scene)),
-        cam(view::FrameScene(model).centre, view::FrameScene(model).distance_m, 1280, 720) {}
+      : model(ViewModel(scene)), cam(view::ViewerCamera(view::FrameScene(model), 1280, 720)) {}
   // the pixel of a point in the world, right of the panel (which covers x < 480)
   std::pair<int, int> Pixel(const Vec3& p) const {
     double x = 0.0, y = 0.0;

@@ -10,8 +10,7 @@
 namespace rigidtouch::view {
 namespace {
 
-TEST(ViewCamera, ViewProjectionAgreesWithProject) {
-  const Camera cam(Vec3(0.05, 0.02, 0.03), 0.3, 1280, 720);
+void ExpectViewProjectionAgreesWithProject(const Camera& cam) {
   const double far_m = 1.0;
   const std::array<float, 16> m = cam.ViewProjection(far_m);
   const Eigen::Matrix4d M = Eigen::Map<const Eigen::Matrix4f>(m.data()).cast<double>();
@@ -23,9 +22,9 @@ TEST(ViewCamera, ViewProjectionAgreesWithProject) {
     double x = 0.0, y = 0.0;
     ASSERT_TRUE(cam.Project(p, x, y));
     const Eigen::Vector4d clip = M * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
-    const double gx = cam.cx * (1.0 + clip.x() / clip.w());
-    const double gy = cam.cy * (1.0 - clip.y() / clip.w());  // OpenGL's y runs up
-    EXPECT_NEAR(gx, x, 0.01) << k;                           // px; the matrix is single precision
+    const double gx = 0.5 * cam.width_px * (1.0 + clip.x() / clip.w());
+    const double gy = 0.5 * cam.height_px * (1.0 - clip.y() / clip.w());  // OpenGL's y runs up
+    EXPECT_NEAR(gx, x, 0.01) << k;  // px; the matrix is single precision
     EXPECT_NEAR(gy, y, 0.01) << k;
     const double depth = clip.z() / clip.w();
     EXPECT_GT(depth, -1.0);
@@ -39,6 +38,25 @@ TEST(ViewCamera, ViewProjectionAgreesWithProject) {
     // and the mouse's inverse: the point at that depth under that pixel
     EXPECT_LT((cam.Unproject(x, y, cam.Depth(p)) - p).norm(), 1e-12);
   }
+}
+
+TEST(ViewCamera, ViewProjectionAgreesWithProject) {
+  ExpectViewProjectionAgreesWithProject(Camera(Vec3(0.05, 0.02, 0.03), 0.3, 1280, 720));
+  // the target right of the panel: the principal point off the window's middle
+  ExpectViewProjectionAgreesWithProject(Camera(Vec3(0.05, 0.02, 0.03), 0.3, 1280, 720, 490));
+}
+
+// the viewer frames the scene right of its panel when the window leaves room, else in the middle
+TEST(ViewCamera, ViewerCameraFramesTheSceneRightOfThePanel) {
+  SceneFrame frame;
+  frame.centre = Vec3(0.1, -0.02, 0.05);
+  frame.distance_m = 0.4;
+  double x = 0.0, y = 0.0;
+  ASSERT_TRUE(ViewerCamera(frame, 1280, 720).Project(frame.centre, x, y));
+  EXPECT_NEAR(x, 0.5 * (kPanelRightPx + 1280), 1e-9);
+  EXPECT_NEAR(y, 360.0, 1e-9);
+  ASSERT_TRUE(ViewerCamera(frame, 800, 600).Project(frame.centre, x, y));
+  EXPECT_NEAR(x, 400.0, 1e-9);  // narrower than two panels: the middle
 }
 
 TEST(ViewCamera, NearAndFarPlanesBoundDepth) {
