@@ -77,4 +77,12 @@ MaterialTrainParams MaterialTrain(const Material& material) {
   return p;
 }
 
+void ApplyMaterial(RenderParams& render, const Material& material) {
+  render.material = material;
+  if (render.renderer != RendererKind::kTrain) return;
+  const MaterialTrainParams t = MaterialTrain(material);
+  render.frequency_hz = t.frequency_hz;
+  render.t_collision_s = t.t_collision_s;
+}
+
 }  // namespace rigidtouch::render

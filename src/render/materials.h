@@ -33,4 +33,9 @@ struct MaterialTrainParams {
 };
 MaterialTrainParams MaterialTrain(const Material& material);
 
+/// Gives `render` the material `material` as `--material` does: the event renderer's transient,
+/// or, for the train renderer, a passive material train (its f and t_c from MaterialTrain). One
+/// place for the CLI, `tap --compare` and study conditions, so all render a material alike.
+void ApplyMaterial(RenderParams& render, const Material& material);
+
 }  // namespace rigidtouch::render
