@@ -279,9 +279,10 @@ std::string ReportToText(const StudyReport& report) {
       if (p.label_swap_suspected) notes += "below chance: labels swapped? ";
       if (!p.complete) notes += "incomplete ";
       char line[200];
-      std::snprintf(line, sizeof line, "  %-16s %7d %7d %9.1f %10.3g %10.3g %10.3g %6.2f  %s\n",
+      std::snprintf(line, sizeof line, "  %-16s %7d %7d %9.1f %10.3g %10.3g %10.3g %6s  %s\n",
                     p.id.c_str(), p.answers, p.correct, p.percent_correct, p.binomial.p_two_sided,
-                    p.binomial.p_greater, p.binomial.p_less, p.d_prime.d_prime, notes.c_str());
+                    p.binomial.p_greater, p.binomial.p_less,
+                    Format("%.2f", p.d_prime.d_prime).c_str(), notes.c_str());
       out << line;
     }
     if (t.conditions.size() > 2) out << ConfusionText(t);
