@@ -42,12 +42,27 @@ std::span<const Material> MaterialPresets() {
 }
 
 Material ReadMaterial(const std::string& path) {
-  const nlohmann::json doc = io::ReadJsonFile(path, "material");
-  const io::JsonSource source(path);
-  const io::StrictObject o(
-      source, doc, "", {"name", "amplitude_Ns_per_m", "decay_per_s", "frequency_hz"}, "a material");
+  return ReadMaterialJson(io::JsonSource(path), io::ReadJsonFile(path, "material"), "",
+                          std::filesystem::path(path).stem().string());
+}
+
+const Material* FindPreset(const Material& material) {
+  for (const Material& m : Table()) {
+    if (m.name == material.name && m.amplitude_Ns_per_m == material.amplitude_Ns_per_m &&
+        m.decay_per_s == material.decay_per_s && m.frequency_hz == material.frequency_hz) {
+      return &m;
+    }
+  }
+  return nullptr;
+}
+
+Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& value,
+                          const std::string& path, const std::string& default_name) {
+  const io::StrictObject o(source, value, path,
+                           {"name", "amplitude_Ns_per_m", "decay_per_s", "frequency_hz"},
+                           "a material");
   Material m;
-  m.name = o.String("name").value_or(std::filesystem::path(path).stem().string());
+  m.name = o.String("name").value_or(default_name);
   if (m.name.empty()) o.FailAt("name", "must not be empty");
   m.amplitude_Ns_per_m = Required(o, "amplitude_Ns_per_m", 0.0, 1e4, "N/(m/s)");
   m.decay_per_s = Required(o, "decay_per_s", 1e-3, 1e5, "1/s");

@@ -6,6 +6,9 @@
 #include <string>
 #include <string_view>
 
+#include <nlohmann/json.hpp>
+
+#include "io/strict_json.h"
 #include "rigidtouch/model.h"
 
 namespace rigidtouch::render {
@@ -19,6 +22,16 @@ std::span<const Material> MaterialPresets();
 /// "decay_per_s", "frequency_hz"}, all three required. Throws Error "FILE: FIELD: ..." naming
 /// the field.
 Material ReadMaterial(const std::string& path);
+
+/// Reads a material from a parsed JSON object, the way ReadMaterial reads a file's: the fields
+/// above, `name` defaulting to `default_name`. `path` is the object's field path in `source`
+/// ("" for a whole file); errors read "SOURCE: PATH.FIELD: ...". One reader for material files and
+/// materials written inline (a study protocol's canonical form).
+Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& value,
+                          const std::string& path, const std::string& default_name);
+
+/// The preset `material` is, or nullptr: same name and the same A, B and f.
+const Material* FindPreset(const Material& material);
 
 /// `text` is a preset name or a path ending in ".json". Anything else is an Error listing the
 /// presets and the file form.

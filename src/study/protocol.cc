@@ -104,34 +104,43 @@ RendererKind ParseConditionRenderer(const JsonSource& ctx, const json& value,
   return renderer;
 }
 
-// the material as --material reads it (render::ParseMaterial), refused here rather than at the
-// first tap; a material train takes f and t_c from it, as `tap --renderer train --material`
+// the material as --material reads it (render::ParseMaterial: a preset or a JSON file), or its
+// fields inline (render::ReadMaterialJson, the file reader), refused here rather than at the first
+// tap; a material train takes f and t_c from it, as `tap --renderer train --material`
 void ParseConditionMaterial(const JsonSource& ctx, const StrictObject& in, const std::string& path,
                             Condition& c) {
-  c.material = in.String("material");
-  if (!c.material) {
+  if (!in.Has("material")) {
     if (c.renderer == RendererKind::kEvent) {
       ctx.Fail(path,
                "missing required field \"material\" for renderer event: the event renderer "
-               "plays a material's transient; valid: rubber, wood, aluminium or a JSON material "
-               "file (docs/renderers.md)");
+               "plays a material's transient; valid: rubber, wood, aluminium, a JSON material "
+               "file, or its fields inline (docs/renderers.md)");
     }
     return;
   }
-  Material m;
-  try {
-    m = render::ParseMaterial(*c.material);
-  } catch (const Error& e) {
-    in.FailAt("material", e.what());
+  const json& value = in.Get("material");
+  if (value.is_object()) {
+    c.material = render::ReadMaterialJson(ctx, value, in.Path("material"), "");
+  } else if (value.is_string()) {
+    try {
+      c.material = render::ParseMaterial(value.get<std::string>());
+    } catch (const Error& e) {
+      in.FailAt("material", e.what());
+    }
+  } else {
+    in.FailAt("material",
+              "expected a material name or file (a string) or its fields (an "
+              "object), got " +
+                  io::JsonTypeName(value));
   }
   if (c.renderer == RendererKind::kTrain) {
     for (const char* key : {"t_collision_s", "frequency_hz"}) {
       if (in.Has(key)) {
-        in.FailAt(key, "a material train takes f and t_c from its material " + Quote(*c.material) +
-                           " (docs/renderers.md): give one or the other");
+        in.FailAt(key, "a material train takes f and t_c from its material " +
+                           Quote(c.material->name) + " (docs/renderers.md): give one or the other");
       }
     }
-    const render::MaterialTrainParams t = render::MaterialTrain(m);
+    const render::MaterialTrainParams t = render::MaterialTrain(*c.material);
     c.t_collision_s = t.t_collision_s;
     c.frequency_hz = t.frequency_hz;
   }
@@ -349,7 +358,15 @@ nlohmann::json Condition::ToJson() const {
     j["t_collision_s"] = t_collision_s;
     j["frequency_hz"] = frequency_hz;
   }
-  if (material) j["material"] = *material;
+  if (material) {
+    // a preset by its name (as --material takes it); any other material by its own fields
+    j["material"] = render::FindPreset(*material) != nullptr
+                        ? json(material->name)
+                        : json{{"name", material->name},
+                               {"amplitude_Ns_per_m", material->amplitude_Ns_per_m},
+                               {"decay_per_s", material->decay_per_s},
+                               {"frequency_hz", material->frequency_hz}};
+  }
   // absent when off, so protocols written before the field existed keep their hash
   if (passivity_control) j["passivity_control"] = true;
   if (stiffness_N_per_m) j["stiffness_N_per_m"] = *stiffness_N_per_m;
@@ -368,7 +385,7 @@ RenderParams Condition::ToRenderParams() const {
     r.t_collision_s = t_collision_s;
     r.frequency_hz = frequency_hz;
   }
-  if (material) render::ApplyMaterial(r, render::ParseMaterial(*material));
+  if (material) render::ApplyMaterial(r, *material);
   r.passivity_control = passivity_control;
   return r;
 }

@@ -30,14 +30,15 @@ struct Condition {
   std::optional<std::string> device;         ///< device preset name, e.g. "touch"
   std::optional<double> approach_speed_mps;  ///< hand approach speed for simulated taps, > 0
   /// event (required) and train only: a material as `--material` takes it (a preset name or a
-  /// JSON material file, render::ParseMaterial), as written; a material train takes its f and
-  /// t_c from it (render::ApplyMaterial)
-  std::optional<std::string> material;
+  /// JSON material file, render::ParseMaterial), or the same fields written inline; a material
+  /// train takes its f and t_c from it (render::ApplyMaterial). Read when the protocol is parsed:
+  /// the canonical JSON holds a preset's name, or else the material's own fields, so the hash
+  /// covers what is rendered and a log does not need the file
+  std::optional<Material> material;
   bool passivity_control = false;  ///< the passivity observer and controller, as the CLI flag
 
   /// The render parameters of this condition, as `rigidtouch tap --renderer R [--restitution e]
-  /// [--t-collision t --frequency f] [--material M] [--passivity-control]` gives them. Throws
-  /// rigidtouch::Error if the material cannot be read.
+  /// [--t-collision t --frequency f] [--material M] [--passivity-control]` gives them.
   RenderParams ToRenderParams() const;
 
   /// The canonical JSON of the renderer configuration (the object stored in the protocol's

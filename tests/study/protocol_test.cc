@@ -145,7 +145,8 @@ TEST(ProtocolTest, AnyRendererWithAMaterialAndPassivityControl) {
   const Condition& e = p.conditions[2];
   ASSERT_EQ(e.label, "e");
   EXPECT_EQ(e.renderer, RendererKind::kEvent);
-  EXPECT_EQ(e.material, "wood");
+  ASSERT_TRUE(e.material.has_value());
+  EXPECT_EQ(e.material->name, "wood");
   EXPECT_FALSE(e.passivity_control);
   // the render parameters are --material's: the event transient, a material train's f and t_c
   const RenderParams re = e.ToRenderParams();
@@ -189,7 +190,18 @@ TEST(ProtocolTest, MaterialAndPassivityErrorsNameTheField) {
   e = with({{"renderer", "event"}, {"material", "glass"}});
   EXPECT_NE(e.find("conditions[\"b\"].material: unknown material 'glass'"), std::string::npos) << e;
   e = with({{"renderer", "event"}, {"material", 3}});
+  EXPECT_NE(e.find("conditions[\"b\"].material: expected a material name or file"),
+            std::string::npos)
+      << e;
+  e = with({{"renderer", "event"},
+            {"material", {{"name", "x"}, {"decay_per_s", 50}, {"frequency_hz", 80}}}});
+  EXPECT_NE(e.find("conditions[\"b\"].material.amplitude_Ns_per_m: missing"), std::string::npos)
+      << e;
+  e = with({{"renderer", "event"},
+            {"material",
+             {{"amplitude_Ns_per_m", 1}, {"decay_per_s", 50}, {"frequency_hz", 80}, {"f", 1}}}});
   EXPECT_NE(e.find("conditions[\"b\"].material"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"f\""), std::string::npos) << e;
   e = with({{"renderer", "event"}, {"material", "/nonexistent/m.json"}});
   EXPECT_NE(e.find("conditions[\"b\"].material: /nonexistent/m.json"), std::string::npos) << e;
   e = with({{"renderer", "train"}, {"material", "wood"}, {"frequency_hz", 100}});
@@ -200,20 +212,39 @@ TEST(ProtocolTest, MaterialAndPassivityErrorsNameTheField) {
   EXPECT_NE(e.find("conditions[\"b\"].passivity_control"), std::string::npos) << e;
 }
 
-// a JSON material file, as --material takes one
+// a JSON material file, as --material takes one; the canonical JSON holds the material's own
+// fields, so the hash covers what is rendered and a log's embedded protocol parses without the
+// file (as `study analyze` on another machine needs)
 TEST(ProtocolTest, MaterialFileIsReadAsTheCliReadsIt) {
-  const testing::ScratchDir dir;
-  const std::string path = dir.File("glass.json");
-  testing::WriteFile(path, R"({"amplitude_Ns_per_m": 20, "decay_per_s": 80, "frequency_hz": 200})");
-  json d = Minimal();
-  d["conditions"]["b"] = {{"renderer", "event"}, {"material", path}};
-  const Protocol p = ParseProtocol(d, "p.json");
-  const RenderParams r = p.conditions[1].ToRenderParams();
-  EXPECT_EQ(r.material.name, "glass");
-  EXPECT_EQ(r.material.amplitude_Ns_per_m, 20.0);
-  EXPECT_EQ(r.material.decay_per_s, 80.0);
-  EXPECT_EQ(r.material.frequency_hz, 200.0);
-  EXPECT_EQ(p.ToJson()["conditions"]["b"]["material"], path);
+  json canonical;
+  std::string hash;
+  {
+    const testing::ScratchDir dir;
+    const std::string path = dir.File("glass.json");
+    testing::WriteFile(path,
+                       R"({"amplitude_Ns_per_m": 20, "decay_per_s": 80, "frequency_hz": 200})");
+    json d = Minimal();
+    d["conditions"]["b"] = {{"renderer", "event"}, {"material", path}};
+    const Protocol p = ParseProtocol(d, "p.json");
+    const RenderParams r = p.conditions[1].ToRenderParams();
+    EXPECT_EQ(r.material.name, "glass");
+    EXPECT_EQ(r.material.amplitude_Ns_per_m, 20.0);
+    EXPECT_EQ(r.material.decay_per_s, 80.0);
+    EXPECT_EQ(r.material.frequency_hz, 200.0);
+    canonical = p.ToJson();
+    hash = ProtocolHash(p);
+    EXPECT_EQ(canonical["conditions"]["b"]["material"],
+              json::parse(R"({"name": "glass", "amplitude_Ns_per_m": 20.0, "decay_per_s": 80.0,
+                              "frequency_hz": 200.0})"));
+    // another content under the same path is another protocol
+    testing::WriteFile(path,
+                       R"({"amplitude_Ns_per_m": 21, "decay_per_s": 80, "frequency_hz": 200})");
+    EXPECT_NE(ProtocolHash(ParseProtocol(d, "p.json")), hash);
+  }
+  // the file is gone: the canonical protocol still parses, to the same hash and material
+  const Protocol q = ParseProtocol(canonical, "embedded");
+  EXPECT_EQ(ProtocolHash(q), hash);
+  EXPECT_EQ(q.conditions[1].ToRenderParams().material.amplitude_Ns_per_m, 20.0);
 }
 
 json ThreeWay() {
