@@ -134,9 +134,7 @@ Settings ResolveSettings(const SceneFlags& f) {
                     "the material (docs/renderers.md): give one");
       }
     }
-    const render::MaterialTrainParams t = render::MaterialTrain(o.render.material);
-    o.render.frequency_hz = t.frequency_hz;
-    o.render.t_collision_s = t.t_collision_s;
+    render::ApplyMaterial(o.render, o.render.material);
   }
   if (f.passivity_control) {
     o.render.passivity_control = true;

@@ -219,7 +219,9 @@ void Predict(const PredictOptions& o) {
     for (const auto& p : predictions) {
       tests.push_back({{"name", p.name},
                        {"distance_jnd", p.distance_jnd},
-                       {"predicted_percent_correct", p.percent_correct},
+                       {"predicted_percent_correct",
+                        std::isnan(p.percent_correct) ? json(nullptr) : json(p.percent_correct)},
+                       {"chance_percent", p.chance_percent},
                        {"mean_percepts_jnd", p.mean_percepts},
                        {"label_interference", p.label_interference},
                        {"cohort_percent_correct", ShareJson(p.cohort_percent_correct)},
@@ -244,8 +246,14 @@ void Predict(const PredictOptions& o) {
               << " (intervals: 5th-95th percentile over cohorts)\n";
     auto percent = [](double share) { return std::to_string(std::lround(100.0 * share)) + "%"; };
     for (const auto& p : predictions) {
-      std::cout << "  " << p.name << ": walls " << p.distance_jnd << " JND apart; nominal observer "
-                << p.percent_correct << "% correct\n";
+      if (p.mean_percepts.size() == 2) {
+        std::cout << "  " << p.name << ": walls " << p.distance_jnd
+                  << " JND apart; nominal observer " << p.percent_correct << "% correct\n";
+      } else {
+        std::cout << "  " << p.name << ": " << p.mean_percepts.size() << " walls, the nearest two "
+                  << p.distance_jnd << " JND apart; chance " << p.chance_percent
+                  << "% (no nominal closed form for more than two walls: see the cohorts)\n";
+      }
       if (o.cohorts == 0) continue;
       const st::CohortShare& m = p.cohort_percent_correct;
       std::cout << "    cohort mean " << m.expected << "% correct [" << m.low << ", " << m.high

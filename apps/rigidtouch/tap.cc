@@ -78,14 +78,11 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     if (spec->render) wall_params = spec->render;
     if (spec->material) {
       // as --material: the event renderer's transient, or a material train's f and window
-      c.load.render.material = *spec->material;
       if (spec->renderer == RendererKind::kTrain) {
         RefuseUnused(ResolveSettings(f.scene), {"render.t_collision_s", "render.frequency_hz"},
                      "a material train takes f and t_c from its material (docs/renderers.md)");
-        const render::MaterialTrainParams t = render::MaterialTrain(*spec->material);
-        c.load.render.frequency_hz = t.frequency_hz;
-        c.load.render.t_collision_s = t.t_collision_s;
       }
+      render::ApplyMaterial(c.load.render, *spec->material);
     }
   }
   if (wall_params) {

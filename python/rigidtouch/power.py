@@ -4,7 +4,7 @@ A pool of simulated participants (the observer model of ``rigidtouch study simul
 its own seed) is run once on the protocol; cohorts of n participants are then drawn from the pool
 without replacement, many times for each n. Each test of the protocol is analysed per cohort the
 way a lab would: a one-sided one-sample t-test of the participants' percent correct against
-chance (50 %), alpha 0.05. The power at n is the fraction of cohorts in which the test is
+chance (50 %; 100/k % for a test of k walls), alpha 0.05. The power at n is the fraction of cohorts in which the test is
 significant; the answer is the smallest n whose power reaches the target (80 %).
 
     python3 -m rigidtouch.power --protocol studies/walls.json
@@ -75,22 +75,29 @@ def power_analysis(protocol, *, pool=60, seed=1, cohorts=2000, alpha=0.05, targe
                                         device=device)
     rng = random.Random(seed)
     max_n = min(max_n or pool, pool)
+    # chance is 1/k for a test of k walls (the report's "chance"; 1/2 for two)
+    chances = [100.0 * test.get("chance", 0.5) for test in report["tests"]]
+    against = ("50 %" if all(c == 50.0 for c in chances)
+               else "chance, 100/k % for a test of k walls")
     out = {"protocol": protocol, "pool": pool, "seed": seed, "cohorts_per_size": cohorts,
            "alpha": alpha, "target_power": target,
-           "test": "one-sided one-sample t-test of percent correct against 50 %", "tests": []}
-    for test in report["tests"]:
+           "test": "one-sided one-sample t-test of percent correct against " + against,
+           "tests": []}
+    for test, chance in zip(report["tests"], chances):
         scores = [p["percent_correct"] for p in test["participants"]]
         powers = {}
         needed = None
         for n in range(2, max_n + 1):
-            hits = sum(one_sided_t_p(rng.sample(scores, n), 50.0) < alpha for _ in range(cohorts))
+            hits = sum(one_sided_t_p(rng.sample(scores, n), chance) < alpha
+                       for _ in range(cohorts))
             powers[n] = hits / cohorts
             if powers[n] >= target:
                 needed = n
                 break
         out["tests"].append({"name": test["name"], "conditions": test["conditions"],
                              "pool_mean_percent_correct": test["mean_percent_correct"],
-                             "pool_sd": test["sd"], "participants_needed": needed,
+                             "pool_sd": test["sd"], "chance_percent": chance,
+                             "participants_needed": needed,
                              "power": powers})
     return out
 

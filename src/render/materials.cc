@@ -42,12 +42,27 @@ std::span<const Material> MaterialPresets() {
 }
 
 Material ReadMaterial(const std::string& path) {
-  const nlohmann::json doc = io::ReadJsonFile(path, "material");
-  const io::JsonSource source(path);
-  const io::StrictObject o(
-      source, doc, "", {"name", "amplitude_Ns_per_m", "decay_per_s", "frequency_hz"}, "a material");
+  return ReadMaterialJson(io::JsonSource(path), io::ReadJsonFile(path, "material"), "",
+                          std::filesystem::path(path).stem().string());
+}
+
+const Material* FindPreset(const Material& material) {
+  for (const Material& m : Table()) {
+    if (m.name == material.name && m.amplitude_Ns_per_m == material.amplitude_Ns_per_m &&
+        m.decay_per_s == material.decay_per_s && m.frequency_hz == material.frequency_hz) {
+      return &m;
+    }
+  }
+  return nullptr;
+}
+
+Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& value,
+                          const std::string& path, const std::string& default_name) {
+  const io::StrictObject o(source, value, path,
+                           {"name", "amplitude_Ns_per_m", "decay_per_s", "frequency_hz"},
+                           "a material");
   Material m;
-  m.name = o.String("name").value_or(std::filesystem::path(path).stem().string());
+  m.name = o.String("name").value_or(default_name);
   if (m.name.empty()) o.FailAt("name", "must not be empty");
   m.amplitude_Ns_per_m = Required(o, "amplitude_Ns_per_m", 0.0, 1e4, "N/(m/s)");
   m.decay_per_s = Required(o, "decay_per_s", 1e-3, 1e5, "1/s");
@@ -75,6 +90,14 @@ MaterialTrainParams MaterialTrain(const Material& material) {
   const double window_s = std::log(20.0) / material.decay_per_s;
   p.t_collision_s = std::max(std::min(window_s, kMaxCollisionWindow_s), 1.0 / p.frequency_hz);
   return p;
+}
+
+void ApplyMaterial(RenderParams& render, const Material& material) {
+  render.material = material;
+  if (render.renderer != RendererKind::kTrain) return;
+  const MaterialTrainParams t = MaterialTrain(material);
+  render.frequency_hz = t.frequency_hz;
+  render.t_collision_s = t.t_collision_s;
 }
 
 }  // namespace rigidtouch::render

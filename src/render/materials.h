@@ -6,6 +6,9 @@
 #include <string>
 #include <string_view>
 
+#include <nlohmann/json.hpp>
+
+#include "io/strict_json.h"
 #include "rigidtouch/model.h"
 
 namespace rigidtouch::render {
@@ -20,6 +23,16 @@ std::span<const Material> MaterialPresets();
 /// the field.
 Material ReadMaterial(const std::string& path);
 
+/// Reads a material from a parsed JSON object, the way ReadMaterial reads a file's: the fields
+/// above, `name` defaulting to `default_name`. `path` is the object's field path in `source`
+/// ("" for a whole file); errors read "SOURCE: PATH.FIELD: ...". One reader for material files and
+/// materials written inline (a study protocol's canonical form).
+Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& value,
+                          const std::string& path, const std::string& default_name);
+
+/// The preset `material` is, or nullptr: same name and the same A, B and f.
+const Material* FindPreset(const Material& material);
+
 /// `text` is a preset name or a path ending in ".json". Anything else is an Error listing the
 /// presets and the file form.
 Material ParseMaterial(std::string_view text);
@@ -32,5 +45,10 @@ struct MaterialTrainParams {
   double t_collision_s = 0.0;
 };
 MaterialTrainParams MaterialTrain(const Material& material);
+
+/// Gives `render` the material `material` as `--material` does: the event renderer's transient,
+/// or, for the train renderer, a passive material train (its f and t_c from MaterialTrain). One
+/// place for the CLI, `tap --compare` and study conditions, so all render a material alike.
+void ApplyMaterial(RenderParams& render, const Material& material);
 
 }  // namespace rigidtouch::render

@@ -20,11 +20,68 @@ using nlohmann::json;
 struct Counts {
   int answers = 0;
   int correct = 0;
-  int signal = 0;        // condition 1 presented
-  int noise = 0;         // condition 0 presented
-  int hits = 0;          // condition 1 named 1
-  int false_alarms = 0;  // condition 0 named 1
+  int signal = 0;                       // condition 1 presented
+  int noise = 0;                        // condition 0 presented
+  int hits = 0;                         // condition 1 named 1
+  int false_alarms = 0;                 // condition 0 named 1
+  std::vector<std::vector<int>> named;  // [presented][named], k x k
 };
+
+// one participant's result in a test of k conditions
+ParticipantResult ResultOf(const std::string& id, const std::string& mode, const Counts& k,
+                           const StudyTest& test) {
+  const std::size_t conditions = test.conditions.size();
+  ParticipantResult p;
+  p.id = id;
+  p.mode = mode;
+  p.answers = k.answers;
+  p.correct = k.correct;
+  p.percent_correct = 100.0 * k.correct / k.answers;
+  p.binomial = ExactBinomialTest(k.correct, k.answers, 1.0 / static_cast<double>(conditions));
+  // d' of a yes/no task: two conditions only (k > 2 would need an identification model)
+  if (conditions == 2) {
+    p.d_prime = LogLinearDPrime(k.hits, k.signal, k.false_alarms, k.noise);
+  } else {
+    const double nan = std::nan("");
+    p.d_prime = {nan, nan, nan, nan};
+  }
+  p.reached_criterion = p.percent_correct >= kCriterionPercent;
+  p.label_swap_suspected = p.binomial.p_less < kLabelSwapAlpha;
+  p.complete = k.answers == test.series;
+  return p;
+}
+
+TestResult ResultOf(const Protocol& protocol, std::size_t t,
+                    const std::map<std::string, std::vector<Counts>>& counts,
+                    const std::map<std::string, std::string>& modes) {
+  const StudyTest& test = protocol.tests[t];
+  const std::size_t k = test.conditions.size();
+  TestResult result;
+  result.name = test.name;
+  for (int c : test.conditions) result.conditions.push_back(protocol.conditions[c].label);
+  result.chance = 1.0 / static_cast<double>(k);
+  result.confusion.assign(k, std::vector<int>(k, 0));
+  std::vector<double> percents;
+  double d_sum = 0.0;
+  for (const auto& [id, per_test] : counts) {
+    const Counts& n = per_test[t];
+    if (n.answers == 0) continue;
+    const ParticipantResult p = ResultOf(id, modes.at(id), n, test);
+    for (std::size_t a = 0; a < k; ++a) {
+      for (std::size_t b = 0; b < k; ++b) result.confusion[a][b] += n.named[a][b];
+    }
+    percents.push_back(p.percent_correct);
+    d_sum += p.d_prime.d_prime;
+    result.reached_criterion += p.reached_criterion ? 1 : 0;
+    result.pooled_answers += n.answers;
+    result.pooled_correct += n.correct;
+    result.participants.push_back(p);
+  }
+  result.percent_correct = ComputeMeanSd(percents);
+  result.mean_d_prime = percents.empty() ? std::nan("") : d_sum / percents.size();
+  result.pooled = ExactBinomialTest(result.pooled_correct, result.pooled_answers, result.chance);
+  return result;
+}
 
 json NumberOrNull(double v) {
   return std::isfinite(v) ? json(v) : json();
@@ -35,6 +92,33 @@ std::string Format(const char* format, double v) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, format, v);
   return buffer;
+}
+
+// the pooled confusion matrix, one row per condition presented
+std::string ConfusionText(const TestResult& t) {
+  std::ostringstream out;
+  out << "  pooled answers (row: presented, column: named)\n";
+  std::size_t width = 8;
+  for (const std::string& label : t.conditions) width = std::max(width, label.size() + 1);
+  const int w = static_cast<int>(width);
+  char cell[160];
+  std::snprintf(cell, sizeof cell, "  %-*s", w, "");
+  out << cell;
+  for (const std::string& label : t.conditions) {
+    std::snprintf(cell, sizeof cell, " %*s", w, label.c_str());
+    out << cell;
+  }
+  out << "\n";
+  for (std::size_t a = 0; a < t.conditions.size(); ++a) {
+    std::snprintf(cell, sizeof cell, "  %-*s", w, t.conditions[a].c_str());
+    out << cell;
+    for (int n : t.confusion[a]) {
+      std::snprintf(cell, sizeof cell, " %*d", w, n);
+      out << cell;
+    }
+    out << "\n";
+  }
+  return out.str();
 }
 
 }  // namespace
@@ -69,11 +153,16 @@ StudyReport AnalyzeLogs(const std::vector<LogInput>& logs) {
     modes[id] = valid.mode;
     std::vector<Counts>& per_test = counts[id];
     per_test.assign(protocol.tests.size(), Counts{});
+    for (std::size_t t = 0; t < protocol.tests.size(); ++t) {
+      const std::size_t k = protocol.tests[t].conditions.size();
+      per_test[t].named.assign(k, std::vector<int>(k, 0));
+    }
     for (const LoggedAnswer& answer : valid.answers) {
       Counts& k = per_test[answer.test];
       const int c = answer.condition, a = answer.answer;
       ++k.answers;
       k.correct += a == c ? 1 : 0;
+      ++k.named[c][a];
       if (c == 1) {
         ++k.signal;
         k.hits += a == 1 ? 1 : 0;
@@ -85,38 +174,7 @@ StudyReport AnalyzeLogs(const std::vector<LogInput>& logs) {
   }
 
   for (std::size_t t = 0; t < protocol.tests.size(); ++t) {
-    const StudyTest& test = protocol.tests[t];
-    TestResult result;
-    result.name = test.name;
-    result.conditions = {protocol.conditions[test.conditions[0]].label,
-                         protocol.conditions[test.conditions[1]].label};
-    std::vector<double> percents;
-    double d_sum = 0.0;
-    for (const auto& [id, per_test] : counts) {
-      const Counts& k = per_test[t];
-      if (k.answers == 0) continue;
-      ParticipantResult p;
-      p.id = id;
-      p.mode = modes[id];
-      p.answers = k.answers;
-      p.correct = k.correct;
-      p.percent_correct = 100.0 * k.correct / k.answers;
-      p.binomial = ExactBinomialTest(k.correct, k.answers, 0.5);
-      p.d_prime = LogLinearDPrime(k.hits, k.signal, k.false_alarms, k.noise);
-      p.reached_criterion = p.percent_correct >= kCriterionPercent;
-      p.label_swap_suspected = p.binomial.p_less < kLabelSwapAlpha;
-      p.complete = k.answers == test.series;
-      percents.push_back(p.percent_correct);
-      d_sum += p.d_prime.d_prime;
-      result.reached_criterion += p.reached_criterion ? 1 : 0;
-      result.pooled_answers += k.answers;
-      result.pooled_correct += k.correct;
-      result.participants.push_back(p);
-    }
-    result.percent_correct = ComputeMeanSd(percents);
-    result.mean_d_prime = percents.empty() ? std::nan("") : d_sum / percents.size();
-    result.pooled = ExactBinomialTest(result.pooled_correct, result.pooled_answers, 0.5);
-    report.tests.push_back(std::move(result));
+    report.tests.push_back(ResultOf(protocol, t, counts, modes));
   }
   return report;
 }
@@ -129,19 +187,25 @@ nlohmann::json ReportToJson(const StudyReport& report) {
   j["methods"] = {{"percent_correct", "100 * correct / answered series, per participant and test"},
                   {"sd", "sample standard deviation over participants (n - 1)"},
                   {"binomial",
-                   "exact binomial test against 0.5; two-sided p sums outcomes no more likely "
-                   "than the observed one"},
+                   "exact binomial test against chance, 1/k for a test of k conditions (0.5 for "
+                   "two); two-sided p sums outcomes no more likely than the observed one"},
                   {"d_prime",
-                   "one-interval two-alternative identification (yes/no): z(H) - z(F), condition "
+                   "two conditions only (null for more): one-interval two-alternative "
+                   "identification (yes/no): z(H) - z(F), condition "
                    "1 as signal, log-linear correction (Hautus 1995): H = (hits + 0.5) / "
                    "(signal series + 1), F = (false alarms + 0.5) / (noise series + 1)"},
+                  {"confusion",
+                   "tests of more than two conditions: pooled answers, row = condition "
+                   "presented, column = condition named, in the test's order"},
                   {"label_swap_suspected", "one-sided binomial p (below chance) < 0.05"},
                   {"reached_90", "percent correct >= 90"}};
   json tests = json::array();
   for (const TestResult& t : report.tests) {
     json tj = json::object();
     tj["name"] = t.name;
-    tj["conditions"] = {t.conditions[0], t.conditions[1]};
+    tj["conditions"] = t.conditions;
+    tj["chance"] = t.chance;
+    if (t.conditions.size() > 2) tj["confusion"] = t.confusion;
     tj["n_participants"] = t.percent_correct.n;
     tj["mean_percent_correct"] = NumberOrNull(t.percent_correct.mean);
     tj["sd"] = NumberOrNull(t.percent_correct.sd);
@@ -170,10 +234,10 @@ nlohmann::json ReportToJson(const StudyReport& report) {
                     {"p_two_sided", p.binomial.p_two_sided},
                     {"p_greater", p.binomial.p_greater},
                     {"p_less", p.binomial.p_less},
-                    {"d_prime", p.d_prime.d_prime},
-                    {"criterion", p.d_prime.criterion},
-                    {"hit_rate", p.d_prime.hit_rate},
-                    {"false_alarm_rate", p.d_prime.false_alarm_rate},
+                    {"d_prime", NumberOrNull(p.d_prime.d_prime)},
+                    {"criterion", NumberOrNull(p.d_prime.criterion)},
+                    {"hit_rate", NumberOrNull(p.d_prime.hit_rate)},
+                    {"false_alarm_rate", NumberOrNull(p.d_prime.false_alarm_rate)},
                     {"reached_90", p.reached_criterion},
                     {"label_swap_suspected", p.label_swap_suspected},
                     {"complete", p.complete}});
@@ -190,7 +254,12 @@ std::string ReportToText(const StudyReport& report) {
   out << "Protocol \"" << report.protocol_name << "\" (" << report.protocol_hash << "), "
       << report.sessions << " session(s)\n";
   for (const TestResult& t : report.tests) {
-    out << "\n" << t.name << ": " << t.conditions[0] << " vs " << t.conditions[1] << "\n";
+    out << "\n" << t.name << ": ";
+    for (std::size_t c = 0; c < t.conditions.size(); ++c) {
+      out << (c == 0 ? "" : " vs ") << t.conditions[c];
+    }
+    if (t.conditions.size() > 2) out << " (chance " << Format("%.1f", 100.0 * t.chance) << "%)";
+    out << "\n";
     out << "  participants " << t.percent_correct.n << ", mean "
         << Format("%.1f", t.percent_correct.mean) << "% correct (SD "
         << Format("%.1f", t.percent_correct.sd) << "), mean d' " << Format("%.2f", t.mean_d_prime)
@@ -210,11 +279,13 @@ std::string ReportToText(const StudyReport& report) {
       if (p.label_swap_suspected) notes += "below chance: labels swapped? ";
       if (!p.complete) notes += "incomplete ";
       char line[200];
-      std::snprintf(line, sizeof line, "  %-16s %7d %7d %9.1f %10.3g %10.3g %10.3g %6.2f  %s\n",
+      std::snprintf(line, sizeof line, "  %-16s %7d %7d %9.1f %10.3g %10.3g %10.3g %6s  %s\n",
                     p.id.c_str(), p.answers, p.correct, p.percent_correct, p.binomial.p_two_sided,
-                    p.binomial.p_greater, p.binomial.p_less, p.d_prime.d_prime, notes.c_str());
+                    p.binomial.p_greater, p.binomial.p_less,
+                    Format("%.2f", p.d_prime.d_prime).c_str(), notes.c_str());
       out << line;
     }
+    if (t.conditions.size() > 2) out << ConfusionText(t);
   }
   return out.str();
 }

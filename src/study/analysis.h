@@ -1,9 +1,9 @@
 // Analysis of study logs: per participant and test percent correct, exact binomial tests against
-// chance, d' (log-linear correction), group mean and SD, who reached 90%, who is far below chance
-// (telling the walls apart but holding the labels swapped).
+// chance (1/k for a test of k conditions), d' (log-linear correction; two conditions), group mean
+// and SD, who reached 90%, who is far below chance (telling the walls apart but holding the labels
+// swapped), and for k > 2 the confusion matrix of presented against named conditions.
 #pragma once
 
-#include <array>
 #include <string>
 #include <vector>
 
@@ -32,9 +32,9 @@ struct ParticipantResult {
   int answers = 0;   ///< series answered
   int correct = 0;   ///< series named correctly
   double percent_correct = 0.0;
-  BinomialTest binomial;              ///< against 50%
-  DPrime d_prime;                     ///< condition 1 as signal, log-linear correction
-  bool reached_criterion = false;     ///< percent_correct >= 90
+  BinomialTest binomial;           ///< against chance, 1/k
+  DPrime d_prime;                  ///< condition 1 as signal, log-linear correction; NaN for k > 2
+  bool reached_criterion = false;  ///< percent_correct >= 90
   bool label_swap_suspected = false;  ///< binomial.p_less < 0.05
   bool complete = false;              ///< every series of the test answered
 };
@@ -42,14 +42,18 @@ struct ParticipantResult {
 /// One test over all participants.
 struct TestResult {
   std::string name;
-  std::array<std::string, 2> conditions;        ///< labels of condition 0 and 1
+  std::vector<std::string> conditions;  ///< labels of conditions 0 to k - 1
+  double chance = 0.5;                  ///< 1/k: percent correct / 100 by guessing
+  /// Pooled answers: confusion[presented][named], counts over all participants (k x k).
+  std::vector<std::vector<int>> confusion;
   std::vector<ParticipantResult> participants;  ///< those with at least one answer, by ID
   MeanSd percent_correct;                       ///< over participants (SD with n - 1)
   double mean_d_prime = 0.0;                    ///< mean of the participants' d'
   int reached_criterion = 0;                    ///< participants at 90% or better
   int pooled_answers = 0;                       ///< all answers of all participants
   int pooled_correct = 0;
-  BinomialTest pooled;  ///< exact binomial test of the pooled answers (treats them as independent)
+  BinomialTest pooled;  ///< exact binomial test of the pooled answers against chance (treats them
+                        ///< as independent)
 };
 
 /// The whole analysis.
@@ -66,9 +70,10 @@ struct StudyReport {
 StudyReport AnalyzeLogs(const std::vector<LogInput>& logs);
 
 /// The report as JSON: "protocol_name", "protocol_hash", "sessions", "methods" and "tests"
-/// (each: "name", "conditions", "n_participants", "mean_percent_correct", "sd",
+/// (each: "name", "conditions", "chance", "n_participants", "mean_percent_correct", "sd",
 /// "mean_d_prime", "reached_90_count", "label_swap_suspected", "pooled", "participants" with
-/// "id", "percent_correct" and the per-participant statistics). NaN is written as null.
+/// "id", "percent_correct" and the per-participant statistics; for k > 2 also "confusion", rows
+/// presented and columns named). NaN is written as null.
 nlohmann::json ReportToJson(const StudyReport& report);
 
 /// The report as a human-readable table.

@@ -149,9 +149,11 @@ ValidLog Validate(const std::vector<json>& records, const std::string& src) {
     if (type == "series") continue;  // presented but maybe unanswered: not done
     if (type == "answer") {
       const int answer = GetInt(r, "answer", src, i);
-      if (answer != 0 && answer != 1) {
+      const int choices = static_cast<int>(log.protocol.tests[step.test].conditions.size());
+      if (answer < 0 || answer >= choices) {
         throw Error(src + ": record " + std::to_string(i + 1) + " has answer " +
-                    std::to_string(answer) + "; valid answers: 0, 1");
+                    std::to_string(answer) + "; valid answers: " +
+                    (choices == 2 ? std::string("0, 1") : "0 to " + std::to_string(choices - 1)));
       }
       if (done[k]) {
         throw Error(src + ": two answers for step " + std::to_string(k) + " (record " +

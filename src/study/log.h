@@ -47,8 +47,8 @@ struct LoggedAnswer {
   int step = 0;       ///< index in the plan
   int test = 0;       ///< index into Protocol::tests
   int series = 0;     ///< series number within the test
-  int condition = 0;  ///< 0 or 1: the condition rendered
-  int answer = 0;     ///< 0 or 1: the condition named
+  int condition = 0;  ///< 0 to k - 1: the condition rendered (k: the test's conditions)
+  int answer = 0;     ///< 0 to k - 1: the condition named
 };
 
 /// What a log that passed ValidateLog holds.
@@ -69,8 +69,9 @@ struct ValidLog {
 /// same message. Valid: the first record is this format's session_start with a valid participant
 /// ID, mode, unsigned seed and an embedded protocol matching its hash; there is no second
 /// session_start; every familiarization, series and answer record matches the step of the plan
-/// its seed implies (answers 0 or 1, at most one per step); the done steps are a prefix of the
-/// plan. `source` names the log in errors. Throws rigidtouch::Error "<source>: ..." otherwise.
+/// its seed implies (answers 0 to k - 1 for a test of k conditions, at most one per step); the done
+/// steps are a prefix of the plan. `source` names the log in errors. Throws rigidtouch::Error
+/// "<source>: ..." otherwise.
 ValidLog ValidateLog(const std::vector<nlohmann::json>& records, std::string_view source);
 
 /// Destination of session records.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 
 #include "io/strict_json.h"
 #include "io/text.h"
@@ -43,6 +44,56 @@ struct ParamSpec {
 };
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+PerceptVector Add(const PerceptVector& a, const PerceptVector& b) {
+  PerceptVector sum{};
+  for (int i = 0; i < kPerceptDimensions; ++i) sum[i] = a[i] + b[i];
+  return sum;
+}
+
+// The labels re-derived after the association was lost: labels[c] is the template the label of
+// condition c is attached to. The participant recalls a coded memory of each wall, its template
+// plus noise sigma per axis (its own draw per wall), and attaches the labels so that the codes
+// lie nearest their templates overall (the permutation of least summed squared distance; ties
+// broken at random). Two conditions: the sign test (D + e) . D of the closed form
+// (LabelSwapProbability), e the difference of the two codes' noises, which is that rule.
+std::vector<int> RederiveLabels(const std::vector<PerceptVector>& templates, double sigma,
+                                Rng& code) {
+  const int k = static_cast<int>(templates.size());
+  if (k == 2) {
+    double along = 0.0;  // (D + e_1 - e_0) . D
+    for (int i = 0; i < kPerceptDimensions; ++i) {
+      const double d = templates[1][i] - templates[0][i];
+      const double e = sigma * (code.Normal() - code.Normal());
+      along += (d + e) * d;
+    }
+    // exactly on the boundary (identical templates): a fair coin
+    const bool swapped = along < 0.0 || (along == 0.0 && code.Bernoulli(0.5));
+    return swapped ? std::vector<int>{1, 0} : std::vector<int>{0, 1};
+  }
+  std::vector<PerceptVector> codes(k);
+  for (int c = 0; c < k; ++c) {
+    for (int i = 0; i < kPerceptDimensions; ++i)
+      codes[c][i] = templates[c][i] + sigma * code.Normal();
+  }
+  std::vector<int> perm(k);
+  std::iota(perm.begin(), perm.end(), 0);
+  std::vector<std::vector<int>> best;
+  double best_cost = kInf;
+  do {  // k <= 8: at most 40320 assignments
+    double cost = 0.0;
+    for (int c = 0; c < k; ++c) {
+      const double d = PerceptDistance(codes[c], templates[perm[c]]);
+      cost += d * d;
+    }
+    if (cost < best_cost) best.clear();
+    if (cost <= best_cost) {
+      best_cost = cost;
+      best.push_back(perm);
+    }
+  } while (std::next_permutation(perm.begin(), perm.end()));
+  return best.size() == 1 ? best.front() : best[code.Below(best.size())];
+}
 
 const ParamSpec kParamSpecs[] = {
     {"intensity_jnd_dB", &ObserverParams::intensity_jnd_dB, 0.0, true, kInf},
@@ -339,6 +390,19 @@ bool SimulatedParticipant::labels_swapped(int test) const {
   return rng.Bernoulli(params_.label_swap_probability);
 }
 
+std::vector<int> SimulatedParticipant::InitialLabels(int test) const {
+  const int k = static_cast<int>(protocol_.tests[test].conditions.size());
+  std::vector<int> labels(k);
+  std::iota(labels.begin(), labels.end(), 0);
+  Rng rng(DeriveSeed(seed_, {kSwap, static_cast<std::uint64_t>(test)}));
+  if (!rng.Bernoulli(params_.label_swap_probability)) return labels;
+  // a swapped pair: with two conditions the two labels, with more a pair drawn at random
+  const auto a = static_cast<int>(k == 2 ? 0 : rng.Below(k));
+  const auto b = static_cast<int>(k == 2 ? 1 : (a + 1 + rng.Below(k - 1)) % k);
+  std::swap(labels[a], labels[b]);
+  return labels;
+}
+
 PerceptVector SimulatedParticipant::FeltMean(const Condition& condition, int taps,
                                              std::uint64_t tap_stream, std::uint64_t noise_stream) {
   PerceptVector mean{};
@@ -359,9 +423,11 @@ const SimulatedParticipant::Memory& SimulatedParticipant::MemoryOf(int test) {
   auto found = memories_.find(test);
   if (found != memories_.end()) return found->second;
   const StudyTest& t = protocol_.tests[test];
+  const int k = static_cast<int>(t.conditions.size());
   const auto tt = static_cast<std::uint64_t>(test);
   Memory memory;
-  for (int c = 0; c < 2; ++c) {
+  memory.templates.resize(k);
+  for (int c = 0; c < k; ++c) {
     const auto cc = static_cast<std::uint64_t>(c);
     const Condition& condition = protocol_.conditions[t.conditions[c]];
     memory.templates[c] = FeltMean(condition, t.familiarization_taps,
@@ -370,8 +436,8 @@ const SimulatedParticipant::Memory& SimulatedParticipant::MemoryOf(int test) {
     Rng encoding(DeriveSeed(seed_, {kEncoding, tt, cc}));
     for (double& x : memory.templates[c]) x += params_.memory_encoding_sd_jnd * encoding.Normal();
   }
-  memory.drift.resize(t.series);
-  for (int c = 0; c < 2; ++c) {
+  memory.drift.assign(t.series, std::vector<PerceptVector>(k));
+  for (int c = 0; c < k; ++c) {
     Rng drift(DeriveSeed(seed_, {kDrift, tt, static_cast<std::uint64_t>(c)}));
     PerceptVector walk{};
     for (int s = 0; s < t.series; ++s) {
@@ -379,47 +445,46 @@ const SimulatedParticipant::Memory& SimulatedParticipant::MemoryOf(int test) {
       memory.drift[s][c] = walk;
     }
   }
-  // label memory: the association of labels and templates is lost with probability h before each
-  // series; the participant then re-derives it by comparing the coded memory of each wall with
-  // the templates (LabelSwapProbability), and keeps the result until the next loss
   // walls of the tests before this one that are not in it compete for its labels
   for (int earlier : test_order_) {
     if (earlier == test) break;
     const StudyTest& e = protocol_.tests[earlier];
-    for (int ec = 0; ec < 2; ++ec) {
-      if (e.conditions[ec] == t.conditions[0] || e.conditions[ec] == t.conditions[1]) continue;
+    for (std::size_t ec = 0; ec < e.conditions.size(); ++ec) {
+      const int other_condition = e.conditions[ec];
+      if (std::find(t.conditions.begin(), t.conditions.end(), other_condition) !=
+          t.conditions.end()) {
+        continue;
+      }
       const PerceptVector other = MemoryOf(earlier).templates[ec];
-      for (int c = 0; c < 2; ++c) {
+      for (int c = 0; c < k; ++c) {
         memory.interference +=
             LabelSimilarity(params_, PerceptDistance(memory.templates[c], other));
       }
     }
   }
+  // label memory: the association of labels and templates is lost with probability h before each
+  // series; the participant then re-derives it from the coded memory of each wall
+  // (RederiveLabels), and keeps the result until the next loss
   const double loss_probability = LabelLossProbability(params_, memory.interference);
-  memory.swapped.resize(t.series);
-  bool swapped = labels_swapped(test);
+  memory.labels.resize(t.series);
+  std::vector<int> labels = InitialLabels(test);
   for (int s = 0; s < t.series; ++s) {
     const auto ss = static_cast<std::uint64_t>(s);
     Rng loss(DeriveSeed(seed_, {kLabelLoss, tt, ss}));
     if (loss.Bernoulli(loss_probability)) {
       Rng code(DeriveSeed(seed_, {kLabelCode, tt, ss}));
-      double along = 0.0;  // (D + e_1 - e_0) . D
-      for (int i = 0; i < kPerceptDimensions; ++i) {
-        const double d = (memory.templates[1][i] + memory.drift[s][1][i]) -
-                         (memory.templates[0][i] + memory.drift[s][0][i]);
-        const double e = params_.label_code_sd_jnd * (code.Normal() - code.Normal());
-        along += (d + e) * d;
-      }
-      // exactly on the boundary (identical templates): a fair coin
-      swapped = along < 0.0 || (along == 0.0 && code.Bernoulli(0.5));
+      std::vector<PerceptVector> now(k);
+      for (int c = 0; c < k; ++c) now[c] = Add(memory.templates[c], memory.drift[s][c]);
+      labels = RederiveLabels(now, params_.label_code_sd_jnd, code);
     }
-    memory.swapped[s] = swapped;
+    memory.labels[s] = labels;
   }
   return memories_.emplace(test, std::move(memory)).first->second;
 }
 
 int SimulatedParticipant::Decide(const Step& step) {
   const StudyTest& t = protocol_.tests[step.test];
+  const int k = static_cast<int>(t.conditions.size());
   const auto tt = static_cast<std::uint64_t>(step.test);
   const auto ss = static_cast<std::uint64_t>(step.series);
   const Condition& condition = protocol_.conditions[t.conditions[step.condition]];
@@ -427,17 +492,22 @@ int SimulatedParticipant::Decide(const Step& step) {
       FeltMean(condition, step.taps, DeriveSeed(seed_, {kSeriesTaps, tt, ss}),
                DeriveSeed(seed_, {kSeriesNoise, tt, ss}));
   Rng lapse(DeriveSeed(seed_, {kLapse, tt, ss}));
-  if (lapse.Bernoulli(params_.lapse_rate)) return static_cast<int>(lapse.Below(2));
+  if (lapse.Bernoulli(params_.lapse_rate)) return static_cast<int>(lapse.Below(k));
 
+  // the nearest of the k remembered templates (the first on a tie), named by the label the
+  // participant holds for it
   const Memory& memory = MemoryOf(step.test);
-  std::array<double, 2> distance{};
-  for (int c = 0; c < 2; ++c) {
-    PerceptVector m = memory.templates[c];
-    for (int i = 0; i < kPerceptDimensions; ++i) m[i] += memory.drift[step.series][c][i];
-    distance[c] = PerceptDistance(felt, m);
+  int nearest = 0;
+  double nearest_distance = kInf;
+  for (int c = 0; c < k; ++c) {
+    const double d = PerceptDistance(felt, Add(memory.templates[c], memory.drift[step.series][c]));
+    if (d < nearest_distance) {
+      nearest = c;
+      nearest_distance = d;
+    }
   }
-  const int nearer = distance[1] < distance[0] ? 1 : 0;
-  return memory.swapped[step.series] ? 1 - nearer : nearer;
+  const std::vector<int>& labels = memory.labels[step.series];
+  return static_cast<int>(std::find(labels.begin(), labels.end(), nearest) - labels.begin());
 }
 
 double SimulatedParticipant::interference(int test) {
@@ -445,14 +515,20 @@ double SimulatedParticipant::interference(int test) {
 }
 
 bool SimulatedParticipant::labels_swapped(int test, int series) {
-  return MemoryOf(test).swapped.at(series);
+  const std::vector<int>& labels = MemoryOf(test).labels.at(series);
+  for (std::size_t c = 0; c < labels.size(); ++c) {
+    if (labels[c] != static_cast<int>(c)) return true;
+  }
+  return false;
+}
+
+const std::vector<int>& SimulatedParticipant::LabelsAt(int test, int series) {
+  return MemoryOf(test).labels.at(series);
 }
 
 PerceptVector SimulatedParticipant::TemplateAt(int test, int series, int condition) {
   const Memory& memory = MemoryOf(test);
-  PerceptVector m = memory.templates.at(condition);
-  for (int i = 0; i < kPerceptDimensions; ++i) m[i] += memory.drift.at(series)[condition][i];
-  return m;
+  return Add(memory.templates.at(condition), memory.drift.at(series).at(condition));
 }
 
 }  // namespace rigidtouch::study

@@ -12,10 +12,11 @@
 // its own JND scale and detection threshold. The observer keeps a memory template of each wall
 // from the familiarization taps (averaged, plus encoding noise, plus a random-walk drift per
 // series: trace memory, Durlach & Braida 1969), averages the taps of a series and takes the wall
-// whose template is nearer (discrimination). Naming it rests on a separate label memory: the
-// association of labels and templates can be lost before any series (more often when walls of
-// earlier tests felt alike) and is then re-derived from a coarse coded memory, possibly swapped
-// (identification). It lapses (guesses) with a small probability.
+// whose template is nearest among the test's k walls (discrimination). Naming it rests on a
+// separate label memory: the association of labels and templates can be lost before any series
+// (more often when walls of earlier tests felt alike) and is then re-derived from a coarse coded
+// memory, possibly with labels exchanged (identification). It lapses (guesses among the k) with a
+// small probability.
 #pragma once
 
 #include <array>
@@ -132,11 +133,12 @@ double LabelSimilarity(const ObserverParams& params, double distance);
 /// (their labels compete for the same feeling: proactive interference).
 double LabelLossProbability(const ObserverParams& params, double interference);
 
-/// Expected percent correct of the nominal observer over a test's series, for walls whose mean
-/// percepts are `a` (condition 0) and `b` (condition 1): the average over series positions s of
-/// lapse / 2 + (1 - lapse) (w_s (1 - P_s) + (1 - w_s) P_s), w_s = LabelSwapProbability. Tap-to-tap
-/// variability of the stimulus and differences between participants are not included (the
-/// simulation, and PredictProtocol's cohorts, include both).
+/// Expected percent correct of the nominal observer over a two-condition test's series (the closed
+/// form exists for two walls only; tests of more are predicted by simulated cohorts), for walls
+/// whose mean percepts are `a` (condition 0) and `b` (condition 1): the average over series
+/// positions s of lapse / 2 + (1 - lapse) (w_s (1 - P_s) + (1 - w_s) P_s), w_s =
+/// LabelSwapProbability. Tap-to-tap variability of the stimulus and differences between
+/// participants are not included (the simulation, and PredictProtocol's cohorts, include both).
 double PredictPercentCorrect(const ObserverParams& params, const StudyTest& test,
                              const PerceptVector& a, const PerceptVector& b,
                              double interference = 0.0);
@@ -160,7 +162,7 @@ class SimulatedParticipant : public WallPresenter, public Responder {
   void Show(std::string_view text) override;
   std::optional<int> Ask(const Protocol& protocol, const Step& step) override;
 
-  /// The observer's answer (0 or 1) to series `step`.
+  /// The observer's answer (0 to k - 1, k the test's conditions) to series `step`.
   int Decide(const Step& step);
   /// This participant's JND scale factor (1 for the nominal observer).
   double jnd_factor() const { return jnd_factor_; }
@@ -169,9 +171,15 @@ class SimulatedParticipant : public WallPresenter, public Responder {
   /// Whether this participant holds the labels of `test` swapped from the start (explicit swap,
   /// label_swap_probability).
   bool labels_swapped(int test) const;
+  /// The labels this participant holds for `test` before its first series: the identity, or
+  /// with label_swap_probability one pair exchanged (k = 2: the two; k > 2: a pair at random).
+  std::vector<int> InitialLabels(int test) const;
   /// Whether this participant holds the labels of `test` swapped at series `series`, after any
-  /// losses of the label association (label memory).
+  /// losses of the label association (label memory): any label on another wall's template.
   bool labels_swapped(int test, int series);
+  /// The labels held at series `series` of `test`: element c is the condition whose template the
+  /// label of condition c is attached to (the identity when every label is right).
+  const std::vector<int>& LabelsAt(int test, int series);
   /// The label interference of `test` (LabelLossProbability) from the tests before it in this
   /// participant's plan, from this participant's templates.
   double interference(int test);
@@ -182,10 +190,10 @@ class SimulatedParticipant : public WallPresenter, public Responder {
 
  private:
   struct Memory {
-    std::array<PerceptVector, 2> templates;           // after familiarization
-    std::vector<std::array<PerceptVector, 2>> drift;  // cumulative drift before each series
-    std::vector<bool> swapped;                        // labels swapped at each series
-    double interference = 0.0;                        // from the walls of earlier tests
+    std::vector<PerceptVector> templates;           // after familiarization, one per condition
+    std::vector<std::vector<PerceptVector>> drift;  // cumulative drift before each series [s][c]
+    std::vector<std::vector<int>> labels;           // labels held at each series (LabelsAt)
+    double interference = 0.0;                      // from the walls of earlier tests
   };
   const Memory& MemoryOf(int test);
   PerceptVector FeltMean(const Condition& condition, int taps, std::uint64_t tap_stream,

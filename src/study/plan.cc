@@ -23,15 +23,32 @@ void Shuffle(std::vector<T>& items, Rng& rng) {
 }
 
 std::vector<int> SeriesConditions(const StudyTest& test, SeriesOrder order, Rng& rng) {
+  const int k = static_cast<int>(test.conditions.size());
   std::vector<int> conditions(test.series);
   if (order == SeriesOrder::kIndependent) {
-    for (int& c : conditions) c = rng.Bernoulli(0.5) ? 1 : 0;
+    // two conditions: the coin of earlier versions, so their logs keep their plans
+    for (int& c : conditions) {
+      c = k == 2 ? (rng.Bernoulli(0.5) ? 1 : 0) : static_cast<int>(rng.Below(k));
+    }
     return conditions;
   }
-  const int half = test.series / 2;
-  int ones = half;
-  if (test.series % 2 == 1 && rng.Bernoulli(0.5)) ++ones;
-  for (int i = 0; i < test.series; ++i) conditions[i] = i < ones ? 1 : 0;
+  // series / k of each; the remainder r < k one each to r conditions drawn without replacement
+  // (two conditions: a coin gives condition 1 the odd series, as earlier versions did)
+  std::vector<int> count(k, test.series / k);
+  const int remainder = test.series % k;
+  if (k == 2) {
+    if (remainder == 1) ++count[rng.Bernoulli(0.5) ? 1 : 0];
+  } else if (remainder > 0) {
+    std::vector<int> order(k);
+    std::iota(order.begin(), order.end(), 0);
+    Shuffle(order, rng);
+    for (int i = 0; i < remainder; ++i) ++count[order[i]];
+  }
+  // filled from the last condition down, as the two-condition plan always was (ones first)
+  int i = 0;
+  for (int c = k - 1; c >= 0; --c) {
+    for (int n = 0; n < count[c]; ++n) conditions[i++] = c;
+  }
   Shuffle(conditions, rng);
   return conditions;
 }
@@ -62,7 +79,7 @@ std::vector<Step> MakePlan(const Protocol& protocol, std::uint64_t seed) {
       step.taps = taps;
       plan.push_back(step);
     };
-    for (int c = 0; c < 2; ++c) {
+    for (int c = 0; c < static_cast<int>(test.conditions.size()); ++c) {
       add(StepKind::kFamiliarization, /*series=*/-1, c, test.familiarization_taps);
     }
     // each test's series order has its own stream: reordering tests does not change it

@@ -23,12 +23,12 @@ struct Step {
   int test = 0;           ///< index into Protocol::tests
   int test_position = 0;  ///< position of the test in this session's order, 0-based
   int series = -1;        ///< series number within the test (0-based); -1 for familiarization
-  int condition = 0;      ///< 0 or 1: which of the test's two conditions is rendered
+  int condition = 0;      ///< 0 to k - 1: which of the test's k conditions is rendered
   int taps = 0;           ///< taps the participant makes in this step
 };
 
 /// Builds the plan: tests in the protocol's order (or a seeded permutation); per test the
-/// familiarization of condition 0 then condition 1, then the series in seeded random order.
+/// familiarization of each condition in the test's order, then the series in seeded random order.
 std::vector<Step> MakePlan(const Protocol& protocol, std::uint64_t seed);
 
 }  // namespace rigidtouch::study

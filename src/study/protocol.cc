@@ -8,6 +8,7 @@
 #include "io/strict_json.h"
 #include "io/text.h"
 #include "render/limits.h"
+#include "render/materials.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::study {
@@ -41,15 +42,24 @@ const std::vector<std::string> kRandomizationKeys = {"series_order", "test_order
 const std::vector<std::string> kSeriesOrders = {"balanced", "independent"};  // SeriesOrder
 const std::vector<std::string> kTestOrders = {"fixed", "shuffled"};          // TestOrder
 const std::vector<std::string> kAllConditionKeys = {
-    "renderer",         "restitution", "t_collision_s", "frequency_hz",      "stiffness_N_per_m",
-    "damping_Ns_per_m", "scene",       "device",        "approach_speed_mps"};
+    "renderer",         "restitution", "t_collision_s", "frequency_hz",       "stiffness_N_per_m",
+    "damping_Ns_per_m", "scene",       "device",        "approach_speed_mps", "material",
+    "passivity_control"};
 std::vector<std::string> ConditionKeysFor(RendererKind renderer) {
-  std::vector<std::string> keys = {"renderer", "stiffness_N_per_m", "damping_Ns_per_m", "scene",
-                                   "device",   "approach_speed_mps"};
-  if (renderer != RendererKind::kPenalty) keys.push_back("restitution");
+  std::vector<std::string> keys = {
+      "renderer", "stiffness_N_per_m",  "damping_Ns_per_m", "scene",
+      "device",   "approach_speed_mps", "material",         "passivity_control"};
+  // the event renderer plays its material's transient: it has no restitution, and penalty and
+  // impulse walls take no material (as the CLI refuses --material with them)
+  if (renderer == RendererKind::kImpulse || renderer == RendererKind::kTrain) {
+    keys.push_back("restitution");
+  }
   if (renderer == RendererKind::kTrain) {
     keys.push_back("t_collision_s");
     keys.push_back("frequency_hz");
+  }
+  if (renderer == RendererKind::kPenalty || renderer == RendererKind::kImpulse) {
+    keys.erase(std::find(keys.begin(), keys.end(), "material"));
   }
   return keys;
 }
@@ -64,20 +74,8 @@ bool IsCleanText(std::string_view s) {
                       [](char c) { return std::iscntrl(static_cast<unsigned char>(c)) != 0; });
 }
 
-Condition ParseCondition(const JsonSource& ctx, const std::string& label, const json& value,
-                         const std::string& path) {
-  Condition c;
-  c.label = label;
-  if (!IsCleanText(label)) {
-    ctx.Fail(path,
-             "a condition label must be non-empty, without control characters or "
-             "leading/trailing spaces");
-  }
-  if (Lower(label) == "quit") ctx.Fail(path, "\"quit\" is reserved for stopping a session");
-  if (!value.is_object()) {
-    ctx.Fail(path,
-             "expected a renderer configuration (a JSON object), got " + io::JsonTypeName(value));
-  }
+RendererKind ParseConditionRenderer(const JsonSource& ctx, const json& value,
+                                    const std::string& path) {
   const std::vector<std::string>& renderers = io::RendererNames();
   if (!value.contains("renderer")) {
     ctx.Fail(path, "missing required field \"renderer\"; valid renderers: " + Join(renderers));
@@ -92,16 +90,9 @@ Condition ParseCondition(const JsonSource& ctx, const std::string& label, const 
     ctx.Fail(path + ".renderer",
              "unknown renderer " + Quote(name) + "; valid renderers: " + Join(renderers));
   }
-  c.renderer = io::ParseRenderer(name);
-  if (c.renderer == RendererKind::kEvent) {
-    // a condition cannot name a material yet: refused here rather than at the first tap
-    ctx.Fail(path + ".renderer",
-             "renderer \"event\" needs a material, which a protocol condition cannot name yet; "
-             "valid renderers in a protocol: penalty, impulse, train");
-  }
-
   // parameters of another renderer are errors rather than silently ignored settings
-  const std::vector<std::string> valid = ConditionKeysFor(c.renderer);
+  const RendererKind renderer = io::ParseRenderer(name);
+  const std::vector<std::string> valid = ConditionKeysFor(renderer);
   for (const auto& [key, unused] : value.items()) {
     if (std::find(valid.begin(), valid.end(), key) != valid.end()) continue;
     const bool known = std::find(kAllConditionKeys.begin(), kAllConditionKeys.end(), key) !=
@@ -110,41 +101,77 @@ Condition ParseCondition(const JsonSource& ctx, const std::string& label, const 
                           : "unknown parameter " + Quote(key)) +
                        "; valid parameters for renderer " + name + ": " + Join(valid));
   }
-  const StrictObject in(ctx, value, path, valid, "a renderer configuration");
+  return renderer;
+}
 
-  if (auto e = in.Number("restitution")) {
-    if (c.renderer == RendererKind::kTrain && *e != render::kTrainRestitution) {
-      in.FailAt("restitution", FormatNumber(*e) +
-                                   " is not allowed; a train is only consistent with perfectly "
-                                   "plastic collisions (Eq. 8): valid: " +
-                                   FormatNumber(render::kTrainRestitution));
+// the material as --material reads it (render::ParseMaterial: a preset or a JSON file), or its
+// fields inline (render::ReadMaterialJson, the file reader), refused here rather than at the first
+// tap; a material train takes f and t_c from it, as `tap --renderer train --material`
+void ParseConditionMaterial(const JsonSource& ctx, const StrictObject& in, const std::string& path,
+                            Condition& c) {
+  if (!in.Has("material")) {
+    if (c.renderer == RendererKind::kEvent) {
+      ctx.Fail(path,
+               "missing required field \"material\" for renderer event: the event renderer "
+               "plays a material's transient; valid: rubber, wood, aluminium, a JSON material "
+               "file, or its fields inline (docs/renderers.md)");
     }
-    if (*e < render::kMinRestitution || *e > render::kMaxRestitution) {
-      in.FailAt("restitution", FormatNumber(*e) + " is out of range; valid: " +
-                                   FormatNumber(render::kMinRestitution) + " to " +
-                                   FormatNumber(render::kMaxRestitution) + " (Eq. 4)");
+    return;
+  }
+  const json& value = in.Get("material");
+  if (value.is_object()) {
+    c.material = render::ReadMaterialJson(ctx, value, in.Path("material"), "");
+  } else if (value.is_string()) {
+    try {
+      c.material = render::ParseMaterial(value.get<std::string>());
+    } catch (const Error& e) {
+      in.FailAt("material", e.what());
     }
-    c.restitution = *e;
+  } else {
+    in.FailAt("material",
+              "expected a material name or file (a string) or its fields (an "
+              "object), got " +
+                  io::JsonTypeName(value));
   }
   if (c.renderer == RendererKind::kTrain) {
-    c.t_collision_s = in.Number("t_collision_s").value_or(render::kMaxCollisionWindow_s);
-    if (!(c.t_collision_s > 0.0 && c.t_collision_s <= render::kMaxCollisionWindow_s)) {
-      in.FailAt("t_collision_s", FormatNumber(c.t_collision_s) +
-                                     " s is out of range; valid: > 0 and <= " +
-                                     FormatNumber(render::kMaxCollisionWindow_s) + " s (II.a)");
+    for (const char* key : {"t_collision_s", "frequency_hz"}) {
+      if (in.Has(key)) {
+        in.FailAt(key, "a material train takes f and t_c from its material " +
+                           Quote(c.material->name) + " (docs/renderers.md): give one or the other");
+      }
     }
-    auto f = in.Number("frequency_hz");
-    if (!f) ctx.Fail(path, "missing required field \"frequency_hz\" for renderer train");
-    c.frequency_hz = *f;
-    const double f_min_hz = 1.0 / c.t_collision_s;
-    if (!render::TrainFrequencyFitsWindow(c.frequency_hz, c.t_collision_s)) {
-      in.FailAt("frequency_hz",
-                FormatNumber(c.frequency_hz) +
-                    " Hz is out of range; valid: >= 1 / t_collision_s = " + FormatNumber(f_min_hz) +
-                    " Hz (II.b; the upper bound 1/h is checked by the "
-                    "engine)");
-    }
+    const render::MaterialTrainParams t = render::MaterialTrain(*c.material);
+    c.t_collision_s = t.t_collision_s;
+    c.frequency_hz = t.frequency_hz;
   }
+}
+
+void ParseTrainWindow(const JsonSource& ctx, const StrictObject& in, const std::string& path,
+                      Condition& c) {
+  c.t_collision_s = in.Number("t_collision_s").value_or(render::kMaxCollisionWindow_s);
+  if (!(c.t_collision_s > 0.0 && c.t_collision_s <= render::kMaxCollisionWindow_s)) {
+    in.FailAt("t_collision_s", FormatNumber(c.t_collision_s) +
+                                   " s is out of range; valid: > 0 and <= " +
+                                   FormatNumber(render::kMaxCollisionWindow_s) + " s (II.a)");
+  }
+  auto f = in.Number("frequency_hz");
+  if (!f) {
+    ctx.Fail(path,
+             "missing required field \"frequency_hz\" for renderer train (or a \"material\", "
+             "whose train takes f and t_c from it)");
+  }
+  c.frequency_hz = *f;
+  const double f_min_hz = 1.0 / c.t_collision_s;
+  if (!render::TrainFrequencyFitsWindow(c.frequency_hz, c.t_collision_s)) {
+    in.FailAt("frequency_hz",
+              FormatNumber(c.frequency_hz) +
+                  " Hz is out of range; valid: >= 1 / t_collision_s = " + FormatNumber(f_min_hz) +
+                  " Hz (II.b; the upper bound 1/h is checked by the "
+                  "engine)");
+  }
+}
+
+void ParseConditionLaw(const StrictObject& in, Condition& c) {
   if (auto k = in.Number("stiffness_N_per_m")) {
     if (!(*k > 0.0)) in.FailAt("stiffness_N_per_m", FormatNumber(*k) + " N/m; valid: > 0");
     c.stiffness_N_per_m = k;
@@ -165,6 +192,43 @@ Condition ParseCondition(const JsonSource& ctx, const std::string& label, const 
       (std::string(key) == "scene" ? c.scene : c.device) = *s;
     }
   }
+}
+
+Condition ParseCondition(const JsonSource& ctx, const std::string& label, const json& value,
+                         const std::string& path) {
+  Condition c;
+  c.label = label;
+  if (!IsCleanText(label)) {
+    ctx.Fail(path,
+             "a condition label must be non-empty, without control characters or "
+             "leading/trailing spaces");
+  }
+  if (Lower(label) == "quit") ctx.Fail(path, "\"quit\" is reserved for stopping a session");
+  if (!value.is_object()) {
+    ctx.Fail(path,
+             "expected a renderer configuration (a JSON object), got " + io::JsonTypeName(value));
+  }
+  c.renderer = ParseConditionRenderer(ctx, value, path);
+  const StrictObject in(ctx, value, path, ConditionKeysFor(c.renderer), "a renderer configuration");
+
+  if (auto e = in.Number("restitution")) {
+    if (c.renderer == RendererKind::kTrain && *e != render::kTrainRestitution) {
+      in.FailAt("restitution", FormatNumber(*e) +
+                                   " is not allowed; a train is only consistent with perfectly "
+                                   "plastic collisions (Eq. 8): valid: " +
+                                   FormatNumber(render::kTrainRestitution));
+    }
+    if (*e < render::kMinRestitution || *e > render::kMaxRestitution) {
+      in.FailAt("restitution", FormatNumber(*e) + " is out of range; valid: " +
+                                   FormatNumber(render::kMinRestitution) + " to " +
+                                   FormatNumber(render::kMaxRestitution) + " (Eq. 4)");
+    }
+    c.restitution = *e;
+  }
+  ParseConditionMaterial(ctx, in, path, c);
+  if (c.renderer == RendererKind::kTrain && !c.material) ParseTrainWindow(ctx, in, path, c);
+  c.passivity_control = in.Bool("passivity_control").value_or(false);
+  ParseConditionLaw(in, c);
   return c;
 }
 
@@ -173,6 +237,96 @@ int FindCondition(const std::vector<Condition>& conditions, const std::string& l
     if (conditions[i].label == label) return static_cast<int>(i);
   }
   return -1;
+}
+
+// the test's conditions: 2 to 8 distinct labels of defined conditions
+std::vector<int> ParseTestConditions(const JsonSource& ctx, const StrictObject& in,
+                                     const std::string& path,
+                                     const std::vector<Condition>& conditions) {
+  std::vector<std::string> labels;
+  for (const auto& c : conditions) labels.push_back(Quote(c.label));
+  const std::string range = std::to_string(kMinTestConditions) + " to " +
+                            std::to_string(kMaxTestConditions) + " condition labels";
+  if (!in.Has("conditions"))
+    ctx.Fail(path, "missing required field \"conditions\" (" + range + ")");
+  const json& cs = in.Get("conditions");
+  if (!cs.is_array() || cs.size() < static_cast<std::size_t>(kMinTestConditions) ||
+      cs.size() > static_cast<std::size_t>(kMaxTestConditions)) {
+    in.FailAt("conditions", "expected an array of " + range + ", got " + cs.dump());
+  }
+  std::vector<int> indices;
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const std::string item_path = in.Path("conditions") + "[" + std::to_string(i) + "]";
+    if (!cs[i].is_string()) ctx.Fail(item_path, "expected a condition label (a string)");
+    const int index = FindCondition(conditions, cs[i].get<std::string>());
+    if (index < 0) {
+      ctx.Fail(item_path,
+               "unknown condition " + cs[i].dump() + "; defined conditions: " + Join(labels));
+    }
+    if (std::find(indices.begin(), indices.end(), index) != indices.end()) {
+      in.FailAt("conditions", "condition " + cs[i].dump() +
+                                  " is listed twice; the conditions of a test must differ (to "
+                                  "test identical walls, define two labels with the same "
+                                  "configuration)");
+    }
+    indices.push_back(index);
+  }
+  return indices;
+}
+
+// one answer key per condition (default "1", "2", ...): distinct without case, not "quit", not
+// the label of another condition of the test
+std::vector<std::string> ParseTestKeys(const JsonSource& ctx, const StrictObject& in,
+                                       const std::vector<Condition>& conditions,
+                                       const std::vector<int>& indices) {
+  const std::size_t k = indices.size();
+  std::vector<std::string> keys;
+  for (std::size_t i = 0; i < k; ++i) keys.push_back(std::to_string(i + 1));
+  if (in.Has("keys")) {
+    const json& ks = in.Get("keys");
+    if (!ks.is_array() || ks.size() != k) {
+      in.FailAt("keys", "expected an array of " + std::to_string(k) +
+                            " answer keys, one per condition, got " + ks.dump());
+    }
+    for (std::size_t i = 0; i < k; ++i) {
+      if (!ks[i].is_string()) {
+        ctx.Fail(in.Path("keys") + "[" + std::to_string(i) + "]", "expected a string");
+      }
+      keys[i] = ks[i].get<std::string>();
+    }
+  }
+  for (std::size_t i = 0; i < k; ++i) {
+    const std::string key_path = in.Path("keys") + "[" + std::to_string(i) + "]";
+    const std::string& key = keys[i];
+    const bool has_space = std::any_of(key.begin(), key.end(), [](char c) {
+      return std::isspace(static_cast<unsigned char>(c)) ||
+             std::iscntrl(static_cast<unsigned char>(c));
+    });
+    if (key.empty() || key.size() > kMaxKeyLength || has_space) {
+      ctx.Fail(key_path, Quote(key) +
+                             " is not a valid key; valid: 1 to 16 characters without "
+                             "spaces");
+    }
+    if (Lower(key) == "quit") ctx.Fail(key_path, "\"quit\" is reserved for stopping a session");
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j != i && Lower(key) == Lower(conditions[indices[j]].label)) {
+        ctx.Fail(key_path,
+                 "key " + Quote(key) + " is the label of " +
+                     (k == 2 ? std::string("the other condition")
+                             : "another condition, " + Quote(conditions[indices[j]].label)));
+      }
+    }
+  }
+  for (std::size_t i = 0; i < k; ++i) {
+    for (std::size_t j = i + 1; j < k; ++j) {
+      if (Lower(keys[i]) == Lower(keys[j])) {
+        in.FailAt("keys", k == 2 ? std::string("the two keys must differ (compared without case)")
+                                 : "keys " + Quote(keys[i]) + " and " + Quote(keys[j]) +
+                                       " must differ (compared without case)");
+      }
+    }
+  }
+  return keys;
 }
 
 StudyTest ParseTest(const JsonSource& ctx, const json& value, const std::string& path,
@@ -186,66 +340,8 @@ StudyTest ParseTest(const JsonSource& ctx, const json& value, const std::string&
       in.Integer("familiarization_taps", defaults.familiarization_taps, 1, kMaxTaps);
   t.series = in.Integer("series", defaults.series, 1, kMaxSeries);
   t.taps_per_series = in.Integer("taps_per_series", defaults.taps_per_series, 1, kMaxTaps);
-
-  std::vector<std::string> labels;
-  for (const auto& c : conditions) labels.push_back(Quote(c.label));
-  if (!in.Has("conditions")) {
-    ctx.Fail(path, "missing required field \"conditions\" (two condition labels)");
-  }
-  const json& cs = in.Get("conditions");
-  if (!cs.is_array() || cs.size() != 2) {
-    in.FailAt("conditions", "expected an array of exactly two condition labels, got " + cs.dump());
-  }
-  for (int i = 0; i < 2; ++i) {
-    const std::string item_path = in.Path("conditions") + "[" + std::to_string(i) + "]";
-    if (!cs[i].is_string()) ctx.Fail(item_path, "expected a condition label (a string)");
-    const int index = FindCondition(conditions, cs[i].get<std::string>());
-    if (index < 0) {
-      ctx.Fail(item_path,
-               "unknown condition " + cs[i].dump() + "; defined conditions: " + Join(labels));
-    }
-    t.conditions[i] = index;
-  }
-  if (t.conditions[0] == t.conditions[1]) {
-    in.FailAt("conditions",
-              "the two conditions must differ (to test identical walls, "
-              "define two labels with the same configuration)");
-  }
-
-  t.keys = {"1", "2"};
-  if (in.Has("keys")) {
-    const json& ks = in.Get("keys");
-    if (!ks.is_array() || ks.size() != 2) {
-      in.FailAt("keys", "expected an array of exactly two answer keys, got " + ks.dump());
-    }
-    for (int i = 0; i < 2; ++i) {
-      if (!ks[i].is_string()) {
-        ctx.Fail(in.Path("keys") + "[" + std::to_string(i) + "]", "expected a string");
-      }
-      t.keys[i] = ks[i].get<std::string>();
-    }
-  }
-  for (int i = 0; i < 2; ++i) {
-    const std::string key_path = in.Path("keys") + "[" + std::to_string(i) + "]";
-    const std::string& key = t.keys[i];
-    const bool has_space = std::any_of(key.begin(), key.end(), [](char c) {
-      return std::isspace(static_cast<unsigned char>(c)) ||
-             std::iscntrl(static_cast<unsigned char>(c));
-    });
-    if (key.empty() || key.size() > kMaxKeyLength || has_space) {
-      ctx.Fail(key_path, Quote(key) +
-                             " is not a valid key; valid: 1 to 16 characters without "
-                             "spaces");
-    }
-    if (Lower(key) == "quit") ctx.Fail(key_path, "\"quit\" is reserved for stopping a session");
-    const std::string& other_label = conditions[t.conditions[1 - i]].label;
-    if (Lower(key) == Lower(other_label)) {
-      ctx.Fail(key_path, "key " + Quote(key) + " is the label of the other condition");
-    }
-  }
-  if (Lower(t.keys[0]) == Lower(t.keys[1])) {
-    in.FailAt("keys", "the two keys must differ (compared without case)");
-  }
+  t.conditions = ParseTestConditions(ctx, in, path, conditions);
+  t.keys = ParseTestKeys(ctx, in, conditions, t.conditions);
   return t;
 }
 
@@ -254,17 +350,44 @@ StudyTest ParseTest(const JsonSource& ctx, const json& value, const std::string&
 nlohmann::json Condition::ToJson() const {
   json j = json::object();
   j["renderer"] = io::RendererName(renderer);
-  if (renderer != RendererKind::kPenalty) j["restitution"] = restitution;
-  if (renderer == RendererKind::kTrain) {
+  if (renderer == RendererKind::kImpulse || renderer == RendererKind::kTrain) {
+    j["restitution"] = restitution;
+  }
+  // a material train's f and t_c follow from its material: the material stands for them
+  if (renderer == RendererKind::kTrain && !material) {
     j["t_collision_s"] = t_collision_s;
     j["frequency_hz"] = frequency_hz;
   }
+  if (material) {
+    // a preset by its name (as --material takes it); any other material by its own fields
+    j["material"] = render::FindPreset(*material) != nullptr
+                        ? json(material->name)
+                        : json{{"name", material->name},
+                               {"amplitude_Ns_per_m", material->amplitude_Ns_per_m},
+                               {"decay_per_s", material->decay_per_s},
+                               {"frequency_hz", material->frequency_hz}};
+  }
+  // absent when off, so protocols written before the field existed keep their hash
+  if (passivity_control) j["passivity_control"] = true;
   if (stiffness_N_per_m) j["stiffness_N_per_m"] = *stiffness_N_per_m;
   if (damping_Ns_per_m) j["damping_Ns_per_m"] = *damping_Ns_per_m;
   if (scene) j["scene"] = *scene;
   if (device) j["device"] = *device;
   if (approach_speed_mps) j["approach_speed_mps"] = *approach_speed_mps;
   return j;
+}
+
+RenderParams Condition::ToRenderParams() const {
+  RenderParams r;
+  r.renderer = renderer;
+  r.restitution = restitution;
+  if (renderer == RendererKind::kTrain) {
+    r.t_collision_s = t_collision_s;
+    r.frequency_hz = frequency_hz;
+  }
+  if (material) render::ApplyMaterial(r, *material);
+  r.passivity_control = passivity_control;
+  return r;
 }
 
 nlohmann::json Protocol::ToJson() const {
@@ -286,8 +409,10 @@ nlohmann::json Protocol::ToJson() const {
   for (const auto& t : tests) {
     json tj = json::object();
     tj["name"] = t.name;
-    tj["conditions"] = {conditions[t.conditions[0]].label, conditions[t.conditions[1]].label};
-    tj["keys"] = {t.keys[0], t.keys[1]};
+    json labels = json::array();
+    for (int c : t.conditions) labels.push_back(conditions[c].label);
+    tj["conditions"] = labels;
+    tj["keys"] = t.keys;
     tj["instructions"] = t.instructions;
     tj["familiarization_taps"] = t.familiarization_taps;
     tj["series"] = t.series;

@@ -4,7 +4,6 @@
 // field and the valid range, and identified by a hash of their canonical JSON.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -30,27 +29,43 @@ struct Condition {
   std::optional<std::string> scene;          ///< MJCF scene, as written in the protocol
   std::optional<std::string> device;         ///< device preset name, e.g. "touch"
   std::optional<double> approach_speed_mps;  ///< hand approach speed for simulated taps, > 0
+  /// event (required) and train only: a material as `--material` takes it (a preset name or a
+  /// JSON material file, render::ParseMaterial), or the same fields written inline; a material
+  /// train takes its f and t_c from it (render::ApplyMaterial). Read when the protocol is parsed:
+  /// the canonical JSON holds a preset's name, or else the material's own fields, so the hash
+  /// covers what is rendered and a log does not need the file
+  std::optional<Material> material;
+  bool passivity_control = false;  ///< the passivity observer and controller, as the CLI flag
+
+  /// The render parameters of this condition, as `rigidtouch tap --renderer R [--restitution e]
+  /// [--t-collision t --frequency f] [--material M] [--passivity-control]` gives them.
+  RenderParams ToRenderParams() const;
 
   /// The canonical JSON of the renderer configuration (the object stored in the protocol's
   /// "conditions" map, without the label). Logs record it as the condition rendered.
   nlohmann::json ToJson() const;
 };
 
-/// One discrimination test between two conditions.
+/// Fewest and most conditions one test compares.
+inline constexpr int kMinTestConditions = 2;
+inline constexpr int kMaxTestConditions = 8;
+
+/// One identification test among 2 to 8 conditions (two: the method's discrimination tests).
 struct StudyTest {
-  std::string name;                 ///< e.g. "test 1"; unique within the protocol
-  std::array<int, 2> conditions{};  ///< indices into Protocol::conditions, distinct
-  std::array<std::string, 2> keys;  ///< what the participant types for each condition
-  std::string instructions;         ///< shown before the test's familiarization
-  int familiarization_taps = 3;     ///< taps on each condition before the series
-  int series = 20;                  ///< number of series (each renders one condition)
-  int taps_per_series = 3;          ///< taps in each series
+  std::string name;               ///< e.g. "test 1"; unique within the protocol
+  std::vector<int> conditions;    ///< indices into Protocol::conditions, distinct, 2 to 8
+  std::vector<std::string> keys;  ///< what the participant types, one per condition, distinct
+  std::string instructions;       ///< shown before the test's familiarization
+  int familiarization_taps = 3;   ///< taps on each condition before the series
+  int series = 20;                ///< number of series (each renders one condition)
+  int taps_per_series = 3;        ///< taps in each series
 };
 
 /// How the series of each test are assigned to conditions.
 enum class SeriesOrder {
-  kBalanced,     ///< series / 2 of each condition (odd: one extra by coin flip), shuffled
-  kIndependent,  ///< a fair coin per series
+  kBalanced,     ///< series / k of each condition, the remainder one each to conditions drawn
+                 ///< at random (k = 2: a coin flip gives condition 1 the odd one), shuffled
+  kIndependent,  ///< a fair draw among the k conditions per series (k = 2: a fair coin)
 };
 
 /// Order in which the tests are run.

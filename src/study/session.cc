@@ -53,7 +53,7 @@ std::string TestIntro(const Protocol& protocol, const Step& step) {
   std::ostringstream out;
   out << "\n== Test " << step.test_position + 1 << " of " << protocol.tests.size() << ": "
       << test.name << " ==\n";
-  for (int c = 0; c < 2; ++c) {
+  for (std::size_t c = 0; c < test.keys.size(); ++c) {
     out << "  key " << test.keys[c] << " = " << protocol.conditions[test.conditions[c]].label
         << "\n";
   }
@@ -76,10 +76,10 @@ std::optional<int> ParseAnswer(const Protocol& protocol, const StudyTest& test,
                                std::string_view text) {
   const std::string answer = Lower(Trim(text));
   if (answer.empty()) return std::nullopt;
-  for (int c = 0; c < 2; ++c) {
+  for (std::size_t c = 0; c < test.keys.size(); ++c) {
     if (answer == Lower(test.keys[c]) ||
         answer == Lower(protocol.conditions[test.conditions[c]].label)) {
-      return c;
+      return static_cast<int>(c);
     }
   }
   return std::nullopt;
@@ -87,11 +87,16 @@ std::optional<int> ParseAnswer(const Protocol& protocol, const StudyTest& test,
 
 std::optional<int> TerminalResponder::Ask(const Protocol& protocol, const Step& step) {
   const StudyTest& test = protocol.tests[step.test];
-  const std::string& label0 = protocol.conditions[test.conditions[0]].label;
-  const std::string& label1 = protocol.conditions[test.conditions[1]].label;
+  // "1 for wall 0 or 2 for wall 1"; with more conditions "1 for a, 2 for b or 3 for c"
+  std::string choices;
+  std::string keys;
+  for (std::size_t c = 0; c < test.keys.size(); ++c) {
+    const std::string sep = c == 0 ? "" : (c + 1 == test.keys.size() ? " or " : ", ");
+    choices += sep + test.keys[c] + " for " + protocol.conditions[test.conditions[c]].label;
+    keys += sep + test.keys[c];
+  }
   for (;;) {
-    out_ << "Which wall was it? Type " << test.keys[0] << " for " << label0 << " or "
-         << test.keys[1] << " for " << label1 << ": ";
+    out_ << "Which wall was it? Type " << choices << ": ";
     out_.flush();
     std::string line;
     if (!std::getline(in_, line)) {
@@ -104,8 +109,8 @@ std::optional<int> TerminalResponder::Ask(const Protocol& protocol, const Step& 
       return std::nullopt;
     }
     if (auto answer = ParseAnswer(protocol, test, line)) return answer;
-    out_ << Quote(Trim(line)) << " is not an answer: type " << test.keys[0] << " or "
-         << test.keys[1] << " (or the wall's name), or quit to stop.\n";
+    out_ << Quote(Trim(line)) << " is not an answer: type " << keys
+         << " (or the wall's name), or quit to stop.\n";
   }
 }
 

@@ -25,7 +25,7 @@ class Responder {
   virtual ~Responder() = default;
   /// Shows text meant for the participant (instructions, what to do next).
   virtual void Show(std::string_view text) = 0;
-  /// Asks which of the test's two conditions the series `step` rendered. Returns 0 or 1, or
+  /// Asks which of the test's k conditions the series `step` rendered. Returns 0 to k - 1, or
   /// nothing to stop the session cleanly (it can be resumed later).
   virtual std::optional<int> Ask(const Protocol& protocol, const Step& step) = 0;
   /// Why the last Ask returned nothing (recorded in the log).
@@ -49,7 +49,8 @@ class TerminalResponder : public Responder {
   std::string stop_reason_ = "stopped";
 };
 
-/// Interprets one typed answer for `test`: 0 or 1, or nothing if it is neither a key nor a label.
+/// Interprets one typed answer for `test`: the index (0 to k - 1) of the condition whose key or
+/// label it is, or nothing if it is neither.
 std::optional<int> ParseAnswer(const Protocol& protocol, const StudyTest& test,
                                std::string_view text);
 

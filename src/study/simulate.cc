@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "rigidtouch/types.h"
@@ -132,24 +133,17 @@ CohortShare Summarise(std::vector<double> per_cohort, double expected) {
 
 }  // namespace
 
-std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
-                                            const ObserverParams& observer,
-                                            const PredictionConfig& config) {
-  if (config.sample_taps < 1) {
-    throw Error("sample taps: " + std::to_string(config.sample_taps) + "; valid: >= 1");
-  }
-  if (config.participants < 1) {
-    throw Error("participants: " + std::to_string(config.participants) + "; valid: >= 1");
-  }
-  if (config.cohorts < 0) {
-    throw Error("cohorts: " + std::to_string(config.cohorts) + "; valid: >= 0");
-  }
-  SampledTapSource sampled(source, config.seed, config.sample_taps);
+namespace {
+
+// the nominal observer's prediction of each test at the walls' mean percepts
+std::vector<TestPrediction> NominalPredictions(const Protocol& protocol, SampledTapSource& sampled,
+                                               const ObserverParams& observer) {
   std::vector<TestPrediction> predictions;
   for (std::size_t index = 0; index < protocol.tests.size(); ++index) {
     const StudyTest& test = protocol.tests[index];
-    std::array<PerceptVector, 2> means{};
-    for (int c = 0; c < 2; ++c) {
+    const std::size_t k = test.conditions.size();
+    std::vector<PerceptVector> means(k, PerceptVector{});
+    for (std::size_t c = 0; c < k; ++c) {
       // equal configurations get the same taps, so two labels for one wall are predicted at
       // exactly chance
       const std::vector<TapPercept>& taps = sampled.TapsOf(protocol.conditions[test.conditions[c]]);
@@ -162,10 +156,13 @@ std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSo
     // not in this one
     double interference = 0.0;
     for (std::size_t e = 0; e < index; ++e) {
-      for (int ec = 0; ec < 2; ++ec) {
-        const int condition = protocol.tests[e].conditions[ec];
-        if (condition == test.conditions[0] || condition == test.conditions[1]) continue;
-        for (int c = 0; c < 2; ++c) {
+      const std::vector<int>& earlier = protocol.tests[e].conditions;
+      for (std::size_t ec = 0; ec < earlier.size(); ++ec) {
+        if (std::find(test.conditions.begin(), test.conditions.end(), earlier[ec]) !=
+            test.conditions.end()) {
+          continue;
+        }
+        for (std::size_t c = 0; c < k; ++c) {
           interference += LabelSimilarity(
               observer, PerceptDistance(means[c], predictions[e].mean_percepts[ec]));
         }
@@ -173,15 +170,27 @@ std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSo
     }
     TestPrediction p;
     p.name = test.name;
-    p.distance_jnd = PerceptDistance(means[0], means[1]);
+    p.distance_jnd = std::numeric_limits<double>::infinity();
+    for (std::size_t a = 0; a < k; ++a) {
+      for (std::size_t b = a + 1; b < k; ++b) {
+        p.distance_jnd = std::min(p.distance_jnd, PerceptDistance(means[a], means[b]));
+      }
+    }
     p.label_interference = interference;
-    p.percent_correct = PredictPercentCorrect(observer, test, means[0], means[1], interference);
+    p.chance_percent = 100.0 / static_cast<double>(k);
+    p.percent_correct =
+        k == 2 ? PredictPercentCorrect(observer, test, means[0], means[1], interference)
+               : std::nan("");
     p.mean_percepts = means;
     predictions.push_back(p);
   }
-  if (config.cohorts == 0) return predictions;
+  return predictions;
+}
 
-  // cohorts of simulated participants answering every series of the plan their seed gives
+// cohorts of simulated participants answering every series of the plan their seed gives
+void CohortPredictions(const Protocol& protocol, SampledTapSource& sampled,
+                       const ObserverParams& observer, const PredictionConfig& config,
+                       std::vector<TestPrediction>& predictions) {
   const std::size_t tests = protocol.tests.size();
   std::vector<std::vector<double>> pc(tests), at_90(tests), at_50(tests);
   std::vector<double> sum_pc(tests, 0.0), n_90(tests, 0.0), n_50(tests, 0.0);
@@ -228,6 +237,25 @@ std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSo
     predictions[t].at_least_90 = Summarise(at_90[t], n_90[t]);
     predictions[t].at_most_50 = Summarise(at_50[t], n_50[t]);
   }
+}
+
+}  // namespace
+
+std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSource& source,
+                                            const ObserverParams& observer,
+                                            const PredictionConfig& config) {
+  if (config.sample_taps < 1) {
+    throw Error("sample taps: " + std::to_string(config.sample_taps) + "; valid: >= 1");
+  }
+  if (config.participants < 1) {
+    throw Error("participants: " + std::to_string(config.participants) + "; valid: >= 1");
+  }
+  if (config.cohorts < 0) {
+    throw Error("cohorts: " + std::to_string(config.cohorts) + "; valid: >= 0");
+  }
+  SampledTapSource sampled(source, config.seed, config.sample_taps);
+  std::vector<TestPrediction> predictions = NominalPredictions(protocol, sampled, observer);
+  if (config.cohorts > 0) CohortPredictions(protocol, sampled, observer, config, predictions);
   return predictions;
 }
 

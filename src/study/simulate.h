@@ -3,7 +3,6 @@
 // resumable from their logs.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -65,10 +64,14 @@ struct CohortShare {
 
 /// The observer model's prediction for one test.
 struct TestPrediction {
-  std::string name;              ///< test name
-  double distance_jnd = 0.0;     ///< distance between the walls' mean percepts [JND]
-  double percent_correct = 0.0;  ///< PredictPercentCorrect for the nominal observer
-  std::array<PerceptVector, 2> mean_percepts{};  ///< each wall's mean percept [JND]
+  std::string name;  ///< test name
+  /// Distance between the walls' mean percepts [JND]; k > 2 walls: the smallest pairwise one.
+  double distance_jnd = 0.0;
+  /// PredictPercentCorrect for the nominal observer; NaN for k > 2 walls (no closed form: the
+  /// cohort part is the prediction).
+  double percent_correct = 0.0;
+  double chance_percent = 50.0;              ///< 100 / k
+  std::vector<PerceptVector> mean_percepts;  ///< each wall's mean percept [JND], test order
   /// Label interference from the earlier tests in the protocol's order (LabelLossProbability).
   double label_interference = 0.0;
   /// Simulated cohorts (individual differences, tap variability, label memory): mean percent

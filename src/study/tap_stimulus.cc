@@ -17,15 +17,10 @@
 namespace rigidtouch::study {
 namespace {
 
+// the condition's renderer, material and passivity control as `tap` renders them (simulated taps
+// and the bridge alike)
 RenderParams ToRenderParams(const Condition& c) {
-  RenderParams r;
-  r.renderer = c.renderer;
-  r.restitution = c.restitution;
-  if (c.renderer == RendererKind::kTrain) {
-    r.t_collision_s = c.t_collision_s;
-    r.frequency_hz = c.frequency_hz;
-  }
-  return r;
+  return c.ToRenderParams();
 }
 
 analysis::TapExperimentConfig TapConfig(const Condition& c, const std::string& scene,

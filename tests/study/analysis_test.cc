@@ -80,6 +80,75 @@ std::vector<std::pair<int, int>> Series(int n, int correct) {
   return out;
 }
 
+// a log of seed 7 for a protocol of one test, every series answered by `answer_of(condition)`
+template <typename F>
+LogInput MakeMappedLog(const Protocol& p, const std::string& id, F answer_of) {
+  LogInput log;
+  log.source = id + ".jsonl";
+  log.records.push_back({{"type", "session_start"},
+                         {"format", kLogFormat},
+                         {"format_version", kLogFormatVersion},
+                         {"protocol", p.ToJson()},
+                         {"protocol_hash", ProtocolHash(p)},
+                         {"participant", id},
+                         {"mode", "person"},
+                         {"seed", std::uint64_t{7}}});
+  for (const Step& step : MakePlan(p, 7)) {
+    if (step.kind == StepKind::kFamiliarization) {
+      log.records.push_back({{"type", "familiarization"},
+                             {"step", step.index},
+                             {"test", step.test},
+                             {"condition", step.condition}});
+      continue;
+    }
+    log.records.push_back({{"type", "answer"},
+                           {"step", step.index},
+                           {"test", step.test},
+                           {"series", step.series},
+                           {"condition", step.condition},
+                           {"answer", answer_of(step.condition)}});
+  }
+  return log;
+}
+
+TEST(AnalysisTest, ThreeConditionsAgainstAThirdWithAConfusionMatrix) {
+  const Protocol p = ParseProtocol(json::parse(R"({
+    "name": "three", "series": 30,
+    "conditions": {"r": {"renderer": "event", "material": "rubber"},
+                   "w": {"renderer": "event", "material": "wood"},
+                   "a": {"renderer": "event", "material": "aluminium"}},
+    "tests": [{"name": "t", "conditions": ["r", "w", "a"]}]
+  })"),
+                                   "three.json");
+  // rubber and aluminium named right, wood always named aluminium: 20 of 30 correct
+  const auto answer = [](int c) { return c == 1 ? 2 : c; };
+  const StudyReport report = AnalyzeLogs({MakeMappedLog(p, "P1", answer)});
+  const TestResult& t = report.tests.at(0);
+  EXPECT_EQ(t.conditions, (std::vector<std::string>{"r", "w", "a"}));
+  EXPECT_DOUBLE_EQ(t.chance, 1.0 / 3.0);
+  // balanced: 10 series of each; rows presented, columns named
+  const std::vector<std::vector<int>> expected = {{10, 0, 0}, {0, 0, 10}, {0, 0, 10}};
+  EXPECT_EQ(t.confusion, expected);
+  const ParticipantResult& r = t.participants.at(0);
+  EXPECT_EQ(r.correct, 20);
+  EXPECT_NEAR(r.percent_correct, 100.0 * 20 / 30, 1e-12);
+  // the binomial test is against 1/3, not 1/2: 20 of 30 is far above a third, not above a half
+  const BinomialTest third = ExactBinomialTest(20, 30, 1.0 / 3.0);
+  EXPECT_EQ(r.binomial.p_greater, third.p_greater);
+  EXPECT_LT(r.binomial.p_greater, 1e-3);
+  EXPECT_GT(ExactBinomialTest(20, 30, 0.5).p_greater, 0.04);
+  EXPECT_EQ(t.pooled.p_greater, third.p_greater);
+  EXPECT_TRUE(std::isnan(r.d_prime.d_prime));  // d' is for two conditions
+  const json j = ReportToJson(report);
+  EXPECT_EQ(j["tests"][0]["chance"], 1.0 / 3.0);
+  EXPECT_EQ(j["tests"][0]["confusion"], json(expected));
+  EXPECT_TRUE(j["tests"][0]["participants"][0]["d_prime"].is_null());
+  const std::string text = ReportToText(report);
+  EXPECT_NE(text.find("t: r vs w vs a (chance 33.3%)"), std::string::npos) << text;
+  EXPECT_NE(text.find("pooled answers (row: presented, column: named)"), std::string::npos) << text;
+  EXPECT_NE(text.find("  w               0        0       10\n"), std::string::npos) << text;
+}
+
 // a step number beyond int read as an int wraps onto a step of the plan (2^32 + k reads as k); the
 // validator must refuse it, not count the answer for step k
 TEST(AnalysisTest, ValidateLogRefusesAStepBeyondInt) {

@@ -47,10 +47,12 @@ Condition Train(double frequency_hz) {
 }
 
 StudyTest MethodTest() {
+  // 3 familiarization taps, 20 series of 3 taps
   StudyTest t;
-  t.name = "t";
+  t.name.assign(1, 't');  // not = "t": GCC 12's -Wrestrict misfires on it (its bug 105329)
   t.conditions = {0, 1};
-  return t;  // 3 familiarization taps, 20 series of 3 taps
+  t.keys = {"1", "2"};
+  return t;
 }
 
 TEST(ObserverTest, ChannelSensitivityFollowsTheFourChannelShapes) {

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <string>
 #include <vector>
+
+#include "study/test_files.h"
 
 namespace rigidtouch::study {
 namespace {
@@ -71,6 +74,76 @@ TEST(PlanTest, BalancedOrderHasHalfOfEach) {
     const auto ones = std::count(d.begin(), d.end(), 1);
     EXPECT_TRUE(ones == 3 || ones == 4) << ones;
   }
+}
+
+Protocol ThreeWayProtocol(int series, const char* series_order = "balanced") {
+  json d = json::parse(R"({
+    "name": "three",
+    "familiarization_taps": 2,
+    "conditions": {
+      "a": {"renderer": "event", "material": "rubber"},
+      "b": {"renderer": "event", "material": "wood"},
+      "c": {"renderer": "event", "material": "aluminium"}
+    },
+    "tests": [{"name": "t", "conditions": ["c", "a", "b"]}]
+  })");
+  d["series"] = series;
+  d["randomization"] = {{"series_order", series_order}};
+  return ParseProtocol(d, "three.json");
+}
+
+TEST(PlanTest, BalancedOrderSpreadsSeriesOverThreeConditions) {
+  std::vector<std::vector<int>> orders;
+  std::vector<int> extra(3, 0);  // how often each condition got one of 31's remainder
+  for (std::uint64_t seed = 0; seed < 60; ++seed) {
+    const std::vector<Step> plan = MakePlan(ThreeWayProtocol(30), seed);
+    // a familiarization of each of the three, in the test's order, then the series
+    ASSERT_EQ(plan.size(), 3u + 30u);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_EQ(plan[c].kind, StepKind::kFamiliarization);
+      EXPECT_EQ(plan[c].condition, c);
+    }
+    const auto order = SeriesConditions(plan, 0);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(std::count(order.begin(), order.end(), c), 10) << c;
+    orders.push_back(order);
+    // 31 = 3 x 10 + 1: one condition gets 11, the others 10
+    const auto odd = SeriesConditions(MakePlan(ThreeWayProtocol(31), seed), 0);
+    std::vector<long> counts(3);
+    for (int c = 0; c < 3; ++c) counts[c] = std::count(odd.begin(), odd.end(), c);
+    std::sort(counts.begin(), counts.end());
+    EXPECT_EQ(counts, (std::vector<long>{10, 10, 11}));
+    for (int c = 0; c < 3; ++c) extra[c] += std::count(odd.begin(), odd.end(), c) == 11 ? 1 : 0;
+  }
+  // shuffled: the 60 seeds give different orders, not one fixed sequence
+  std::sort(orders.begin(), orders.end());
+  EXPECT_GE(std::unique(orders.begin(), orders.end()) - orders.begin(), 55);
+  // the odd series goes to each condition at some seed (expected 20 of 60 each; P(0) < 1e-10)
+  for (int c = 0; c < 3; ++c) EXPECT_GT(extra[c], 0) << c;
+}
+
+TEST(PlanTest, IndependentOrderDrawsAmongThreeConditions) {
+  const auto c = SeriesConditions(MakePlan(ThreeWayProtocol(300, "independent"), 3), 0);
+  // Binomial(300, 1/3) per condition: mean 100, SD 8.2; a 5 SD band
+  for (int k = 0; k < 3; ++k) {
+    const auto n = std::count(c.begin(), c.end(), k);
+    EXPECT_GT(n, 59) << k;
+    EXPECT_LT(n, 141) << k;
+  }
+}
+
+// plans of two-condition protocols are those of earlier versions, so their logs resume: the
+// series conditions of the walls study's test 1 with 7 series for seed 1, as the session log of
+// the version before tests could have more conditions recorded them (an odd count, so the coin
+// of the balanced order is drawn too)
+TEST(PlanTest, TwoConditionPlansAreUnchanged) {
+  json d =
+      json::parse(testing::ReadFile(std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json"));
+  d["series"] = 7;
+  EXPECT_EQ(SeriesConditions(MakePlan(ParseProtocol(d, "walls"), 1), 0),
+            (std::vector<int>{1, 1, 0, 0, 0, 0, 1}));
+  d["randomization"]["series_order"] = "independent";
+  EXPECT_EQ(SeriesConditions(MakePlan(ParseProtocol(d, "walls"), 1), 0),
+            (std::vector<int>{0, 1, 1, 1, 1, 1, 0}));
 }
 
 TEST(PlanTest, OrderIsAPureFunctionOfTheSeed) {

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
+#include <vector>
 
 #include "render/limits.h"
 #include "rigidtouch/types.h"
@@ -116,13 +118,207 @@ TEST(ProtocolTest, Fnv1a64TestVectors) {
   EXPECT_EQ(Fnv1a64("foobar"), 0x85944171f73967e8ULL);
 }
 
-// the event renderer needs a material a condition cannot name: refused when the protocol loads
-TEST(ProtocolTest, EventRendererIsRefusedWithTheReason) {
+// the walls study's hash, computed before conditions could name a material or passivity control
+// and tests more than two conditions: its canonical JSON (and so logs of it) must not change
+TEST(ProtocolTest, WallsStudyHashIsUnchanged) {
+  EXPECT_EQ(ProtocolHash(LoadProtocol(kWalls)), "fnv1a64:0e4f65817691a9d1");
+}
+
+// the event renderer plays a material's transient: without one it is refused when the protocol
+// loads, with the reason
+TEST(ProtocolTest, EventRendererWithoutAMaterialIsRefusedWithTheReason) {
   json d = Minimal();
   d["conditions"]["b"] = {{"renderer", "event"}};
   const std::string e = ErrorOf(d);
-  EXPECT_NE(e.find("conditions[\"b\"].renderer"), std::string::npos) << e;
-  EXPECT_NE(e.find("needs a material"), std::string::npos) << e;
+  EXPECT_NE(e.find("p.json: conditions[\"b\"]"), std::string::npos) << e;
+  EXPECT_NE(e.find("missing required field \"material\" for renderer event"), std::string::npos)
+      << e;
+  EXPECT_NE(e.find("rubber, wood, aluminium"), std::string::npos) << e;
+}
+
+TEST(ProtocolTest, AnyRendererWithAMaterialAndPassivityControl) {
+  json d = Minimal();
+  d["conditions"]["e"] = {{"renderer", "event"}, {"material", "wood"}};
+  d["conditions"]["m"] = {{"renderer", "train"}, {"material", "aluminium"}};
+  d["conditions"]["p"] = {{"renderer", "penalty"}, {"passivity_control", true}};
+  const Protocol p = ParseProtocol(d, "p.json");
+  const Condition& e = p.conditions[2];
+  ASSERT_EQ(e.label, "e");
+  EXPECT_EQ(e.renderer, RendererKind::kEvent);
+  ASSERT_TRUE(e.material.has_value());
+  EXPECT_EQ(e.material->name, "wood");
+  EXPECT_FALSE(e.passivity_control);
+  // the render parameters are --material's: the event transient, a material train's f and t_c
+  const RenderParams re = e.ToRenderParams();
+  EXPECT_EQ(re.material.name, "wood");
+  EXPECT_EQ(re.material.frequency_hz, 100.0);
+  const RenderParams rm = p.conditions[3].ToRenderParams();
+  EXPECT_EQ(rm.material.name, "aluminium");
+  EXPECT_EQ(rm.frequency_hz, 300.0);
+  EXPECT_NEAR(rm.t_collision_s, std::log(20.0) / 90.0, 1e-12);  // ln 20 / B, B = 90 1/s
+  EXPECT_TRUE(p.conditions[4].passivity_control);
+  EXPECT_TRUE(p.conditions[4].ToRenderParams().passivity_control);
+  // the canonical JSON carries them, so the hash covers them
+  const json c = p.ToJson()["conditions"];
+  EXPECT_EQ(c["e"], json::parse(R"({"renderer": "event", "material": "wood"})"));
+  EXPECT_EQ(c["m"], json::parse(R"({"renderer": "train", "restitution": 0.0,
+                                    "material": "aluminium"})"));
+  EXPECT_EQ(c["p"], json::parse(R"({"renderer": "penalty", "passivity_control": true})"));
+  json other = d;
+  other["conditions"]["e"]["material"] = "rubber";
+  EXPECT_NE(ProtocolHash(p), ProtocolHash(ParseProtocol(other, "q.json")));
+  other = d;
+  other["conditions"]["e"]["passivity_control"] = true;
+  EXPECT_NE(ProtocolHash(p), ProtocolHash(ParseProtocol(other, "q.json")));
+  EXPECT_EQ(ProtocolHash(p), ProtocolHash(ParseProtocol(p.ToJson(), "canonical")));
+}
+
+TEST(ProtocolTest, MaterialAndPassivityErrorsNameTheField) {
+  const auto with = [](const json& condition) {
+    json d = Minimal();
+    d["conditions"]["b"] = condition;
+    return ErrorOf(d);
+  };
+  std::string e = with({{"renderer", "impulse"}, {"material", "wood"}});
+  EXPECT_NE(e.find("conditions[\"b\"]: parameter \"material\" does not apply to renderer impulse"),
+            std::string::npos)
+      << e;
+  e = with({{"renderer", "penalty"}, {"material", "wood"}});
+  EXPECT_NE(e.find("\"material\" does not apply to renderer penalty"), std::string::npos) << e;
+  e = with({{"renderer", "event"}, {"material", "wood"}, {"restitution", 0}});
+  EXPECT_NE(e.find("\"restitution\" does not apply to renderer event"), std::string::npos) << e;
+  e = with({{"renderer", "event"}, {"material", "glass"}});
+  EXPECT_NE(e.find("conditions[\"b\"].material: unknown material 'glass'"), std::string::npos) << e;
+  e = with({{"renderer", "event"}, {"material", 3}});
+  EXPECT_NE(e.find("conditions[\"b\"].material: expected a material name or file"),
+            std::string::npos)
+      << e;
+  e = with({{"renderer", "event"},
+            {"material", {{"name", "x"}, {"decay_per_s", 50}, {"frequency_hz", 80}}}});
+  EXPECT_NE(e.find("conditions[\"b\"].material.amplitude_Ns_per_m: missing"), std::string::npos)
+      << e;
+  e = with({{"renderer", "event"},
+            {"material",
+             {{"amplitude_Ns_per_m", 1}, {"decay_per_s", 50}, {"frequency_hz", 80}, {"f", 1}}}});
+  EXPECT_NE(e.find("conditions[\"b\"].material"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"f\""), std::string::npos) << e;
+  e = with({{"renderer", "event"}, {"material", "/nonexistent/m.json"}});
+  EXPECT_NE(e.find("conditions[\"b\"].material: /nonexistent/m.json"), std::string::npos) << e;
+  e = with({{"renderer", "train"}, {"material", "wood"}, {"frequency_hz", 100}});
+  EXPECT_NE(e.find("conditions[\"b\"].frequency_hz: a material train takes f and t_c"),
+            std::string::npos)
+      << e;
+  e = with({{"renderer", "penalty"}, {"passivity_control", "yes"}});
+  EXPECT_NE(e.find("conditions[\"b\"].passivity_control"), std::string::npos) << e;
+}
+
+// a JSON material file, as --material takes one; the canonical JSON holds the material's own
+// fields, so the hash covers what is rendered and a log's embedded protocol parses without the
+// file (as `study analyze` on another machine needs)
+TEST(ProtocolTest, MaterialFileIsReadAsTheCliReadsIt) {
+  json canonical;
+  std::string hash;
+  {
+    const testing::ScratchDir dir;
+    const std::string path = dir.File("glass.json");
+    testing::WriteFile(path,
+                       R"({"amplitude_Ns_per_m": 20, "decay_per_s": 80, "frequency_hz": 200})");
+    json d = Minimal();
+    d["conditions"]["b"] = {{"renderer", "event"}, {"material", path}};
+    const Protocol p = ParseProtocol(d, "p.json");
+    const RenderParams r = p.conditions[1].ToRenderParams();
+    EXPECT_EQ(r.material.name, "glass");
+    EXPECT_EQ(r.material.amplitude_Ns_per_m, 20.0);
+    EXPECT_EQ(r.material.decay_per_s, 80.0);
+    EXPECT_EQ(r.material.frequency_hz, 200.0);
+    canonical = p.ToJson();
+    hash = ProtocolHash(p);
+    EXPECT_EQ(canonical["conditions"]["b"]["material"],
+              json::parse(R"({"name": "glass", "amplitude_Ns_per_m": 20.0, "decay_per_s": 80.0,
+                              "frequency_hz": 200.0})"));
+    // another content under the same path is another protocol
+    testing::WriteFile(path,
+                       R"({"amplitude_Ns_per_m": 21, "decay_per_s": 80, "frequency_hz": 200})");
+    EXPECT_NE(ProtocolHash(ParseProtocol(d, "p.json")), hash);
+  }
+  // the file is gone: the canonical protocol still parses, to the same hash and material
+  const Protocol q = ParseProtocol(canonical, "embedded");
+  EXPECT_EQ(ProtocolHash(q), hash);
+  EXPECT_EQ(q.conditions[1].ToRenderParams().material.amplitude_Ns_per_m, 20.0);
+}
+
+json ThreeWay() {
+  return json::parse(R"({
+    "name": "three",
+    "conditions": {
+      "rubber": {"renderer": "event", "material": "rubber"},
+      "wood": {"renderer": "event", "material": "wood"},
+      "aluminium": {"renderer": "event", "material": "aluminium"}
+    },
+    "tests": [{"name": "t", "conditions": ["rubber", "wood", "aluminium"],
+               "keys": ["r", "w", "a"]}]
+  })");
+}
+
+TEST(ProtocolTest, TestOfThreeConditionsRoundTrips) {
+  const Protocol p = ParseProtocol(ThreeWay(), "three.json");
+  ASSERT_EQ(p.tests.size(), 1u);
+  ASSERT_EQ(p.tests[0].conditions.size(), 3u);
+  // conditions are stored by label order (a JSON object); the test keeps its own order
+  EXPECT_EQ(p.conditions[p.tests[0].conditions[0]].label, "rubber");
+  EXPECT_EQ(p.conditions[p.tests[0].conditions[1]].label, "wood");
+  EXPECT_EQ(p.conditions[p.tests[0].conditions[2]].label, "aluminium");
+  EXPECT_EQ(p.tests[0].keys, (std::vector<std::string>{"r", "w", "a"}));
+  const json canonical = p.ToJson();
+  EXPECT_EQ(canonical["tests"][0]["conditions"], json({"rubber", "wood", "aluminium"}));
+  EXPECT_EQ(canonical["tests"][0]["keys"], json({"r", "w", "a"}));
+  const Protocol q = ParseProtocol(json::parse(canonical.dump()), "canonical");
+  EXPECT_EQ(q.tests[0].conditions, p.tests[0].conditions);
+  EXPECT_EQ(q.tests[0].keys, p.tests[0].keys);
+  EXPECT_EQ(ProtocolHash(p), ProtocolHash(q));
+  // default keys: one per condition
+  json d = ThreeWay();
+  d["tests"][0].erase("keys");
+  EXPECT_EQ(ParseProtocol(d, "d.json").tests[0].keys, (std::vector<std::string>{"1", "2", "3"}));
+  // the order of the conditions is part of the test (keys follow it): another hash
+  d = ThreeWay();
+  d["tests"][0]["conditions"] = {"wood", "rubber", "aluminium"};
+  EXPECT_NE(ProtocolHash(p), ProtocolHash(ParseProtocol(d, "d.json")));
+}
+
+TEST(ProtocolTest, TestsOfMoreConditionsAreCheckedAsTwo) {
+  json d = ThreeWay();
+  d["tests"][0]["conditions"] = {"rubber", "wood", "rubber"};
+  std::string e = ErrorOf(d);
+  EXPECT_NE(e.find("tests[0].conditions: condition \"rubber\" is listed twice"), std::string::npos)
+      << e;
+  d = ThreeWay();
+  d["tests"][0]["keys"] = {"r", "w"};
+  e = ErrorOf(d);
+  EXPECT_NE(e.find("tests[0].keys: expected an array of 3 answer keys"), std::string::npos) << e;
+  d = ThreeWay();
+  d["tests"][0]["keys"] = {"r", "w", "R"};
+  e = ErrorOf(d);
+  EXPECT_NE(e.find("tests[0].keys: keys \"r\" and \"R\" must differ"), std::string::npos) << e;
+  d = ThreeWay();
+  d["tests"][0]["keys"] = {"wood", "w", "a"};
+  e = ErrorOf(d);
+  EXPECT_NE(e.find("tests[0].keys[0]: key \"wood\" is the label of another condition"),
+            std::string::npos)
+      << e;
+  d = ThreeWay();
+  for (const char* label : {"c0", "c1", "c2", "c3", "c4", "c5", "c6", "c7", "c8"}) {
+    d["conditions"][label] = {{"renderer", "penalty"}};
+    d["tests"][0]["conditions"].push_back(label);
+  }
+  d["tests"][0].erase("keys");
+  e = ErrorOf(d);
+  EXPECT_NE(e.find("tests[0].conditions: expected an array of 2 to 8 condition labels"),
+            std::string::npos)
+      << e;
+  // eight is the most
+  d["tests"][0]["conditions"] = {"rubber", "wood", "aluminium", "c0", "c1", "c2", "c3", "c4"};
+  EXPECT_EQ(ErrorOf(d), "");
 }
 
 TEST(ProtocolTest, UnknownRendererListsTheValidOnes) {
@@ -212,7 +408,9 @@ TEST(ProtocolTest, MalformedStructureNamesTheField) {
   {
     json d = Minimal();
     d["tests"][0]["conditions"] = {"a"};
-    EXPECT_NE(ErrorOf(d).find("exactly two"), std::string::npos) << ErrorOf(d);
+    EXPECT_NE(ErrorOf(d).find("tests[0].conditions: expected an array of 2 to 8 condition labels"),
+              std::string::npos)
+        << ErrorOf(d);
   }
   {
     json d = Minimal();

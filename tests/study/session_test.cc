@@ -372,6 +372,104 @@ TEST(AnswerTest, TerminalAsksAgainAfterATypoAndStopsAtEndOfInput) {
 
 // `study run --resume` and `study analyze` make the one check (ValidateLog): a log one accepts
 // the other accepts, and a damaged log is refused by both with the same message
+// a test of three conditions after one of two: 2 + 6 then 3 + 6 steps
+Protocol ThreeWayProtocol() {
+  json d = json::parse(R"({
+    "name": "three",
+    "familiarization_taps": 2,
+    "series": 6,
+    "conditions": {
+      "soft": {"renderer": "penalty", "stiffness_N_per_m": 500},
+      "wood": {"renderer": "event", "material": "wood"},
+      "tin": {"renderer": "train", "material": "aluminium", "passivity_control": true}
+    },
+    "tests": [{"name": "pair", "conditions": ["soft", "tin"]},
+              {"name": "three", "conditions": ["soft", "wood", "tin"], "keys": ["s", "w", "t"]}]
+  })");
+  return ParseProtocol(d, "three.json");
+}
+
+TEST(SessionTest, ThreeConditionTestIsLoggedAndResumes) {
+  const Protocol p = ThreeWayProtocol();
+  // answers of the second test use all three conditions
+  const std::vector<int> script = {0, 1, 1, 0, 1, 0, 2, 0, 1, 2, 2, 1};
+  MemorySink reference;
+  RecordingPresenter reference_presenter;
+  {
+    ScriptedResponder responder(script);
+    RunSession(p, Config(), {}, "mem", reference, reference_presenter, responder);
+  }
+  // each of the three is familiarized, with its key, and rendered as written
+  EXPECT_EQ(OfType(reference.records, "familiarization").size(), 5u);
+  for (const json& f : OfType(reference.records, "familiarization")) {
+    if (f["test"] != 1) continue;
+    const std::vector<std::string> keys = {"s", "w", "t"};
+    EXPECT_EQ(f["key"], keys[f["condition"].get<int>()]);
+  }
+  const auto answers = OfType(reference.records, "answer");
+  ASSERT_EQ(answers.size(), 12u);
+  EXPECT_EQ(answers[8]["answer"], 1);
+  EXPECT_EQ(answers[9]["answer"], 2);
+  EXPECT_EQ(answers[9]["answer_label"], "tin");
+  EXPECT_EQ(ValidateLog(reference.records, "mem").answers.size(), 12u);
+  for (const json& s : OfType(reference.records, "series")) {
+    if (s["test"] == 1 && s["label"] == "tin") {
+      EXPECT_EQ(s["rendered"], json::parse(R"({"renderer": "train", "restitution": 0.0,
+                                  "material": "aluminium", "passivity_control": true})"));
+    }
+  }
+  for (std::size_t stop_after : {7u, 9u}) {  // inside the three-condition test
+    MemorySink sink;
+    RecordingPresenter presenter;
+    ScriptedResponder first(std::vector<int>(script.begin(), script.begin() + stop_after));
+    EXPECT_EQ(RunSession(p, Config(), {}, "mem", sink, presenter, first).status,
+              SessionStatus::kStopped);
+    SessionConfig resume = Config("P01", std::nullopt);
+    resume.resume = true;
+    ScriptedResponder rest(std::vector<int>(script.begin() + stop_after, script.end()));
+    const std::vector<json> existing = sink.records;
+    const SessionOutcome b = RunSession(p, resume, existing, "mem", sink, presenter, rest);
+    EXPECT_EQ(b.status, SessionStatus::kComplete);
+    EXPECT_EQ(b.answers_before, static_cast<int>(stop_after));
+    EXPECT_EQ(AnswerKeys(sink.records), AnswerKeys(reference.records)) << stop_after;
+  }
+  // answer 2 is valid in the three-condition test only; 3 in neither
+  std::vector<json> damaged = reference.records;
+  std::size_t last = damaged.size();
+  while (damaged[--last]["type"] != "answer") {
+  }
+  damaged[last]["answer"] = 3;
+  EXPECT_THROW(ValidateLog(damaged, "mem"), Error);
+  damaged = reference.records;
+  std::size_t first = 0;
+  while (damaged[first]["type"] != "answer") ++first;
+  damaged[first]["answer"] = 2;
+  try {
+    ValidateLog(damaged, "mem");
+    ADD_FAILURE() << "answer 2 in a two-condition test was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("valid answers: 0, 1"), std::string::npos) << e.what();
+  }
+}
+
+TEST(AnswerTest, ThreeKeysAndLabels) {
+  const Protocol p = ThreeWayProtocol();
+  const StudyTest& t = p.tests[1];
+  EXPECT_EQ(ParseAnswer(p, t, "w"), 1);
+  EXPECT_EQ(ParseAnswer(p, t, " TIN "), 2);
+  EXPECT_EQ(ParseAnswer(p, t, "s"), 0);
+  EXPECT_EQ(ParseAnswer(p, t, "x"), std::nullopt);
+  std::istringstream in("x\nt\n");
+  std::ostringstream out;
+  TerminalResponder terminal(in, out);
+  Step step;
+  step.test = 1;
+  EXPECT_EQ(terminal.Ask(p, step), 2);
+  EXPECT_NE(out.str().find("Type s for soft, w for wood or t for tin: "), std::string::npos)
+      << out.str();
+  EXPECT_NE(out.str().find("type s, w or t (or the wall's name)"), std::string::npos) << out.str();
+}
+
 TEST(SessionTest, ResumeAndAnalyzeAgreeOnWhichLogsAreValid) {
   const Protocol p = SmallProtocol();
   MemorySink sink;

@@ -10,6 +10,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "rigidtouch/types.h"
@@ -78,6 +79,95 @@ TEST(SimulateTest, IdenticalWallsGiveChanceWithinTheBinomialInterval) {
   EXPECT_GE(t.percent_correct.mean, lo);
   EXPECT_LE(t.percent_correct.mean, hi);
   EXPECT_NEAR(t.percent_correct.mean, 100.0 * t.pooled_correct / 4000.0, 1e-9);
+}
+
+Protocol ThreeWay(const json& a, const json& b, const json& c, int series = 30) {
+  json d = {{"name", "three"},
+            {"series", series},
+            {"conditions", {{"a", a}, {"b", b}, {"c", c}}},
+            {"tests", {{{"name", "only"}, {"conditions", {"a", "b", "c"}}}}}};
+  return ParseProtocol(d, "three");
+}
+
+TestResult RunThreeWay(const Protocol& protocol, int participants, const ObserverParams& observer,
+                       std::uint64_t seed) {
+  ToyStimulusSource source;
+  CohortConfig config;
+  config.participants = participants;
+  config.seed = seed;
+  config.observer = observer;
+  std::vector<LogInput> logs;
+  for (const auto& run : SimulateCohort(protocol, source, config)) {
+    logs.push_back({run.id, run.records});
+  }
+  return AnalyzeLogs(logs).tests.at(0);
+}
+
+// exact central 95% interval of Binomial(n, 1/3), in percent
+std::pair<double, double> ThirdInterval(int n) {
+  return {100.0 * BinomialQuantile(n, 1.0 / 3.0, 0.025) / n,
+          100.0 * BinomialQuantile(n, 1.0 / 3.0, 0.975) / n};
+}
+
+TEST(SimulateTest, ThreeIdenticalWallsGiveChanceOfOneThird) {
+  // three labels, one configuration: 100 participants x 30 series = 3000 answers
+  const TestResult t = RunThreeWay(ThreeWay(kTrain250, kTrain250, kTrain250), 100, {}, 321);
+  EXPECT_EQ(t.chance, 1.0 / 3.0);
+  ASSERT_EQ(t.pooled_answers, 3000);
+  const auto [lo, hi] = ThirdInterval(3000);  // 31.6% to 35.0%
+  const double pooled = 100.0 * t.pooled_correct / 3000.0;
+  EXPECT_GE(pooled, lo);
+  EXPECT_LE(pooled, hi);
+  // every label is named, and each about as often: a third of 3000 each, 5 binomial SD (25.8)
+  for (int named = 0; named < 3; ++named) {
+    int n = 0;
+    for (int presented = 0; presented < 3; ++presented) n += t.confusion[presented][named];
+    EXPECT_NEAR(n, 1000, 5 * 25.8) << named;
+  }
+}
+
+TEST(SimulateTest, ThreeDifferentWallsAreIdentifiedAboveChance) {
+  const TestResult t = RunThreeWay(ThreeWay(kTrain250, kTrain100, kPenalty1000), 20, {}, 5);
+  ASSERT_EQ(t.pooled_answers, 600);
+  EXPECT_GT(t.percent_correct.mean, 75.0);
+  EXPECT_LT(t.pooled.p_greater, 1e-6);  // against 1/3
+  // the confusion matrix counts every answer; its diagonal is the correct ones
+  int total = 0, diagonal = 0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) total += t.confusion[a][b];
+    diagonal += t.confusion[a][a];
+  }
+  EXPECT_EQ(total, 600);
+  EXPECT_EQ(diagonal, t.pooled_correct);
+}
+
+// the label memory of three walls: an association lost before every series and re-derived from a
+// coded memory far noisier than the walls' differences gives labels at random, so chance; the
+// same with an exact coded memory gives the labels back
+TEST(SimulateTest, ThreeWallsLabelsRederivedFromTheCodedMemory) {
+  const Protocol protocol = ThreeWay(kTrain250, kTrain100, kPenalty1000);
+  ObserverParams lost;
+  lost.label_loss_per_series = 1.0;
+  lost.label_code_sd_jnd = 1e4;
+  const TestResult noisy = RunThreeWay(protocol, 100, lost, 9);
+  const auto [lo, hi] = ThirdInterval(3000);
+  const double pooled = 100.0 * noisy.pooled_correct / 3000.0;
+  EXPECT_GE(pooled, lo);
+  EXPECT_LE(pooled, hi);
+  lost.label_code_sd_jnd = 0.0;
+  EXPECT_GT(RunThreeWay(protocol, 20, lost, 9).percent_correct.mean, 75.0);
+}
+
+// a participant who always lapses guesses uniformly among the three
+TEST(SimulateTest, LapsesGuessAmongAllThree) {
+  ObserverParams guessing;
+  guessing.lapse_rate = 1.0;
+  const TestResult t = RunThreeWay(ThreeWay(kTrain250, kTrain100, kPenalty1000), 100, guessing, 4);
+  for (int named = 0; named < 3; ++named) {
+    int n = 0;
+    for (int presented = 0; presented < 3; ++presented) n += t.confusion[presented][named];
+    EXPECT_NEAR(n, 1000, 5 * 25.8) << named;  // Binomial(3000, 1/3): SD 25.8
+  }
 }
 
 TEST(SimulateTest, DifferentWallsAreToldApartAndTheCohortIsDeterministic) {

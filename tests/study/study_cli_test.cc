@@ -424,6 +424,48 @@ TEST(StudyCliTest, AnalyzeWallsSessions) {
   EXPECT_EQ(ReadFile(junk), "hello\n");
 }
 
+// the shipped materials study at the terminal: three walls per test, answered by key and by
+// label; the analysis is against a third, with the confusion matrix
+TEST(StudyCliTest, MaterialsStudyIdentifiesAmongThree) {
+  ScratchDir dir;
+  const std::string protocol = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/materials.json";
+  const std::string log = dir.File("P01.jsonl");
+  std::string answers;
+  for (int i = 0; i < 30; ++i) answers += i % 3 == 0 ? "r\n" : (i % 3 == 1 ? "W\n" : "a\n");
+  for (int i = 0; i < 30; ++i) answers += i % 2 == 0 ? "train:wood\n" : "a\n";
+  const Result r = RunCli(dir, RunArgs(protocol, log, "P01"), answers);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("Type r for event:rubber, w for event:wood or a for event:aluminium: "),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("rendering event:wood (event) for 3 taps"), std::string::npos) << r.out;
+  const auto recorded = Records(log, "answer");
+  ASSERT_EQ(recorded.size(), 60u);
+  EXPECT_EQ(recorded[1]["answer"], 1);
+  EXPECT_EQ(recorded[2]["answer_label"], "event:aluminium");
+  EXPECT_EQ(recorded[30]["answer_label"], "train:wood");
+  const Result text = RunCli(dir, {"study", "analyze", log});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("event: event:rubber vs event:wood vs event:aluminium (chance 33.3%)"),
+            std::string::npos)
+      << text.out;
+  EXPECT_NE(text.out.find("pooled answers (row: presented, column: named)"), std::string::npos)
+      << text.out;
+  const Result j = RunCli(dir, {"study", "analyze", log, "--json"});
+  ASSERT_EQ(j.exit_code, 0) << j.err;
+  const json report = json::parse(j.out);
+  for (const json& t : report["tests"]) {
+    EXPECT_EQ(t["chance"], 1.0 / 3.0);
+    int total = 0;
+    for (const json& row : t["confusion"]) {
+      for (const json& n : row) total += n.get<int>();
+    }
+    EXPECT_EQ(total, 30);
+  }
+  // the second test was answered wood or aluminium only: no "rubber" column entries
+  for (const json& row : report["tests"][1]["confusion"]) EXPECT_EQ(row[0], 0);
+}
+
 TEST(StudyCliTest, PredictPrintsTheCohortSharesWithIntervals) {
   ScratchDir dir;
   Result r = RunCli(dir, {"study", "predict", "--protocol", kWalls, "--taps", "5", "--cohorts",

@@ -1,5 +1,8 @@
 // The study's engine binding: percepts of simulated taps from the real tap experiment.
 #include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -41,6 +44,50 @@ TEST(TapStimulusTest, PerceptsAreDeterministicAndTellTheWallsApart) {
   // another seed draws another hand speed (10% spread)
   const TapPercept c = source->RenderTap(Wall(kWall1), 43);
   EXPECT_NE(a.approach_speed_mps, c.approach_speed_mps);
+}
+
+// stdout of a command
+std::string Output(const std::string& command) {
+  std::string out;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return out;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
+  pclose(pipe);
+  return out;
+}
+
+// a condition with a material and passivity control is rendered as `rigidtouch tap --renderer R
+// --material M [--passivity-control]` renders it: the same tap, to the last bit the JSON prints
+TEST(TapStimulusTest, MaterialConditionsRenderAsTheTapCommand) {
+  TapSourceOptions options;
+  options.approach_speed_relative_sd = 0.0;  // as tap without --spread
+  const auto source = MakeTapStimulusSource(options);
+  struct Case {
+    json condition;
+    std::string flags;
+  };
+  const std::vector<Case> cases = {
+      {{{"renderer", "event"}, {"material", "wood"}}, "--renderer event --material wood"},
+      {{{"renderer", "train"}, {"material", "aluminium"}}, "--renderer train --material aluminium"},
+      {{{"renderer", "event"}, {"material", "rubber"}, {"passivity_control", true}},
+       "--renderer event --material rubber --passivity-control"},
+  };
+  std::vector<double> peaks;
+  for (const Case& c : cases) {
+    const TapPercept p = source->RenderTap(Wall(c.condition), 1);
+    const json tap = json::parse(
+        Output(std::string(RIGIDTOUCH_CLI) + " tap " + c.flags + " --taps 1 --json"))["taps"][0];
+    EXPECT_DOUBLE_EQ(p.peak_force_N, tap["peak_force_N"].get<double>()) << c.flags;
+    EXPECT_DOUBLE_EQ(p.rate_hardness_N_per_m, tap["rate_hardness_N_per_m"].get<double>())
+        << c.flags;
+    EXPECT_DOUBLE_EQ(p.transient_peak_to_mean, tap["transient_peak_to_mean"].get<double>())
+        << c.flags;
+    peaks.push_back(p.peak_force_N);
+  }
+  // and the material matters: rubber's transient is not wood's
+  EXPECT_NE(peaks[0], peaks[2]);
 }
 
 // pulses of 1 N every `period` ticks of 1 ms, `count` of them, in a 100 ms window
