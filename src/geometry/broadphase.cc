@@ -105,11 +105,14 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
   int* order = bp.order.data();
   double *lo_s = bp.lo_s.data(), *hi_s = bp.hi_s.data(), *lo_p = bp.lo_p.data(),
          *hi_p = bp.hi_p.data(), *lo_q = bp.lo_q.data(), *hi_q = bp.hi_q.data();
-  // the bounds of order[i]'s box at i: along the sweep axis (s) and the two others (p, q)
+  // the bounds of order[i]'s box at i: along the sweep axis (s) and the two others (p, q). A NaN
+  // lower bound along the sweep axis is kept as +inf, as the fresh sort below counts it: a NaN
+  // would stop the insertion sort from moving other boxes past it, leaving the order unsorted
+  // and the sweep blind to pairs of finite boxes; the box overlaps nothing either way
   auto place = [&bp, order, lo_s, hi_s, lo_p, hi_p, lo_q, hi_q](int i) {
     const Aabb& box = bp.boxes[order[i]];
     const int as = bp.axis, ap = (as + 1) % 3, aq = (as + 2) % 3;
-    lo_s[i] = box.lo[as];
+    lo_s[i] = std::isnan(box.lo[as]) ? std::numeric_limits<double>::infinity() : box.lo[as];
     hi_s[i] = box.hi[as];
     lo_p[i] = box.lo[ap];
     hi_p[i] = box.hi[ap];

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <utility>
 #include <vector>
@@ -150,6 +151,35 @@ TEST(BroadphaseTest, SamePairsAsBruteForceInSweepOrder) {
     }
   }
   EXPECT_GT(total, 1000);  // the scenes are dense enough to test something
+}
+
+// a geom whose pose turned NaN (a diverged body) overlaps nothing, and must not keep the others
+// unsorted: over coherent motion with one NaN geom in every other tick, the finite geoms' pairs
+// are the brute-force set (which pairs nothing with the NaN geom)
+TEST(BroadphaseTest, ANanGeomLeavesTheOthersPairsIntact) {
+  std::mt19937_64 rng(5);
+  int total = 0;
+  for (int scene = 0; scene < 20; ++scene) {
+    const Model m = RandomModel(rng, 30 + scene);
+    std::vector<GeomPose> poses(m.geoms.size());
+    RandomPoses(rng, m, poses);
+    Broadphase bp;
+    bp.Reserve(m, 4096);
+    std::normal_distribution<double> step(0.0, 0.01);
+    for (int tick = 0; tick < 20; ++tick) {
+      for (std::size_t g = 0; g < poses.size(); ++g) {
+        if (m.geoms[g].type != GeomType::kPlane) poses[g].p_W += Vec3(step(rng), step(rng), 0.0);
+      }
+      std::vector<GeomPose> used = poses;
+      if (tick % 2 == 1) used[2 + scene % 5].p_W = Vec3::Constant(std::nan(""));
+      FindPairs(m, used, bp);
+      const std::vector<std::pair<int, int>> found(bp.pairs.begin(), bp.pairs.begin() + bp.npair);
+      ASSERT_EQ(Sorted(found), Sorted(BruteForce(m, used)))
+          << "scene " << scene << " tick " << tick;
+      total += bp.npair;
+    }
+  }
+  EXPECT_GT(total, 500);
 }
 
 // the sweep follows the axis over which the geoms spread most, and leaves the current one only
