@@ -136,17 +136,24 @@ struct ServeRun {
   loop::RecordQueue* records;
 };
 
+// the tap experiment's model and simulated device for the flags, direct coupling; its load
+// warnings printed
+analysis::TapSetup PrepareServeTap(const ServeRun& s) {
+  analysis::TapExperimentConfig c =
+      TapConfig(s.f.scene, s.choice.spec_text, s.rate_hz, s.f.speed_mps, s.f.taps);
+  c.load.device.coupling = Coupling::kDirect;
+  analysis::TapSetup setup = analysis::PrepareTap(c);
+  PrintLoadWarnings(setup.model);
+  return setup;
+}
+
 // replays a --record session through the model the simulated path builds
 nlohmann::json ServeReplay(const ServeRun& s, io::Record& recorded, loop::HapticLoopResult& r) {
   const device::DeviceLimits& preset = s.choice.spec.limits;
   // the model is built as on the simulated path, so a session recorded there replays through
   // the same model; the tool starts where the recorded handle did
-  analysis::TapExperimentConfig c =
-      TapConfig(s.f.scene, s.choice.spec_text, s.rate_hz, s.f.speed_mps, s.f.taps);
-  c.load.device.coupling = Coupling::kDirect;
-  analysis::TapSetup setup = analysis::PrepareTap(c);
+  analysis::TapSetup setup = PrepareServeTap(s);
   Model& model = setup.model;
-  PrintLoadWarnings(model);
   device::ReplayDevice dev(std::move(recorded.samples), setup.device);
   model.initial[model.tool].x_W = dev.first_state().position_m;
   device::TightenDeviceParams(model.device, dev.limits());
@@ -177,12 +184,8 @@ nlohmann::json ServeReplay(const ServeRun& s, io::Record& recorded, loop::Haptic
 // the in-process simulated device: the preset's model and a simulated hand's taps
 nlohmann::json ServeSim(const ServeRun& s, loop::HapticLoopResult& r) {
   const device::DeviceLimits& preset = s.choice.spec.limits;
-  analysis::TapExperimentConfig c =
-      TapConfig(s.f.scene, s.choice.spec_text, s.rate_hz, s.f.speed_mps, s.f.taps);
-  c.load.device.coupling = Coupling::kDirect;
-  analysis::TapSetup setup = analysis::PrepareTap(c);
+  analysis::TapSetup setup = PrepareServeTap(s);
   Model& model = setup.model;
-  PrintLoadWarnings(model);
   device::TightenDeviceParams(model.device, setup.simulated->limits());
   SetPlausibility(s.f, model.device);
   // refuses a stiffness or damping the device cannot display
