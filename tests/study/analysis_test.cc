@@ -30,14 +30,10 @@ Protocol TwoTests(const char* name = "analysis") {
   return ParseProtocol(d, "analysis.json");
 }
 
-// a valid log (study/log.h, ValidateLog) of a session with seed 7: per test, its series in plan
-// order take the given (condition, answer) pairs in turn, answered correctly when the pair is
-// (the plan decides which condition each series renders); the log stops at the first series left
-// without a pair
-LogInput MakeLog(const Protocol& p, const std::string& id,
-                 const std::vector<std::vector<std::pair<int, int>>>& per_test,
-                 const char* mode = "person") {
-  constexpr std::uint64_t kSeed = 7;
+constexpr std::uint64_t kLogSeed = 7;
+
+// a log's session_start record, seed kLogSeed
+LogInput StartLog(const Protocol& p, const std::string& id, const char* mode) {
   LogInput log;
   log.source = id + ".jsonl";
   log.records.push_back({{"type", "session_start"},
@@ -47,14 +43,29 @@ LogInput MakeLog(const Protocol& p, const std::string& id,
                          {"protocol_hash", ProtocolHash(p)},
                          {"participant", id},
                          {"mode", mode},
-                         {"seed", kSeed}});
+                         {"seed", kLogSeed}});
+  return log;
+}
+
+json Familiarization(const Step& step) {
+  return {{"type", "familiarization"},
+          {"step", step.index},
+          {"test", step.test},
+          {"condition", step.condition}};
+}
+
+// a valid log (study/log.h, ValidateLog) of a session with seed 7: per test, its series in plan
+// order take the given (condition, answer) pairs in turn, answered correctly when the pair is
+// (the plan decides which condition each series renders); the log stops at the first series left
+// without a pair
+LogInput MakeLog(const Protocol& p, const std::string& id,
+                 const std::vector<std::vector<std::pair<int, int>>>& per_test,
+                 const char* mode = "person") {
+  LogInput log = StartLog(p, id, mode);
   std::vector<std::size_t> next(p.tests.size(), 0);
-  for (const Step& step : MakePlan(p, kSeed)) {
+  for (const Step& step : MakePlan(p, kLogSeed)) {
     if (step.kind == StepKind::kFamiliarization) {
-      log.records.push_back({{"type", "familiarization"},
-                             {"step", step.index},
-                             {"test", step.test},
-                             {"condition", step.condition}});
+      log.records.push_back(Familiarization(step));
       continue;
     }
     const std::size_t t = static_cast<std::size_t>(step.test);
@@ -83,22 +94,10 @@ std::vector<std::pair<int, int>> Series(int n, int correct) {
 // a log of seed 7 for a protocol of one test, every series answered by `answer_of(condition)`
 template <typename F>
 LogInput MakeMappedLog(const Protocol& p, const std::string& id, F answer_of) {
-  LogInput log;
-  log.source = id + ".jsonl";
-  log.records.push_back({{"type", "session_start"},
-                         {"format", kLogFormat},
-                         {"format_version", kLogFormatVersion},
-                         {"protocol", p.ToJson()},
-                         {"protocol_hash", ProtocolHash(p)},
-                         {"participant", id},
-                         {"mode", "person"},
-                         {"seed", std::uint64_t{7}}});
-  for (const Step& step : MakePlan(p, 7)) {
+  LogInput log = StartLog(p, id, "person");
+  for (const Step& step : MakePlan(p, kLogSeed)) {
     if (step.kind == StepKind::kFamiliarization) {
-      log.records.push_back({{"type", "familiarization"},
-                             {"step", step.index},
-                             {"test", step.test},
-                             {"condition", step.condition}});
+      log.records.push_back(Familiarization(step));
       continue;
     }
     log.records.push_back({{"type", "answer"},
