@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "io/output_file.h"
+#include "io/text.h"
 
 namespace rigidtouch::io {
 namespace {
@@ -59,18 +60,13 @@ constexpr std::array<std::string_view, 38> kColumns = {"tick",
 constexpr std::string_view kWhat = "record file";
 
 void Put(std::string& line, double v) {
-  char buf[32];
-  // shortest form that reads back to the same double
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  line.append(buf, r.ptr);
+  io::AppendShortest(line, v);
   line.push_back(',');
 }
 
 template <typename Int>
 void PutInt(std::string& line, Int v) {
-  char buf[24];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  line.append(buf, r.ptr);
+  io::AppendInteger(line, v);
   line.push_back(',');
 }
 

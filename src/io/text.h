@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cctype>
+#include <charconv>
 #include <cstdio>
 #include <string>
 #include <string_view>
@@ -57,6 +58,22 @@ inline std::string FormatNumber(double value) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.6g", value);
   return buffer;
+}
+
+/// Appends `value` in the shortest form that reads back to the same double (the record and trace
+/// files keep every bit).
+inline void AppendShortest(std::string& out, double value) {
+  char buffer[32];  // the longest shortest form of a double is 24 characters
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  out.append(buffer, result.ptr);
+}
+
+/// Appends an integer in decimal.
+template <typename Int>
+void AppendInteger(std::string& out, Int value) {
+  char buffer[24];  // 20 digits and a sign hold any 64-bit integer
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  out.append(buffer, result.ptr);
 }
 
 }  // namespace rigidtouch::io

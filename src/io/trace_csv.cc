@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "io/output_file.h"
+#include "io/text.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::io {
@@ -57,27 +58,15 @@ std::string SystemReason(int error_number) {
   return std::generic_category().message(error_number);
 }
 
-void AppendDouble(std::string& out, double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  out.append(buffer, result.ptr);
-}
-
-void AppendInt(std::string& out, long long value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  out.append(buffer, result.ptr);
-}
-
 void AppendVec(std::string& out, const Vec3& v) {
   for (int i = 0; i < 3; ++i) {
     out += ',';
-    AppendDouble(out, v[i]);
+    io::AppendShortest(out, v[i]);
   }
 }
 
 void AppendRow(std::string& out, const TraceSample& s) {
-  AppendDouble(out, s.time_s);
+  io::AppendShortest(out, s.time_s);
   AppendVec(out, s.tool_position_m);
   AppendVec(out, s.tool_velocity_mps);
   AppendVec(out, s.penalty_force_N);
@@ -86,25 +75,25 @@ void AppendRow(std::string& out, const TraceSample& s) {
   AppendVec(out, s.hand_force_N);
   AppendVec(out, s.wall_normal);
   out += ',';
-  AppendDouble(out, s.penetration_m);
+  io::AppendShortest(out, s.penetration_m);
   out += ',';
-  AppendInt(out, s.tool_contacts);
+  io::AppendInteger(out, s.tool_contacts);
   out += ',';
-  AppendInt(out, s.impulses);
+  io::AppendInteger(out, s.impulses);
   out += ',';
-  AppendDouble(out, s.kinetic_energy_before_J);
+  io::AppendShortest(out, s.kinetic_energy_before_J);
   out += ',';
-  AppendDouble(out, s.kinetic_energy_after_J);
+  io::AppendShortest(out, s.kinetic_energy_after_J);
   out += ',';
   out += s.clipped ? '1' : '0';
   out += ',';
-  AppendInt(out, s.tap);
+  io::AppendInteger(out, s.tap);
   out += ',';
-  AppendInt(out, s.step);
+  io::AppendInteger(out, s.step);
   out += '\n';
 }
 
-std::string_view Trim(std::string_view s) {
+std::string_view TrimSpaces(std::string_view s) {
   while (!s.empty() && (s.back() == '\r' || s.back() == ' ')) s.remove_suffix(1);
   while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
   return s;
@@ -116,10 +105,10 @@ std::vector<std::string_view> SplitCommas(std::string_view line) {
   while (true) {
     const std::size_t comma = line.find(',', begin);
     if (comma == std::string_view::npos) {
-      fields.push_back(Trim(line.substr(begin)));
+      fields.push_back(TrimSpaces(line.substr(begin)));
       return fields;
     }
-    fields.push_back(Trim(line.substr(begin, comma - begin)));
+    fields.push_back(TrimSpaces(line.substr(begin, comma - begin)));
     begin = comma + 1;
   }
 }
@@ -172,7 +161,7 @@ std::vector<TraceSample> ReadTraceCsv(const std::string& path) {
   std::array<long long, kColumnCount> integers{};
   while (std::getline(in, line)) {
     ++line_number;
-    if (Trim(line).empty()) continue;
+    if (TrimSpaces(line).empty()) continue;
     const std::vector<std::string_view> fields = SplitCommas(line);
     for (std::size_t k = 0; k < kColumnCount; ++k) {
       const std::size_t c = static_cast<std::size_t>(index[k]);
