@@ -60,47 +60,16 @@ void UdpDevice::SendHello(std::int64_t now_ns, bool new_handshake) {
 
 DeviceState UdpDevice::Read() {
   const std::int64_t now_ns = MonotonicNowNs();
-  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
-    Datagram datagram;
-    const int status = socket_.Receive(buffer_, &datagram);
-    if (status == EAGAIN) break;
-    if (status != 0) {
-      // a persistent socket error must not spin the loop: stop draining for this tick
-      ++counters_.receive_errors;
-      counters_.last_errno = status;
-      break;
-    }
-    ++counters_.received;
-    if (datagram.source != server_) {
-      ++counters_.wrong_source;
-      continue;
-    }
-    if (loss_.DropIncoming()) {
-      ++counters_.test_dropped_incoming;
-      continue;
-    }
-    if (datagram.full_bytes != datagram.bytes) {
-      ++counters_.malformed[static_cast<std::size_t>(DecodeResult::kOversized)];
-      continue;
-    }
-    const std::span<const std::uint8_t> bytes(buffer_.data(), datagram.bytes);
-    PacketHeader header;
-    const DecodeResult framing =
-        CheckFraming(bytes, PacketType::kHelloReply, PacketType::kState, &header);
-    if (framing != DecodeResult::kOk) {
-      ++counters_.malformed[static_cast<std::size_t>(framing)];
-      continue;
-    }
-    if (!VerifyMac(bytes, key_)) {
-      ++counters_.unauthenticated;
-      continue;
-    }
-    if (header.type == PacketType::kHelloReply) {
-      HandleReply(header, bytes, now_ns);
-    } else {
-      HandleState(header, bytes, now_ns);
-    }
-  }
+  const LinkInbox inbox{socket_, buffer_, loss_, counters_, key_};
+  DrainAuthenticated(inbox, &server_, PacketType::kHelloReply, PacketType::kState,
+                     [&](const PacketHeader& header, std::span<const std::uint8_t> bytes,
+                         const UdpEndpoint& /*source*/) {
+                       if (header.type == PacketType::kHelloReply) {
+                         HandleReply(header, bytes, now_ns);
+                       } else {
+                         HandleState(header, bytes, now_ns);
+                       }
+                     });
   if (session_ && now_ns - last_fresh_ns_ > watchdog_ns_) {
     if (has_state_ && !tripped_) {
       tripped_ = true;

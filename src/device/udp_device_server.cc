@@ -163,46 +163,17 @@ void UdpDeviceServer::Impl::SendReply() {
 }
 
 void UdpDeviceServer::Impl::DrainDatagrams(std::int64_t now_ns) {
-  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
-    Datagram datagram;
-    const int status = socket.Receive(buffer, &datagram);
-    if (status == EAGAIN) return;
-    if (status != 0) {
-      ++counters.receive_errors;
-      counters.last_errno = status;
-      return;
-    }
-    ++counters.received;
-    if (fixed_peer && datagram.source != allowed_peer) {
-      ++counters.wrong_source;
-      continue;
-    }
-    if (loss.DropIncoming()) {
-      ++counters.test_dropped_incoming;
-      continue;
-    }
-    if (datagram.full_bytes != datagram.bytes) {
-      ++counters.malformed[static_cast<std::size_t>(DecodeResult::kOversized)];
-      continue;
-    }
-    const std::span<const std::uint8_t> bytes(buffer.data(), datagram.bytes);
-    PacketHeader header;
-    const DecodeResult framing =
-        CheckFraming(bytes, PacketType::kHello, PacketType::kCommand, &header);
-    if (framing != DecodeResult::kOk) {
-      ++counters.malformed[static_cast<std::size_t>(framing)];
-      continue;
-    }
-    if (!VerifyMac(bytes, key)) {
-      ++counters.unauthenticated;
-      continue;
-    }
-    if (header.type == PacketType::kHello) {
-      HandleHello(header, datagram.source, now_ns);
-    } else {
-      HandleCommand(header, datagram.source, bytes, now_ns);
-    }
-  }
+  const LinkInbox inbox{socket, buffer, loss, counters, key};
+  DrainAuthenticated(inbox, fixed_peer ? &allowed_peer : nullptr, PacketType::kHello,
+                     PacketType::kCommand,
+                     [&](const PacketHeader& header, std::span<const std::uint8_t> bytes,
+                         const UdpEndpoint& source) {
+                       if (header.type == PacketType::kHello) {
+                         HandleHello(header, source, now_ns);
+                       } else {
+                         HandleCommand(header, source, bytes, now_ns);
+                       }
+                     });
 }
 
 void UdpDeviceServer::Impl::HandleHello(const PacketHeader& header, const UdpEndpoint& source,

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cerrno>
 #include <cstdint>
 #include <random>
 #include <span>
@@ -49,6 +50,63 @@ class LossSimulator {
   std::mt19937_64 generator_;
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
 };
+
+/// Where one end of the link reads from: its socket, receive buffer, test-only loss, counters
+/// and key.
+struct LinkInbox {
+  UdpSocket& socket;
+  std::span<std::uint8_t> buffer;
+  LossSimulator& loss;
+  UdpCounters& counters;
+  const DeviceKey& key;
+};
+
+/// Takes up to kMaxDatagramsPerPeriod datagrams off the socket and calls
+/// `admit(header, bytes, source)` for each that comes from `required_source` (any source when it
+/// is null), survives the test-only loss, arrived whole, is framed as `first` or `second` and
+/// carries a valid MAC; every other one is counted in `counters` by why it was refused. Stops at
+/// the first EAGAIN or socket error (counted: a persistent error must not spin the loop). Never
+/// blocks or allocates; throws only what `admit` throws.
+template <typename Admit>
+void DrainAuthenticated(const LinkInbox& inbox, const UdpEndpoint* required_source,
+                        PacketType first, PacketType second, Admit&& admit) {
+  UdpCounters& counters = inbox.counters;
+  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
+    Datagram datagram;
+    const int status = inbox.socket.Receive(inbox.buffer, &datagram);
+    if (status == EAGAIN) return;
+    if (status != 0) {
+      ++counters.receive_errors;
+      counters.last_errno = status;
+      return;
+    }
+    ++counters.received;
+    if (required_source != nullptr && datagram.source != *required_source) {
+      ++counters.wrong_source;
+      continue;
+    }
+    if (inbox.loss.DropIncoming()) {
+      ++counters.test_dropped_incoming;
+      continue;
+    }
+    if (datagram.full_bytes != datagram.bytes) {
+      ++counters.malformed[static_cast<std::size_t>(DecodeResult::kOversized)];
+      continue;
+    }
+    const std::span<const std::uint8_t> bytes(inbox.buffer.data(), datagram.bytes);
+    PacketHeader header;
+    const DecodeResult framing = CheckFraming(bytes, first, second, &header);
+    if (framing != DecodeResult::kOk) {
+      ++counters.malformed[static_cast<std::size_t>(framing)];
+      continue;
+    }
+    if (!VerifyMac(bytes, inbox.key)) {
+      ++counters.unauthenticated;
+      continue;
+    }
+    admit(header, bytes, datagram.source);
+  }
+}
 
 /// Sends one datagram unless the test-only loss drops it, and counts the outcome in `counters`
 /// (sent, send_errors with last_errno, test_dropped_outgoing). Never blocks, allocates or throws.
