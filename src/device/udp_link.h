@@ -1,5 +1,5 @@
-// Pieces shared by both ends of the UDP device link: the counters they report and the test-only
-// packet-loss simulation.
+// Pieces shared by both ends of the UDP device link: the checks every received datagram passes,
+// the counters they report and the test-only packet-loss simulation.
 #pragma once
 
 #include <array>
