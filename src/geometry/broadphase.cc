@@ -6,7 +6,7 @@
 #include <limits>
 
 #if defined(__SSE2__)
-#include <emmintrin.h>
+#include <immintrin.h>
 #endif
 
 namespace rigidtouch::geometry {
@@ -68,8 +68,79 @@ float FloatAbove(double x) {
   return -FloatBelow(-x);
 }
 
-// geoms a float block of the sweep tests at once
-constexpr int kLanes = 4;
+// places a float block of the sweep tests at once: 4 with SSE2, 8 with AVX2 (chosen at run time:
+// the pairs are the same, as the blocks only filter candidates for the double test)
+constexpr int kMaxLanes = 8;
+
+// the sweep's float bounds, in sweep order
+struct FloatBounds {
+  const float *lo_s, *hi_s, *lo_p, *hi_p, *lo_q, *hi_q;
+};
+
+// writes to `hits` the places j > i, in order, whose float boxes overlap place i's, from i + 1 to
+// the end of the first block in which a float lower bound along the sweep axis exceeds i's upper
+// bound (the double sweep stops before it); returns how many. Every place past n is NaN, so a
+// block reaching past n is safe to read and its extra lanes never pass.
+int ScanPortable(const FloatBounds& f, int i, int n, int* hits) {
+  int count = 0;
+#if defined(__SSE2__)
+  constexpr int kLanes = 4;
+  const __m128 ls_i = _mm_set1_ps(f.lo_s[i]), hs_i = _mm_set1_ps(f.hi_s[i]);
+  const __m128 lp_i = _mm_set1_ps(f.lo_p[i]), hp_i = _mm_set1_ps(f.hi_p[i]);
+  const __m128 lq_i = _mm_set1_ps(f.lo_q[i]), hq_i = _mm_set1_ps(f.hi_q[i]);
+  for (int j = i + 1; j < n; j += kLanes) {
+    __m128 m = _mm_cmple_ps(_mm_loadu_ps(f.lo_s + j), hs_i);
+    m = _mm_and_ps(m, _mm_cmple_ps(_mm_loadu_ps(f.lo_q + j), hq_i));
+    m = _mm_and_ps(m, _mm_cmple_ps(lq_i, _mm_loadu_ps(f.hi_q + j)));
+    m = _mm_and_ps(m, _mm_cmple_ps(_mm_loadu_ps(f.lo_p + j), hp_i));
+    m = _mm_and_ps(m, _mm_cmple_ps(lp_i, _mm_loadu_ps(f.hi_p + j)));
+    m = _mm_and_ps(m, _mm_cmple_ps(ls_i, _mm_loadu_ps(f.hi_s + j)));
+    for (unsigned bits = static_cast<unsigned>(_mm_movemask_ps(m)); bits != 0; bits &= bits - 1) {
+      hits[count++] = j + std::countr_zero(bits);
+    }
+    if (f.lo_s[j + kLanes - 1] > f.hi_s[i]) break;
+  }
+#else
+  constexpr int kLanes = 4;
+  for (int j = i + 1; j < n; j += kLanes) {
+    for (int k = j; k < j + kLanes; ++k) {
+      if (f.lo_s[k] <= f.hi_s[i] && f.lo_q[k] <= f.hi_q[i] && f.lo_q[i] <= f.hi_q[k] &&
+          f.lo_p[k] <= f.hi_p[i] && f.lo_p[i] <= f.hi_p[k] && f.lo_s[i] <= f.hi_s[k]) {
+        hits[count++] = k;
+      }
+    }
+    if (f.lo_s[j + kLanes - 1] > f.hi_s[i]) break;
+  }
+#endif
+  return count;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define RIGIDTOUCH_SWEEP_AVX2 1
+// ScanPortable eight places at a time
+__attribute__((target("avx2"))) int ScanAvx2(const FloatBounds& f, int i, int n, int* hits) {
+  constexpr int kLanes = 8;
+  int count = 0;
+  const __m256 ls_i = _mm256_set1_ps(f.lo_s[i]), hs_i = _mm256_set1_ps(f.hi_s[i]);
+  const __m256 lp_i = _mm256_set1_ps(f.lo_p[i]), hp_i = _mm256_set1_ps(f.hi_p[i]);
+  const __m256 lq_i = _mm256_set1_ps(f.lo_q[i]), hq_i = _mm256_set1_ps(f.hi_q[i]);
+  for (int j = i + 1; j < n; j += kLanes) {
+    // ordered comparisons: false for a NaN, as <= is
+    __m256 m = _mm256_cmp_ps(_mm256_loadu_ps(f.lo_s + j), hs_i, _CMP_LE_OQ);
+    m = _mm256_and_ps(m, _mm256_cmp_ps(_mm256_loadu_ps(f.lo_q + j), hq_i, _CMP_LE_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(lq_i, _mm256_loadu_ps(f.hi_q + j), _CMP_LE_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(_mm256_loadu_ps(f.lo_p + j), hp_i, _CMP_LE_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(lp_i, _mm256_loadu_ps(f.hi_p + j), _CMP_LE_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(ls_i, _mm256_loadu_ps(f.hi_s + j), _CMP_LE_OQ));
+    for (unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(m)); bits != 0;
+         bits &= bits - 1) {
+      hits[count++] = j + std::countr_zero(bits);
+    }
+    if (f.lo_s[j + kLanes - 1] > f.hi_s[i]) break;
+  }
+  return count;
+}
+#endif
 
 }  // namespace
 
@@ -87,8 +158,14 @@ void Broadphase::Reserve(const Model& model, int pair_capacity) {
   axis = 0;
   for (auto* bound : {&lo_s, &hi_s, &lo_p, &hi_p, &lo_q, &hi_q}) bound->assign(order.size(), 0.0);
   for (auto* bound : {&flo_s, &fhi_s, &flo_p, &fhi_p, &flo_q, &fhi_q}) {
-    bound->assign(order.size() + kLanes - 1, std::numeric_limits<float>::quiet_NaN());
+    bound->assign(order.size() + kMaxLanes - 1, std::numeric_limits<float>::quiet_NaN());
   }
+  hits.assign(order.size(), 0);
+#if defined(RIGIDTOUCH_SWEEP_AVX2)
+  wide = __builtin_cpu_supports("avx2") != 0;
+#else
+  wide = false;
+#endif
   pairs.assign(pair_capacity, {-1, -1});
   npair = 0;
   dropped = 0;
@@ -207,11 +284,11 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
   }
   // sweep. The pairs are those of the plain sweep (for each place i, the places j > i in order
   // whose boxes overlap i's, then the planes), which the float bounds find faster: a block of
-  // kLanes places is tested at once against i's float box, which encloses its double box, so the
-  // float test passes every pair the double test passes; the double test then decides each pair
-  // the float test let through, in order. The scan stops after the block where a float lower
-  // bound exceeds i's float upper bound: the double sweep has stopped by then, and the places
-  // past its stop within the block fail the double test (their lower bounds are larger still).
+  // places is tested at once against i's float box, which encloses its double box, so the float
+  // test passes every pair the double test passes; the double test then decides each pair the
+  // float test let through, in order. The scan stops after the block where a float lower bound
+  // exceeds i's float upper bound: the double sweep has stopped by then, and the places past its
+  // stop within the block fail the double test (their lower bounds are larger still).
   const Broadphase::Filter* filters = bp.filters.data();
   float *flo_s = bp.flo_s.data(), *fhi_s = bp.fhi_s.data(), *flo_p = bp.flo_p.data(),
         *fhi_p = bp.fhi_p.data(), *flo_q = bp.flo_q.data(), *fhi_q = bp.fhi_q.data();
@@ -223,45 +300,23 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
     flo_q[i] = FloatBelow(lo_q[i]);
     fhi_q[i] = FloatAbove(hi_q[i]);
   }
-  // the double test of places i < j (the plain sweep's), and the pair if it passes
-  auto test = [&](int i, int j) {
-    if (lo_q[i] <= hi_q[j] && lo_q[j] <= hi_q[i] && lo_p[i] <= hi_p[j] && lo_p[j] <= hi_p[i] &&
-        lo_s[i] <= hi_s[j] && lo_s[j] <= hi_s[i] &&
-        CanCollide(filters[order[i]], filters[order[j]])) {
-      add(order[i], order[j]);
-    }
-  };
+  const FloatBounds fb{flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q};
+  int* hits = bp.hits.data();
   for (int i = 0; i < n; ++i) {
     const int a = order[i];
-#if defined(__SSE2__)
-    const __m128 ls_i = _mm_set1_ps(flo_s[i]), hs_i = _mm_set1_ps(fhi_s[i]);
-    const __m128 lp_i = _mm_set1_ps(flo_p[i]), hp_i = _mm_set1_ps(fhi_p[i]);
-    const __m128 lq_i = _mm_set1_ps(flo_q[i]), hq_i = _mm_set1_ps(fhi_q[i]);
-    for (int j = i + 1; j < n; j += kLanes) {
-      __m128 m = _mm_cmple_ps(_mm_loadu_ps(flo_s + j), hs_i);
-      m = _mm_and_ps(m, _mm_cmple_ps(_mm_loadu_ps(flo_q + j), hq_i));
-      m = _mm_and_ps(m, _mm_cmple_ps(lq_i, _mm_loadu_ps(fhi_q + j)));
-      m = _mm_and_ps(m, _mm_cmple_ps(_mm_loadu_ps(flo_p + j), hp_i));
-      m = _mm_and_ps(m, _mm_cmple_ps(lp_i, _mm_loadu_ps(fhi_p + j)));
-      m = _mm_and_ps(m, _mm_cmple_ps(ls_i, _mm_loadu_ps(fhi_s + j)));
-      // the padding past n is NaN: its lanes never pass
-      for (unsigned bits = static_cast<unsigned>(_mm_movemask_ps(m)); bits != 0; bits &= bits - 1) {
-        test(i, j + std::countr_zero(bits));
-      }
-      if (flo_s[j + kLanes - 1] > fhi_s[i]) break;
-    }
+#if defined(RIGIDTOUCH_SWEEP_AVX2)
+    const int nhit = bp.wide ? ScanAvx2(fb, i, n, hits) : ScanPortable(fb, i, n, hits);
 #else
-    for (int j = i + 1; j < n; j += kLanes) {
-      for (int k = 0; k < kLanes; ++k) {
-        const int jk = j + k;
-        if (flo_s[jk] <= fhi_s[i] && flo_q[jk] <= fhi_q[i] && flo_q[i] <= fhi_q[jk] &&
-            flo_p[jk] <= fhi_p[i] && flo_p[i] <= fhi_p[jk] && flo_s[i] <= fhi_s[jk]) {
-          test(i, jk);
-        }
-      }
-      if (flo_s[j + kLanes - 1] > fhi_s[i]) break;
-    }
+    const int nhit = ScanPortable(fb, i, n, hits);
 #endif
+    for (int k = 0; k < nhit; ++k) {
+      // the plain sweep's test of places i < j
+      const int j = hits[k];
+      if (lo_q[i] <= hi_q[j] && lo_q[j] <= hi_q[i] && lo_p[i] <= hi_p[j] && lo_p[j] <= hi_p[i] &&
+          lo_s[i] <= hi_s[j] && lo_s[j] <= hi_s[i] && CanCollide(filters[a], filters[order[j]])) {
+        add(a, order[j]);
+      }
+    }
     for (int p : bp.planes) {
       if (CanCollide(filters[a], filters[p]) && BelowPlane(bp.boxes[a], poses[p])) add(a, p);
     }

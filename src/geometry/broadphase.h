@@ -29,9 +29,11 @@ struct Broadphase {
   // bounds along the sweep axis (lo_s, hi_s) and the two others in cyclic order (_p, _q)
   std::vector<double> lo_s, hi_s, lo_p, hi_p, lo_q, hi_q;  // (non-plane geoms)
   // the same bounds in float, rounded outwards (each float box encloses its double box), for a
-  // four-wide first test of the sweep; NaN past the last geom, so that a block read there
+  // wide first test of the sweep; NaN past the last geom, so that a block read there
   // overlaps nothing
-  std::vector<float> flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q;  // (non-plane geoms + 3)
+  std::vector<float> flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q;  // (non-plane geoms + 7)
+  std::vector<int> hits;  // (non-plane geoms) the places whose float boxes overlap one place's
+  bool wide = false;      // the float test runs eight places at once (AVX2, from the CPU)
   // each geom's collision filter from the model (Reserve), read for every candidate pair
   struct Filter {
     int body = -1, contype = 0, conaffinity = 0;
