@@ -49,23 +49,13 @@ bool BelowPlane(const Aabb& box, const GeomPose& plane) {
   return n.dot(c - plane.p_W) - n.cwiseAbs().dot(h) <= 0.0;
 }
 
-// a float at most x, at most about 2^-22 |x| + 2^-140 below it (FloatBelow), and a float at least x
-// (FloatAbove); NaN stays NaN. Moving x down by that much before rounding to the nearest float
-// keeps the result below x: a rounding moves it by at most 2^-24 of its size in float's normal
-// range and by 2^-150 in its subnormal range, and the double subtraction rounds by far less.
-// Beyond 2^127 the bound is the largest float or an infinity, without the conversion (undefined
-// out of float's range); the branch is taken only by such huge or non-finite bounds.
-float FloatBelow(double x) {
-  constexpr double kLargest = 0x1p127;
-  if (!(std::abs(x) <= kLargest)) {
-    if (x > 0.0) return std::numeric_limits<float>::max();
-    return x < 0.0 ? -std::numeric_limits<float>::infinity()
-                   : std::numeric_limits<float>::quiet_NaN();
-  }
-  return static_cast<float>(x - (std::abs(x) * 0x1p-22 + 0x1p-140));
-}
-float FloatAbove(double x) {
-  return -FloatBelow(-x);
+// x as a float: the nearest, or the largest float of x's sign beyond float's range (where the
+// conversion would be undefined); NaN stays NaN. The map never decreases as x grows, so a <= b
+// gives FloatOf(a) <= FloatOf(b) (exactly what the float test needs to pass every pair the
+// double test passes), and FloatOf(a) > FloatOf(b) gives a > b (what stopping the scan needs).
+float FloatOf(double x) {
+  constexpr double kMax = std::numeric_limits<float>::max();
+  return static_cast<float>(std::clamp(x, -kMax, kMax));
 }
 
 // places a float block of the sweep tests at once: 4 with SSE2, 8 with AVX2 (chosen at run time:
@@ -283,22 +273,23 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
     hi_q[j] = q1;
   }
   // sweep. The pairs are those of the plain sweep (for each place i, the places j > i in order
-  // whose boxes overlap i's, then the planes), which the float bounds find faster: a block of
-  // places is tested at once against i's float box, which encloses its double box, so the float
-  // test passes every pair the double test passes; the double test then decides each pair the
-  // float test let through, in order. The scan stops after the block where a float lower bound
-  // exceeds i's float upper bound: the double sweep has stopped by then, and the places past its
-  // stop within the block fail the double test (their lower bounds are larger still).
+  // whose double boxes overlap i's, then the planes), which float copies of the bounds find
+  // faster: a block of places is tested at once against i's float box. Every bound goes through
+  // the same non-decreasing FloatOf, so the float test passes every pair the double test passes;
+  // the double test then decides each pair the float test let through, in order. The scan stops
+  // after the block where a float lower bound exceeds i's float upper bound: the double bounds
+  // compare the same way, so the double sweep has stopped by then, and the places past its stop
+  // within the block fail the double test (their lower bounds are larger still).
   const Broadphase::Filter* filters = bp.filters.data();
   float *flo_s = bp.flo_s.data(), *fhi_s = bp.fhi_s.data(), *flo_p = bp.flo_p.data(),
         *fhi_p = bp.fhi_p.data(), *flo_q = bp.flo_q.data(), *fhi_q = bp.fhi_q.data();
   for (int i = 0; i < n; ++i) {
-    flo_s[i] = FloatBelow(lo_s[i]);
-    fhi_s[i] = FloatAbove(hi_s[i]);
-    flo_p[i] = FloatBelow(lo_p[i]);
-    fhi_p[i] = FloatAbove(hi_p[i]);
-    flo_q[i] = FloatBelow(lo_q[i]);
-    fhi_q[i] = FloatAbove(hi_q[i]);
+    flo_s[i] = FloatOf(lo_s[i]);
+    fhi_s[i] = FloatOf(hi_s[i]);
+    flo_p[i] = FloatOf(lo_p[i]);
+    fhi_p[i] = FloatOf(hi_p[i]);
+    flo_q[i] = FloatOf(lo_q[i]);
+    fhi_q[i] = FloatOf(hi_q[i]);
   }
   const FloatBounds fb{flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q};
   int* hits = bp.hits.data();

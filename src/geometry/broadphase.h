@@ -28,9 +28,8 @@ struct Broadphase {
   // the boxes in sweep order, one array per bound (order[i]'s at i), for a compact inner loop:
   // bounds along the sweep axis (lo_s, hi_s) and the two others in cyclic order (_p, _q)
   std::vector<double> lo_s, hi_s, lo_p, hi_p, lo_q, hi_q;  // (non-plane geoms)
-  // the same bounds in float, rounded outwards (each float box encloses its double box), for a
-  // wide first test of the sweep; NaN past the last geom, so that a block read there
-  // overlaps nothing
+  // the same bounds as floats (each rounded to the nearest), for a wide first test of the sweep;
+  // NaN past the last geom, so that a block read there overlaps nothing
   std::vector<float> flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q;  // (non-plane geoms + 7)
   std::vector<int> hits;  // (non-plane geoms) the places whose float boxes overlap one place's
   bool wide = false;      // the float test runs eight places at once (AVX2, from the CPU)

@@ -380,6 +380,16 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
         Vec3(-0.2 - 0.06 * k, 0.0, 0.3),
         Quat(Eigen::AngleAxisd(0.7, Vec3(1.0, 2.0, 3.0).normalized())).toRotationMatrix()});
   }
+  // two small spheres that touch exactly: the upper x bound of one is the lower of the other
+  // (-0.1171875, binary fractions throughout), which only a test by <= pairs
+  const int touching = static_cast<int>(m.geoms.size());
+  for (int k = 0; k < 2; ++k) {
+    GeomModel ball = m.geoms[touching - 3];  // the tool
+    ball.body = static_cast<int>(m.geoms.size());
+    ball.size = Vec3::Constant(0.0078125);
+    m.geoms.push_back(ball);
+    poses.push_back(GeomPose{Vec3(-0.125 + 0.015625 * k, 0.0, 0.25), Mat3::Identity()});
+  }
   Broadphase wide, narrow;
   wide.Reserve(m, 1 << 16);
   narrow.Reserve(m, 1 << 16);
@@ -427,6 +437,9 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
     ASSERT_EQ(wide.dropped, 0);
     ASSERT_EQ(found, expected) << "tick " << tick;
     ASSERT_EQ(found4, expected) << "tick " << tick;
+    EXPECT_NE(std::find(expected.begin(), expected.end(), std::pair(touching, touching + 1)),
+              expected.end())
+        << "tick " << tick;
     if (!brute_force_agrees) {  // the case is exercised: the plain sweep pairs the two
       const std::pair<int, int> both[] = {{huge, huge + 1}, {huge + 1, huge}};
       EXPECT_TRUE(std::find_first_of(expected.begin(), expected.end(), both, both + 2) !=
