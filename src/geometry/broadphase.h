@@ -1,7 +1,9 @@
 // Broad phase: which geom pairs may touch this tick. Sweep and prune over axis-aligned boxes along
 // the world axis over which they spread most (as MuJoCo sweeps along its principal axis), with an
-// insertion sort that is linear when the order barely changes between ticks. Planes are infinite
-// and are paired with every geom that may collide with them.
+// insertion sort that is linear when the order barely changes between ticks. The sweep tests
+// float copies of the bounds several geoms at a time (SIMD) and the double bounds only for the
+// candidates they let through, which gives the plain double sweep's pairs in its order. Planes are
+// infinite and are paired with every geom that may collide with them.
 #pragma once
 
 #include <span>
