@@ -178,26 +178,84 @@ bool CanCollide(const GeomModel& a, const GeomModel& b) {
   return (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0;
 }
 
-void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
-  const int capacity = static_cast<int>(bp.pairs.size());
-  bp.npair = 0;
-  bp.dropped = 0;
-  // body pairs the scene excludes (MJCF <contact><exclude>), sorted; empty in most scenes
+namespace {
+
+// appends candidate pair (a, b) unless the scene excludes its bodies (`excluded`: MJCF
+// <contact><exclude>, sorted; empty in most scenes); beyond `capacity` pairs it counts the pair as
+// dropped
+void AddPair(const std::vector<std::pair<int, int>>& excluded, int capacity, Broadphase& bp, int a,
+             int b) {
+  if (!excluded.empty()) {
+    const int ba = bp.filters[a].body, bb = bp.filters[b].body;
+    if (std::binary_search(excluded.begin(), excluded.end(),
+                           std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)))) {
+      return;
+    }
+  }
+  if (bp.npair < capacity) {
+    bp.pairs[bp.npair++] = {a, b};
+  } else {
+    ++bp.dropped;
+  }
+}
+
+// the pairs of the boxes in sweep order (bp.order and the bounds at their places): those of the
+// plain sweep (for each place i, the places j > i in order whose double boxes overlap i's, then
+// the planes), which float copies of the bounds find faster: a block of places is tested at once
+// against i's float box. Every bound goes through the same non-decreasing FloatOf, so the float
+// test passes every pair the double test passes; the double test then decides each pair the
+// float test let through, in order. The scan stops after the block where a float lower bound
+// exceeds i's float upper bound: the double bounds compare the same way, so the double sweep has
+// stopped by then, and the places past its stop within the block fail the double test (their
+// lower bounds are larger still).
+void Sweep(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
+  const int n = static_cast<int>(bp.order.size());
+  const int* order = bp.order.data();
+  const double *lo_s = bp.lo_s.data(), *hi_s = bp.hi_s.data(), *lo_p = bp.lo_p.data(),
+               *hi_p = bp.hi_p.data(), *lo_q = bp.lo_q.data(), *hi_q = bp.hi_q.data();
+  const Broadphase::Filter* filters = bp.filters.data();
   const std::vector<std::pair<int, int>>& excluded = model.excluded_body_pairs;
-  auto add = [&bp, capacity, &excluded](int a, int b) {
-    if (!excluded.empty()) {
-      const int ba = bp.filters[a].body, bb = bp.filters[b].body;
-      if (std::binary_search(excluded.begin(), excluded.end(),
-                             std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)))) {
-        return;
+  const int capacity = static_cast<int>(bp.pairs.size());
+  float *flo_s = bp.flo_s.data(), *fhi_s = bp.fhi_s.data(), *flo_p = bp.flo_p.data(),
+        *fhi_p = bp.fhi_p.data(), *flo_q = bp.flo_q.data(), *fhi_q = bp.fhi_q.data();
+  for (int i = 0; i < n; ++i) {
+    flo_s[i] = FloatOf(lo_s[i]);
+    fhi_s[i] = FloatOf(hi_s[i]);
+    flo_p[i] = FloatOf(lo_p[i]);
+    fhi_p[i] = FloatOf(hi_p[i]);
+    flo_q[i] = FloatOf(lo_q[i]);
+    fhi_q[i] = FloatOf(hi_q[i]);
+  }
+  const FloatBounds fb{flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q};
+  int* hits = bp.hits.data();
+  for (int i = 0; i < n; ++i) {
+    const int a = order[i];
+#if defined(RIGIDTOUCH_SWEEP_AVX2)
+    const int nhit = bp.wide ? ScanAvx2(fb, i, n, hits) : ScanPortable(fb, i, n, hits);
+#else
+    const int nhit = ScanPortable(fb, i, n, hits);
+#endif
+    for (int k = 0; k < nhit; ++k) {
+      // the plain sweep's test of places i < j
+      const int j = hits[k];
+      if (lo_q[i] <= hi_q[j] && lo_q[j] <= hi_q[i] && lo_p[i] <= hi_p[j] && lo_p[j] <= hi_p[i] &&
+          lo_s[i] <= hi_s[j] && lo_s[j] <= hi_s[i] && CanCollide(filters[a], filters[order[j]])) {
+        AddPair(excluded, capacity, bp, a, order[j]);
       }
     }
-    if (bp.npair < capacity) {
-      bp.pairs[bp.npair++] = {a, b};
-    } else {
-      ++bp.dropped;
+    for (int p : bp.planes) {
+      if (CanCollide(filters[a], filters[p]) && BelowPlane(bp.boxes[a], poses[p])) {
+        AddPair(excluded, capacity, bp, a, p);
+      }
     }
-  };
+  }
+}
+
+}  // namespace
+
+void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
+  bp.npair = 0;
+  bp.dropped = 0;
   const int n = static_cast<int>(bp.order.size());
   int* order = bp.order.data();
   double *lo_s = bp.lo_s.data(), *hi_s = bp.hi_s.data(), *lo_p = bp.lo_p.data(),
@@ -272,46 +330,7 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
     lo_q[j] = q0;
     hi_q[j] = q1;
   }
-  // sweep. The pairs are those of the plain sweep (for each place i, the places j > i in order
-  // whose double boxes overlap i's, then the planes), which float copies of the bounds find
-  // faster: a block of places is tested at once against i's float box. Every bound goes through
-  // the same non-decreasing FloatOf, so the float test passes every pair the double test passes;
-  // the double test then decides each pair the float test let through, in order. The scan stops
-  // after the block where a float lower bound exceeds i's float upper bound: the double bounds
-  // compare the same way, so the double sweep has stopped by then, and the places past its stop
-  // within the block fail the double test (their lower bounds are larger still).
-  const Broadphase::Filter* filters = bp.filters.data();
-  float *flo_s = bp.flo_s.data(), *fhi_s = bp.fhi_s.data(), *flo_p = bp.flo_p.data(),
-        *fhi_p = bp.fhi_p.data(), *flo_q = bp.flo_q.data(), *fhi_q = bp.fhi_q.data();
-  for (int i = 0; i < n; ++i) {
-    flo_s[i] = FloatOf(lo_s[i]);
-    fhi_s[i] = FloatOf(hi_s[i]);
-    flo_p[i] = FloatOf(lo_p[i]);
-    fhi_p[i] = FloatOf(hi_p[i]);
-    flo_q[i] = FloatOf(lo_q[i]);
-    fhi_q[i] = FloatOf(hi_q[i]);
-  }
-  const FloatBounds fb{flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q};
-  int* hits = bp.hits.data();
-  for (int i = 0; i < n; ++i) {
-    const int a = order[i];
-#if defined(RIGIDTOUCH_SWEEP_AVX2)
-    const int nhit = bp.wide ? ScanAvx2(fb, i, n, hits) : ScanPortable(fb, i, n, hits);
-#else
-    const int nhit = ScanPortable(fb, i, n, hits);
-#endif
-    for (int k = 0; k < nhit; ++k) {
-      // the plain sweep's test of places i < j
-      const int j = hits[k];
-      if (lo_q[i] <= hi_q[j] && lo_q[j] <= hi_q[i] && lo_p[i] <= hi_p[j] && lo_p[j] <= hi_p[i] &&
-          lo_s[i] <= hi_s[j] && lo_s[j] <= hi_s[i] && CanCollide(filters[a], filters[order[j]])) {
-        add(a, order[j]);
-      }
-    }
-    for (int p : bp.planes) {
-      if (CanCollide(filters[a], filters[p]) && BelowPlane(bp.boxes[a], poses[p])) add(a, p);
-    }
-  }
+  Sweep(model, poses, bp);
 }
 
 }  // namespace rigidtouch::geometry
