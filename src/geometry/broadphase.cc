@@ -105,7 +105,7 @@ int ScanPortable(const FloatBounds& f, int i, int n, int* hits) {
   return count;
 }
 
-#if defined(__x86_64__) && defined(__GNUC__)
+#if defined(__SSE2__) && defined(__x86_64__) && defined(__GNUC__)
 #define RIGIDTOUCH_SWEEP_AVX2 1
 // ScanPortable eight places at a time
 __attribute__((target("avx2"))) int ScanAvx2(const FloatBounds& f, int i, int n, int* hits) {
