@@ -1,7 +1,9 @@
 // Broad phase: which geom pairs may touch this tick. Sweep and prune over axis-aligned boxes along
 // the world axis over which they spread most (as MuJoCo sweeps along its principal axis), with an
-// insertion sort that is linear when the order barely changes between ticks. Planes are infinite
-// and are paired with every geom that may collide with them.
+// insertion sort that is linear when the order barely changes between ticks. The sweep tests
+// float copies of the bounds several geoms at a time (SIMD) and the double bounds only for the
+// candidates they let through, which gives the plain double sweep's pairs in its order. Planes are
+// infinite and are paired with every geom that may collide with them.
 #pragma once
 
 #include <span>
@@ -28,6 +30,11 @@ struct Broadphase {
   // the boxes in sweep order, one array per bound (order[i]'s at i), for a compact inner loop:
   // bounds along the sweep axis (lo_s, hi_s) and the two others in cyclic order (_p, _q)
   std::vector<double> lo_s, hi_s, lo_p, hi_p, lo_q, hi_q;  // (non-plane geoms)
+  // the same bounds as floats (each rounded to the nearest), for a wide first test of the sweep;
+  // NaN past the last geom, so that a block read there overlaps nothing
+  std::vector<float> flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q;  // (non-plane geoms + 7)
+  std::vector<int> hits;  // (non-plane geoms) the places whose float boxes overlap one place's
+  bool wide = false;      // the float test runs eight places at once (AVX2, from the CPU)
   // each geom's collision filter from the model (Reserve), read for every candidate pair
   struct Filter {
     int body = -1, contype = 0, conaffinity = 0;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -219,6 +220,246 @@ TEST(BroadphaseTest, SweepsAlongTheAxisOfWidestSpread) {
     total += bp.npair;
   }
   EXPECT_GT(total, 10);  // dense enough to test something
+}
+
+// the sweep as it was before the float blocks (one place at a time, double bounds only), kept
+// here as the reference for the order of the pairs: the same bounds, the same insertion sort
+// carried over the ticks, the same axis rule, the same pair order
+class ReferenceSweep {
+ public:
+  explicit ReferenceSweep(const Model& m) {
+    for (int g = 0; g < static_cast<int>(m.geoms.size()); ++g) {
+      (m.geoms[g].type == GeomType::kPlane ? planes_ : order_).push_back(g);
+    }
+  }
+
+  std::vector<std::pair<int, int>> Find(const Model& m, const std::vector<GeomPose>& poses) {
+    const int n = static_cast<int>(order_.size());
+    std::vector<Aabb> boxes(m.geoms.size());
+    Vec3 least = Vec3::Constant(kInf), most = -least;
+    for (int g : order_) {
+      const GeomModel& geom = m.geoms[g];
+      Vec3 half;
+      switch (geom.type) {
+        case GeomType::kSphere:
+          half.setConstant(geom.size.x());
+          break;
+        case GeomType::kBox:
+          half = poses[g].R_WG.cwiseAbs() * geom.size;
+          break;
+        case GeomType::kCapsule:
+          half = poses[g].R_WG.col(2).cwiseAbs() * geom.size.y() + Vec3::Constant(geom.size.x());
+          break;
+        default:
+          half.setConstant(geom.rbound_m);
+          break;
+      }
+      boxes[g] = Aabb{poses[g].p_W - half, poses[g].p_W + half};
+      least = least.cwiseMin(boxes[g].lo);
+      most = most.cwiseMax(boxes[g].lo);
+    }
+    const Vec3 spread = most - least;
+    int widest = 0;
+    for (int a = 1; a < 3; ++a) {
+      if (spread[a] > spread[widest]) widest = a;
+    }
+    auto key = [&boxes, this](int g) {
+      const double l = boxes[g].lo[axis_];
+      return std::isnan(l) ? kInf : l;
+    };
+    if (widest != axis_ && spread[widest] > 2.0 * spread[axis_]) {
+      axis_ = widest;
+      std::sort(order_.begin(), order_.end(), [&key](int g1, int g2) {
+        return key(g1) < key(g2) || (key(g1) == key(g2) && g1 < g2);
+      });
+    }
+    for (int i = 1; i < n; ++i) {  // stable insertion sort from last tick's order
+      const int g = order_[i];
+      int j = i;
+      for (; j > 0 && key(order_[j - 1]) > key(g); --j) order_[j] = order_[j - 1];
+      order_[j] = g;
+    }
+    std::vector<std::pair<int, int>> pairs;
+    auto add = [&m, &pairs](int a, int b) {
+      const int ba = m.geoms[a].body, bb = m.geoms[b].body;
+      if (!std::binary_search(m.excluded_body_pairs.begin(), m.excluded_body_pairs.end(),
+                              std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)))) {
+        pairs.emplace_back(a, b);
+      }
+    };
+    const int as = axis_, ap = (as + 1) % 3, aq = (as + 2) % 3;
+    for (int i = 0; i < n; ++i) {
+      const int a = order_[i];
+      const Aabb& A = boxes[a];
+      for (int j = i + 1; j < n; ++j) {
+        const Aabb& B = boxes[order_[j]];
+        if (key(order_[j]) > A.hi[as]) break;
+        if (A.lo[aq] <= B.hi[aq] && B.lo[aq] <= A.hi[aq] && A.lo[ap] <= B.hi[ap] &&
+            B.lo[ap] <= A.hi[ap] && key(a) <= B.hi[as] && key(order_[j]) <= A.hi[as] &&
+            CanCollide(m.geoms[a], m.geoms[order_[j]])) {
+          add(a, order_[j]);
+        }
+      }
+      for (int p : planes_) {
+        const Vec3 n_W = poses[p].R_WG.col(2);
+        const Vec3 c = 0.5 * (A.lo + A.hi), h = 0.5 * (A.hi - A.lo);
+        if (CanCollide(m.geoms[a], m.geoms[p]) &&
+            n_W.dot(c - poses[p].p_W) - n_W.cwiseAbs().dot(h) <= 0.0) {
+          add(a, p);
+        }
+      }
+    }
+    return pairs;
+  }
+
+ private:
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<int> order_, planes_;
+  int axis_ = 0;
+};
+
+// a settled-looking pile: nx x ny x nz boxes of half-size 25 mm, 51 mm apart, each on its own
+// body and turned by up to 0.02 rad, a floor, a 5 mm tool sphere above it, and two excluded body
+// pairs
+Model PileModel(int nx, int ny, int nz, std::vector<GeomPose>& poses, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> tilt(-0.02, 0.02);
+  Model m;
+  GeomModel floor;
+  floor.type = GeomType::kPlane;
+  floor.contype = floor.conaffinity = 1;
+  m.geoms.push_back(floor);
+  poses.assign(1, GeomPose{Vec3::Zero(), Mat3::Identity()});
+  for (int z = 0; z < nz; ++z) {
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x) {
+        GeomModel box;
+        box.type = GeomType::kBox;
+        box.body = static_cast<int>(m.geoms.size());
+        box.size = Vec3::Constant(0.025);
+        box.rbound_m = box.size.norm();
+        box.contype = box.conaffinity = 1;
+        m.geoms.push_back(box);
+        const Vec3 axis = Vec3(tilt(rng), tilt(rng), tilt(rng));
+        poses.push_back(
+            GeomPose{Vec3(0.051 * x, 0.051 * y, 0.025 + 0.0501 * z),
+                     Quat(Eigen::AngleAxisd(axis.norm(), axis.normalized())).toRotationMatrix()});
+      }
+    }
+  }
+  GeomModel tool;
+  tool.type = GeomType::kSphere;
+  tool.body = static_cast<int>(m.geoms.size());
+  tool.size = Vec3::Constant(0.005);
+  tool.rbound_m = 0.005;
+  tool.contype = tool.conaffinity = 1;
+  m.geoms.push_back(tool);
+  poses.push_back(GeomPose{Vec3(0.051, 0.051, 0.0501 * nz + 0.004), Mat3::Identity()});
+  m.excluded_body_pairs = {{1, 2}, {1, 1 + nx}};
+  return m;
+}
+
+// A pile of 360 boxes over 80 ticks: jitter that reorders the sweep, a column pushed sideways, a
+// stretch along z that moves the sweep to that axis, a geom whose pose turns NaN, a huge geom
+// (bounds of +-inf), and one at infinity (a NaN lower bound below an infinite upper one). Every
+// tick FindPairs gives exactly the pair list of the plain double sweep (ReferenceSweep, same
+// order) with the eight-wide and the four-wide float blocks, and the brute-force pair set
+// whenever no bound is NaN beside an infinite one (there the plain sweep's +inf for a NaN lower
+// bound pairs the geom at infinity with the huge one, which brute force does not).
+TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
+  std::mt19937_64 rng(19);
+  std::vector<GeomPose> poses;
+  Model m = PileModel(6, 6, 10, poses, rng);
+  const int nbox = 360, huge = nbox + 2;
+  // two more geoms on bodies of their own, parked beside the pile until their ticks
+  for (int k = 0; k < 2; ++k) {
+    GeomModel box = m.geoms[1];
+    box.body = static_cast<int>(m.geoms.size());
+    m.geoms.push_back(box);
+    // turned so that each bound sums three nonzero terms (a size of 1.7e308 then overflows)
+    poses.push_back(GeomPose{
+        Vec3(-0.2 - 0.06 * k, 0.0, 0.3),
+        Quat(Eigen::AngleAxisd(0.7, Vec3(1.0, 2.0, 3.0).normalized())).toRotationMatrix()});
+  }
+  // two small spheres that touch exactly: the upper x bound of one is the lower of the other
+  // (-0.1171875, binary fractions throughout), which only a test by <= pairs
+  const int touching = static_cast<int>(m.geoms.size());
+  for (int k = 0; k < 2; ++k) {
+    GeomModel ball = m.geoms[touching - 3];  // the tool
+    ball.body = static_cast<int>(m.geoms.size());
+    ball.size = Vec3::Constant(0.0078125);
+    m.geoms.push_back(ball);
+    poses.push_back(GeomPose{Vec3(-0.125 + 0.015625 * k, 0.0, 0.25), Mat3::Identity()});
+  }
+  Broadphase wide, narrow;
+  wide.Reserve(m, 1 << 16);
+  narrow.Reserve(m, 1 << 16);
+  narrow.wide = false;
+  ReferenceSweep reference(m);
+  std::normal_distribution<double> jitter(0.0, 1e-4);
+  int total = 0, compared = 0, axis_switches = 0;
+  for (int tick = 0; tick < 80; ++tick) {
+    std::vector<GeomPose> used = poses;
+    for (int g = 1; g <= nbox; ++g) used[g].p_W += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    if (tick >= 20) {  // a column slides by up to 3 mm into its neighbour
+      for (int g = 1; g <= nbox; g += 36) used[g].p_W.x() += 1e-4 * (tick - 20);
+    }
+    if (tick >= 50) {  // stretched along z, three times as tall: the sweep turns to z
+      for (int g = 1; g <= nbox; ++g) used[g].p_W.z() *= 3.0 + 0.01 * (tick - 50);
+    }
+    bool brute_force_agrees = true;
+    if (tick % 7 == 3) used[1 + tick % nbox].p_W = Vec3::Constant(std::nan(""));
+    if (tick % 5 == 1) {
+      m.geoms[huge].size = Vec3::Constant(1.7e308);  // |R| size sums overflow: bounds +-inf
+      used[huge].p_W = Vec3(0.1, 0.1, 0.1);
+    } else {
+      m.geoms[huge].size = Vec3::Constant(0.025);
+    }
+    if (tick % 10 == 6) {  // a huge box at infinity: NaN lower and +inf upper bound on the axis
+      m.geoms[huge].size = Vec3::Constant(1.7e308);
+      used[huge].p_W = Vec3(0.1, 0.1, 0.1);
+      used[huge].p_W[wide.axis] = std::numeric_limits<double>::infinity();
+      used[huge + 1].p_W = Vec3(0.1, 0.1, 0.1);
+      m.geoms[huge + 1].size = Vec3::Constant(1.7e308);
+      brute_force_agrees = false;
+    } else {
+      used[huge + 1].p_W = poses[huge + 1].p_W;
+      m.geoms[huge + 1].size = Vec3::Constant(0.025);
+    }
+    const int axis_before = wide.axis;
+    FindPairs(m, used, wide);
+    FindPairs(m, used, narrow);
+    axis_switches += wide.axis != axis_before ? 1 : 0;
+    const std::vector<std::pair<int, int>> expected = reference.Find(m, used);
+    const std::vector<std::pair<int, int>> found(wide.pairs.begin(),
+                                                 wide.pairs.begin() + wide.npair);
+    const std::vector<std::pair<int, int>> found4(narrow.pairs.begin(),
+                                                  narrow.pairs.begin() + narrow.npair);
+    ASSERT_EQ(wide.dropped, 0);
+    ASSERT_EQ(found, expected) << "tick " << tick;
+    ASSERT_EQ(found4, expected) << "tick " << tick;
+    EXPECT_NE(std::find(expected.begin(), expected.end(), std::pair(touching, touching + 1)),
+              expected.end())
+        << "tick " << tick;
+    if (!brute_force_agrees) {  // the case is exercised: the plain sweep pairs the two
+      const std::pair<int, int> both[] = {{huge, huge + 1}, {huge + 1, huge}};
+      EXPECT_TRUE(std::find_first_of(expected.begin(), expected.end(), both, both + 2) !=
+                  expected.end())
+          << "tick " << tick;
+    } else {
+      std::vector<std::pair<int, int>> brute = BruteForce(m, used);
+      std::erase_if(brute, [&m](const std::pair<int, int>& p) {
+        const int ba = m.geoms[p.first].body, bb = m.geoms[p.second].body;
+        return std::binary_search(m.excluded_body_pairs.begin(), m.excluded_body_pairs.end(),
+                                  std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)));
+      });
+      ASSERT_EQ(Sorted(found), Sorted(brute)) << "tick " << tick;
+      ++compared;
+    }
+    total += wide.npair;
+  }
+  EXPECT_EQ(axis_switches, 1);  // x to z, once
+  EXPECT_EQ(compared, 72);
+  EXPECT_GT(total, 80 * 900);  // a box touches about five others in the pile
 }
 
 // a full pair list keeps the first candidates and counts the rest
