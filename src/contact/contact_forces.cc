@@ -4,6 +4,21 @@
 #include "contact/relative_motion.h"
 
 namespace rigidtouch::contact {
+namespace {
+
+// the friction patch of contact ci: its geom pair's points, consecutive in data.contacts; the
+// index of the first
+int PatchStart(const Data& data, int ci) {
+  const Contact& c = data.contacts[ci];
+  int patch = ci;
+  while (patch > 0 && data.contacts[patch - 1].geom_a == c.geom_a &&
+         data.contacts[patch - 1].geom_b == c.geom_b) {
+    --patch;
+  }
+  return patch;
+}
+
+}  // namespace
 
 void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::VelocityScratch& forces) {
   Contact& c = data.contacts[ci];
@@ -34,6 +49,11 @@ void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::Veloci
 
 bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
                       dynamics::ImplicitContact& ic) {
+  return LinearizeContact(model, data, scratch, ci, PatchStart(data, ci), ic);
+}
+
+bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
+                      int patch, dynamics::ImplicitContact& ic) {
   Contact& c = data.contacts[ci];
   const PenaltyLaw& law = scratch.laws[ci];
   const double h = model.timestep_s;
@@ -47,8 +67,8 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
   }
   // backward Euler: depth after the step is d - h u_n+, so the force is k d - (h k + b) u_n+;
   // every penetrating point enters the solve, and SolveGroupVelocities drops the contacts that
-  // would pull at the new velocities (a trial on the old velocities would react to velocity noise)
-  ic = dynamics::ImplicitContact{};
+  // would pull at the new velocities (a trial on the old velocities would react to velocity noise).
+  // Every field is written, so no default object is built first.
   ic.body_a = c.body_a;
   ic.body_b = c.body_b;
   ic.n_W = c.n_W;
@@ -58,12 +78,10 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
   ic.contact = ci;
   ic.mu_static = law.mu_static;
   ic.mu_kinetic = law.mu_kinetic;
-  // the friction patch: the geom pair's points, consecutive in data.contacts
-  ic.patch = ci;
-  while (ic.patch > 0 && data.contacts[ic.patch - 1].geom_a == c.geom_a &&
-         data.contacts[ic.patch - 1].geom_b == c.geom_b) {
-    --ic.patch;
-  }
+  ic.patch = patch;
+  ic.active = true;
+  ic.normal_force_N = 0.0;
+  ic.friction_force_W.setZero();
   // stick or slip was decided for the whole geom pair in stage 3 (DecidePatchFriction) from the
   // anchor springs; a sticking patch whose forces at the new velocities leave the friction cone
   // slips too (SolveGroupVelocities, EnforceFrictionCones), so sliding starts Coulomb-bounded
@@ -81,7 +99,9 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
     const Vec3 ft =
         stretch > 0.0 ? Vec3(-s * (law.mu_kinetic * ic.phi_n_N / stretch)) : Vec3::Zero();
     SlideAnchor(data, c, s, ft, law.kt_N_per_m);
+    ic.stick = false;
     ic.phi_t_W = ft;
+    ic.c_t_Ns_per_m = 0.0;
   }
   return true;
 }
@@ -103,10 +123,18 @@ void ContactForces(const Model& model, Data& data, const ContactScratch& scratch
     if (too_large(g)) {
       data.Warn(Warning::kGroupTooLarge);
     } else {
+      // a geom pair's points are consecutive in data.contacts and in the same group, so its
+      // patch (first point) is known from the previous point instead of searched for again
+      int patch = -1;
       for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
         const int ci = G.contacts[k];
+        const Contact& c = data.contacts[ci];
+        const bool same_pair = patch >= 0 && G.contacts[k - 1] == ci - 1 &&
+                               data.contacts[ci - 1].geom_a == c.geom_a &&
+                               data.contacts[ci - 1].geom_b == c.geom_b;
+        if (!same_pair) patch = PatchStart(data, ci);
         if (scratch.laws[ci].implicit &&
-            LinearizeContact(model, data, scratch, ci, forces.implicit[n])) {
+            LinearizeContact(model, data, scratch, ci, patch, forces.implicit[n])) {
           ++n;
         }
       }

@@ -20,6 +20,10 @@ void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::Veloci
 /// slipping one (mu_k k d against the anchor's stretch), with its patch's friction cone.
 bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
                       dynamics::ImplicitContact& ic);
+/// The same, with the index of the first point of ci's geom pair in data.contacts (its friction
+/// patch) already known.
+bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
+                      int patch, dynamics::ImplicitContact& ic);
 
 /// Stage 4 over data.contacts: the explicit contacts' forces, and each group's implicit contacts
 /// in forces.implicit (group g's at [implicit_start[g], implicit_start[g + 1])). A group with more

@@ -1,14 +1,6 @@
 #include "contact/friction.h"
 
-#include "dynamics/kinematics.h"
-
 namespace rigidtouch::contact {
-
-Vec3 AnchorDisplacement(const Data& data, const Contact& c) {
-  const Vec3 d = dynamics::WorldPoint(data, c.body_a, c.anchor_A) -
-                 dynamics::WorldPoint(data, c.body_b, c.anchor_B);
-  return d - d.dot(c.n_W) * c.n_W;
-}
 
 void SlideAnchor(const Data& data, Contact& c, const Vec3& s, const Vec3& f_t, double kt) {
   if (kt <= 0.0) return;

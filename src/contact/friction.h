@@ -7,12 +7,18 @@
 #include <span>
 
 #include "contact/penalty.h"
+#include "dynamics/kinematics.h"
 #include "rigidtouch/data.h"
 
 namespace rigidtouch::contact {
 
 /// Tangential stretch of the stick anchor: a's anchor relative to b's, in the tangent plane  [m].
-Vec3 AnchorDisplacement(const Data& data, const Contact& c);
+/// (Inline: it is evaluated for every scene contact every tick.)
+[[gnu::always_inline]] inline Vec3 AnchorDisplacement(const Data& data, const Contact& c) {
+  const Vec3 d = dynamics::WorldPoint(data, c.body_a, c.anchor_A) -
+                 dynamics::WorldPoint(data, c.body_b, c.anchor_B);
+  return d - d.dot(c.n_W) * c.n_W;
+}
 
 /// Moves b's anchor so that the anchor spring alone, of stiffness kt, would exert `f_t` on a (the
 /// slip limit); `s` is the anchor's stretch before the move.

@@ -379,17 +379,19 @@ int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) 
     int end = begin + 1;
     while (first.patch >= 0 && end < nc && contacts[end].patch == first.patch) ++end;
     double fn = 0.0, ft = 0.0;  // the active contacts' normal force, tangential forces' norms
-    Vec3 resultant = Vec3::Zero();
     for (int k = begin; k < end; ++k) {
       const ImplicitContact& c = contacts[k];
       if (!c.active) continue;
       fn += std::max(0.0, c.normal_force_N);
       ft += c.friction_force_W.norm();
-      resultant += c.friction_force_W;
     }
     if (first.stick && ft > first.mu_static * fn) {
       // slip: the kinetic friction of each point along its trial force (the resultant's
-      // direction for a point without one)
+      // direction for a point without one); the resultant is summed only here, where it is used
+      Vec3 resultant = Vec3::Zero();
+      for (int k = begin; k < end; ++k) {
+        if (contacts[k].active) resultant += contacts[k].friction_force_W;
+      }
       const double rn = resultant.norm();
       const Vec3 fallback = rn > 0.0 ? Vec3(resultant / rn) : Vec3::Zero();
       for (int k = begin; k < end; ++k) {

@@ -3,6 +3,7 @@
 // mu_k N is scaled back, and nothing changes inside the cone.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include "dynamics/group_assembly.h"
@@ -58,6 +59,26 @@ TEST(FrictionConeTest, AStickingPatchBeyondItsConeSlipsAlongItsTrialForce) {
     EXPECT_NEAR(c.phi_t_W.x(), -0.4 * c.phi_n_N, 1e-15);
     EXPECT_EQ(c.phi_t_W.y(), 0.0);
   }
+}
+
+TEST(FrictionConeTest, APointWithoutTrialForceSlipsAlongTheActivePointsResultant) {
+  // active trial forces (-10, 0, 0) and (0, -10, 0) at points 0 and 1, none at point 2, and a
+  // dropped point 3 whose stale (0, 30, 0) must not count: the resultant is (-10, -10, 0), so
+  // point 2's kinetic friction mu_k k d points along (-1, -1, 0) / sqrt(2)
+  std::vector<ImplicitContact> cs = Face(0, true, 10.0, 1.0);
+  cs[0].friction_force_W = Vec3(-10.0, 0.0, 0.0);
+  cs[1].friction_force_W = Vec3(0.0, -10.0, 0.0);
+  cs[2].friction_force_W = Vec3::Zero();
+  cs[3].active = false;
+  cs[3].friction_force_W = Vec3(0.0, 30.0, 0.0);
+  EXPECT_EQ(EnforceFrictionCones(cs, false), kFrictionSlipped);
+  const double f = 0.4 * cs[2].phi_n_N / std::sqrt(2.0);
+  EXPECT_NEAR(cs[2].phi_t_W.x(), -f, 1e-15);
+  EXPECT_NEAR(cs[2].phi_t_W.y(), -f, 1e-15);
+  EXPECT_EQ(cs[2].phi_t_W.z(), 0.0);
+  // the points with a trial force slip along their own
+  EXPECT_NEAR(cs[0].phi_t_W.x(), -0.4 * cs[0].phi_n_N, 1e-15);
+  EXPECT_NEAR(cs[1].phi_t_W.y(), -0.4 * cs[1].phi_n_N, 1e-15);
 }
 
 TEST(FrictionConeTest, ASlippingPatchIsKeptWithinMuKineticTimesItsNormalForce) {
