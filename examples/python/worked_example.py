@@ -22,8 +22,9 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("--out-dir", default=tempfile.mkdtemp(prefix="rigidtouch-example-"))
-    out_dir = parser.parse_args().out_dir
+    parser.add_argument("--out-dir", help="default: a new temporary directory")
+    # made only when no folder is given (a default of mkdtemp() would make one on every run)
+    out_dir = parser.parse_args().out_dir or tempfile.mkdtemp(prefix="rigidtouch-example-")
     os.makedirs(out_dir, exist_ok=True)
 
     # %% 1. The engine, one tick at a time: a tool pushed onto a stack of boxes with 2 N

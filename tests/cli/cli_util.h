@@ -12,6 +12,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <vector>
 
 namespace rigidtouch::test {
 
@@ -21,12 +23,21 @@ struct CliResult {
   std::string err;
 };
 
-/// A fresh folder for one test's files.
+/// A fresh folder for one test's files, removed when the test process ends.
 inline std::filesystem::path TempDir(const std::string& name) {
+  struct Made {
+    std::vector<std::filesystem::path> dirs;
+    ~Made() {
+      std::error_code ignored;
+      for (const auto& dir : dirs) std::filesystem::remove_all(dir, ignored);
+    }
+  };
+  static Made made;
   const auto dir = std::filesystem::temp_directory_path() /
                    ("rigidtouch_cli_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  made.dirs.push_back(dir);
   return dir;
 }
 

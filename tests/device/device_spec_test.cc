@@ -64,9 +64,11 @@ TEST(DeviceSpecTest, AFileGivesEveryField) {
   // without a name, the file's stem
   std::string unnamed = kFull;
   unnamed.replace(unnamed.find(R"("name": "lab", )"), 15, "");
-  EXPECT_EQ(ParseDeviceSpec(Write("mydev.json", unnamed)).limits.name,
+  const std::string unnamed_path = Write("mydev.json", unnamed);
+  EXPECT_EQ(ParseDeviceSpec(unnamed_path).limits.name,
             "rigidtouch_spec_" + std::to_string(::getpid()) + "_mydev");
   std::filesystem::remove(path);
+  std::filesystem::remove(unnamed_path);
 }
 
 TEST(DeviceSpecTest, BadSpecsNameTheField) {

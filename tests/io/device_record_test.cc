@@ -13,6 +13,7 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <system_error>
 #include <vector>
 
 namespace rigidtouch::io {
@@ -20,11 +21,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// this process's scratch folder, removed when the tests end
 fs::path Dir() {
-  const fs::path d =
-      fs::temp_directory_path() / ("rigidtouch_record_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
+  struct Scratch {
+    fs::path path = fs::temp_directory_path() / ("rigidtouch_record_" + std::to_string(::getpid()));
+    ~Scratch() {
+      std::error_code ignored;
+      fs::remove_all(path, ignored);
+    }
+  };
+  static const Scratch scratch;
+  fs::create_directories(scratch.path);
+  return scratch.path;
 }
 
 std::vector<RecordSample> Samples() {
