@@ -57,14 +57,14 @@ if [ "${1:-}" != "--quick" ]; then
     -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
     -DRIGIDTOUCH_SANITIZE_THREAD=ON -DRIGIDTOUCH_BUILD_TESTS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
   tsan_targets=$(ls tests/loop/*_test.cc tests/device/*_test.cc tests/cli/bridge_cli_test.cc \
-    tests/cli/fake_device_test.cc |
+    tests/cli/fake_device_test.cc tests/geometry/worker_test.cc |
     xargs -n1 basename | sed 's/\.cc$//')
   # shellcheck disable=SC2086
   cmake --build build-tsan -j"$jobs" --target $tsan_targets
   # -j1: the loop tests measure timing, and TSan slows every thread
   (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
     ctest --output-on-failure -L '^(loop|device)$' &&
-    TSAN_OPTIONS="halt_on_error=1" ctest --output-on-failure -R '^(BridgeCliTest|ServeCliTest|FakeDeviceTest)\.')
+    TSAN_OPTIONS="halt_on_error=1" ctest --output-on-failure -R '^(BridgeCliTest|ServeCliTest|FakeDeviceTest|WorkerTest)\.')
   echo "ThreadSanitizer pass: $(($(date +%s) - start_s)) s"
 
   echo "== libFuzzer: each harness of tests/fuzz from its seed corpus, bounded in time"

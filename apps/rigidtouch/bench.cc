@@ -60,6 +60,7 @@ void Run(const BenchFlags& f) {
                                  {"impulses", impulses},
                                  {"deepest_penetration_m", deepest},
                                  {"finite", finite},
+                                 {"threads", model.threads},
                                  {"warnings", WarningsJson(data)}};
   if (f.json) {
     std::cout << result.dump() << "\n";
@@ -74,6 +75,7 @@ void Register(CLI::App& root) {
   auto f = std::make_shared<BenchFlags>();
   CLI::App* app = root.add_subcommand("bench", "time the steps of a scene");
   AddSceneFlags(app, f->scene);
+  AddThreadsFlag(app, f->scene);
   app->add_option("--steps", f->steps, "measured steps")->capture_default_str();
   app->add_option("--warmup", f->warmup, "warm-up steps")->capture_default_str();
   app->add_option("--tool-force", f->tool_force, "constant tool force FX FY FZ [N]")->expected(3);

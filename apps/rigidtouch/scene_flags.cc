@@ -34,7 +34,8 @@ const std::map<std::string, std::string>& FlagOf() {
       {"render.passivity_control", "--passivity-control"},
       {"render.material", "--material"},
       {"contact.stiffness_N_per_m", "--stiffness"},
-      {"contact.damping_Ns_per_m", "--damping"}};
+      {"contact.damping_Ns_per_m", "--damping"},
+      {"threads", "--threads"}};
   return flags;
 }
 
@@ -95,6 +96,13 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->footer(footer.empty() ? kPrecedence : std::string(kPrecedence) + "\n\n" + footer);
 }
 
+void AddThreadsFlag(CLI::App* app, SceneFlags& flags) {
+  app->add_option("--threads", flags.threads,
+                  "threads stepping the scene: 1, or 2 (a worker thread shares the narrow phase; "
+                  "the results are the same bit for bit; default 1)")
+      ->check(InRange(1, 2, "threads"));
+}
+
 Settings ResolveSettings(const SceneFlags& f) {
   Settings s;
   LoadOptions& o = s.load;
@@ -108,6 +116,7 @@ Settings ResolveSettings(const SceneFlags& f) {
   };
   flag("tool", o.tool_name, f.tool);
   flag("timestep_s", o.timestep_s, f.timestep_s);
+  flag("threads", o.threads, f.threads);
   if (f.renderer) {
     o.render.renderer = io::ParseRenderer(*f.renderer);
     s.origin["render.renderer"] = "--renderer";

@@ -34,6 +34,7 @@ struct SceneFlags {
   bool reference_solver = false;
   bool passivity_control = false;
   std::optional<std::string> material;
+  std::optional<int> threads;  // --threads (AddThreadsFlag)
 };
 
 /// How a setting is resolved, stated in every subcommand's --help and in docs/cli.md.
@@ -50,6 +51,9 @@ void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description)
 /// --renderer, --restitution, --t-collision, --frequency, --stiffness, --damping,
 /// --reference-solver.
 void AddSceneFlags(CLI::App* app, SceneFlags& flags, bool scene_required = true);
+
+/// Adds --threads N (1 or 2): the threads that step the scene (LoadOptions::threads).
+void AddThreadsFlag(CLI::App* app, SceneFlags& flags);
 
 /// The load options a user asked for: the defaults, then the config file's fields, then the
 /// flags (flag > config > default; a device preset, where one applies, comes between the config

@@ -333,6 +333,7 @@ void Register(CLI::App& root) {
   auto f = std::make_shared<ServeFlags>();
   CLI::App* app = root.add_subcommand("serve", "run the real-time haptic loop against a device");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
+  AddThreadsFlag(app, f->scene);
   app->add_option("--device", f->device,
                   "the device: a preset or a JSON device spec (" + device::DeviceSpecHelp() +
                       ", default touch); its force, stiffness and damping limits apply on every "

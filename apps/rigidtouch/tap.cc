@@ -450,6 +450,7 @@ void Run(const TapFlags& f) {
 std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
   auto f = std::make_shared<TapFlags>();
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
+  AddThreadsFlag(app, f->scene);
   app->add_option("--wall", f->wall,
                   "the method's walls: 0 single impulse, 1 train 250 Hz, "
                   "2 train 50 Hz")

@@ -179,6 +179,12 @@ void CollisionScratch::Reset(const Model& model) {
   SetStaticPoses(model, *this);
 }
 
+void CollisionScratch::StartWorker(const Model& model) {
+  pair_points.assign(broadphase.pairs.size(), PairPoints{});
+  for (auto& points : thread_points) points.assign(model.max_contacts + kMaxPairContacts, {});
+  worker = std::make_unique<Worker>();
+}
+
 CollisionScratch::~CollisionScratch() {
   if (mj != nullptr) mj_deleteData(mj);
 }
@@ -322,6 +328,90 @@ void UpdatePoses(const Model& model, const Data& data, CollisionScratch& s) {
   }
 }
 
+// one pair's contacts on the tick's thread, written to the contact list (not yet matched)
+void CollidePair(const Model& model, Data& data, CollisionScratch& s, int g1, int g2) {
+  const GeomModel& a = model.geoms[g1];
+  const GeomModel& b = model.geoms[g2];
+  const GeomCheck c1 = s.geom_check[g1], c2 = s.geom_check[g2];
+  // HasNarrowPhase(a.type, b.type), and Collide's checks of its arguments
+  if (c1 != GeomCheck::kMuJoCo && c2 != GeomCheck::kMuJoCo &&
+      !(a.type == GeomType::kPlane && b.type == GeomType::kPlane)) {
+    const int n = c1 == GeomCheck::kAccepted && c2 == GeomCheck::kAccepted
+                      ? CollideAccepted(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
+                                        s.points.data(), kMaxPairContacts)
+                      : 0;
+    if (n > 0) {
+      // the narrow phase's normal points from geom 2 towards geom 1
+      const PairWriter w = BeginPair(model, data, g1, g2);
+      const int fit = Room(data, n);
+      for (int i = 0; i < fit; ++i) {
+        AddContact(data, w, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
+      }
+    }
+  } else {
+    CollideWithMuJoCo(model, data, s, g1, g2);
+  }
+}
+
+// the narrow phase of pairs [begin, end) into point buffer t, without touching Data: what
+// CollidePair computes, for either thread. MuJoCo's pairs (and any beyond the buffer) are left to
+// the tick's thread.
+void NarrowRange(const Model& model, CollisionScratch& s, int begin, int end, int t) {
+  ContactPoint* points = s.thread_points[t].data();
+  const int capacity = static_cast<int>(s.thread_points[t].size());
+  int used = 0;
+  for (int k = begin; k < end; ++k) {
+    const auto [g1, g2] = s.broadphase.pairs[k];
+    const GeomModel& a = model.geoms[g1];
+    const GeomModel& b = model.geoms[g2];
+    const GeomCheck c1 = s.geom_check[g1], c2 = s.geom_check[g2];
+    CollisionScratch::PairPoints& out = s.pair_points[k];
+    if (c1 == GeomCheck::kMuJoCo || c2 == GeomCheck::kMuJoCo ||
+        used + kMaxPairContacts > capacity) {
+      out = {0, -1};
+    } else if ((a.type == GeomType::kPlane && b.type == GeomType::kPlane) ||
+               c1 != GeomCheck::kAccepted || c2 != GeomCheck::kAccepted) {
+      out = {used, 0};
+    } else {
+      out = {used, CollideAccepted(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
+                                   points + used, kMaxPairContacts)};
+      used += out.count;
+    }
+  }
+}
+
+void RunNarrowJob(void* context) {
+  const auto* job = static_cast<const CollisionScratch::NarrowJob*>(context);
+  NarrowRange(*job->model, *job->scratch, job->begin, job->end, 1);
+}
+
+// fewer pairs than this are not worth the hand-off to the worker
+constexpr int kMinPairsForTwoThreads = 32;
+
+// the narrow phase on two threads (halves of the pair list), then the contacts written and
+// matched in pair order on the tick's thread: the same contacts, bit for bit, as CollidePair's
+void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s) {
+  const int npair = s.broadphase.npair, mid = npair / 2;
+  s.job = {&model, &s, mid, npair};
+  s.worker->Post(&RunNarrowJob, &s.job);
+  NarrowRange(model, s, 0, mid, 0);
+  s.worker->Wait();
+  for (int k = 0; k < npair; ++k) {
+    const auto [g1, g2] = s.broadphase.pairs[k];
+    const int begin = data.ncontact;
+    const CollisionScratch::PairPoints found = s.pair_points[k];
+    if (found.count < 0) {
+      CollidePair(model, data, s, g1, g2);
+    } else if (found.count > 0) {
+      const ContactPoint* p = s.thread_points[k < mid ? 0 : 1].data() + found.offset;
+      const PairWriter w = BeginPair(model, data, g1, g2);
+      const int fit = Room(data, found.count);
+      for (int i = 0; i < fit; ++i) AddContact(data, w, p[i].p_W, p[i].n_W, p[i].depth_m);
+    }
+    if (data.ncontact > begin) MatchPair(data, s, begin, data.ncontact);
+  }
+}
+
 }  // namespace
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
@@ -329,30 +419,14 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
   UpdatePoses(model, data, s);
   FindPairs(model, s.poses, s.broadphase);
   if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
+  if (s.worker != nullptr && s.broadphase.npair >= kMinPairsForTwoThreads) {
+    CollideOnTwoThreads(model, data, s);
+    return;
+  }
   for (int k = 0; k < s.broadphase.npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
-    const GeomModel& a = model.geoms[g1];
-    const GeomModel& b = model.geoms[g2];
     const int begin = data.ncontact;
-    const GeomCheck c1 = s.geom_check[g1], c2 = s.geom_check[g2];
-    // HasNarrowPhase(a.type, b.type), and Collide's checks of its arguments
-    if (c1 != GeomCheck::kMuJoCo && c2 != GeomCheck::kMuJoCo &&
-        !(a.type == GeomType::kPlane && b.type == GeomType::kPlane)) {
-      const int n = c1 == GeomCheck::kAccepted && c2 == GeomCheck::kAccepted
-                        ? CollideAccepted(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
-                                          s.points.data(), kMaxPairContacts)
-                        : 0;
-      if (n > 0) {
-        // the narrow phase's normal points from geom 2 towards geom 1
-        const PairWriter w = BeginPair(model, data, g1, g2);
-        const int fit = Room(data, n);
-        for (int i = 0; i < fit; ++i) {
-          AddContact(data, w, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
-        }
-      }
-    } else {
-      CollideWithMuJoCo(model, data, s, g1, g2);
-    }
+    CollidePair(model, data, s, g1, g2);
     if (data.ncontact > begin) MatchPair(data, s, begin, data.ncontact);
   }
 }

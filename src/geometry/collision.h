@@ -9,10 +9,12 @@
 #include <mujoco/mujoco.h>
 
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "geometry/broadphase.h"
 #include "geometry/narrow_phase.h"
+#include "geometry/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -54,8 +56,29 @@ struct CollisionScratch {
   std::vector<int> run_start;  // (ngeom + 1)
   std::vector<int> run_fill;   // (ngeom) counting-sort scratch
 
+  // Model::threads 2: the worker thread, which collides the second half of the pair list while
+  // the tick's thread collides the first, each into its own point buffer; the tick's thread then
+  // writes the points into the contact list in pair order, as one thread would (StartWorker)
+  std::unique_ptr<Worker> worker;
+  struct PairPoints {
+    int offset = 0;  // into the point buffer of the pair's half
+    int count = 0;   // points; -1: the tick's thread collides the pair itself, in order (MuJoCo's
+                     // functions, which share `mj`, or a full buffer)
+  };
+  std::vector<PairPoints> pair_points;                     // (pair capacity)
+  std::array<std::vector<ContactPoint>, 2> thread_points;  // (max contacts + kMaxPairContacts)
+  struct NarrowJob {
+    const Model* model = nullptr;
+    CollisionScratch* scratch = nullptr;
+    int begin = 0, end = 0;  // the worker's pairs
+  };
+  NarrowJob job;
+
   /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
   void Reserve(const Model& model);
+  /// Starts the worker thread and sizes its buffers (MakeData, for Model::threads 2). Throws Error
+  /// if no thread can be started.
+  void StartWorker(const Model& model);
   /// Puts the persistent sort order back to its initial state; sets the static geoms' poses
   /// again.
   void Reset(const Model& model);

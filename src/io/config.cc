@@ -70,7 +70,8 @@ const char* CouplingName(Coupling coupling) {
 std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options) {
   const nlohmann::json root = ReadJsonFile(path, "config file");
   const JsonSource source(path);
-  const StrictObject top(source, root, "", {"tool", "timestep_s", "contact", "render", "device"},
+  const StrictObject top(source, root, "",
+                         {"tool", "timestep_s", "contact", "render", "device", "threads"},
                          "a config object");
   std::vector<std::string> given;
   for (const char* field : {"tool", "timestep_s"}) {
@@ -78,6 +79,8 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
   }
   top.Read("tool", options.tool_name);
   if (auto h = top.Number("timestep_s")) options.timestep_s = *h;
+  if (top.Has("threads")) given.push_back("threads");
+  options.threads = top.Integer("threads", options.threads, 1, 2);
 
   ContactParams& c = options.contact;
   ReadSection(top, "contact",

@@ -468,6 +468,10 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   model.max_group_bodies = options.max_group_bodies > 0
                                ? std::min<int>(options.max_group_bodies, model.bodies.size())
                                : static_cast<int>(model.bodies.size());
+  if (options.threads != 1 && options.threads != 2) {
+    throw Error("threads is " + std::to_string(options.threads) + ": valid 1 or 2");
+  }
+  model.threads = options.threads;
   Configure(model);
   CheckInitialOverlap(model, path);
   return model;

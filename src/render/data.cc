@@ -53,6 +53,7 @@ Data MakeData(const Model& model) {
   ws.contact.Reserve(nbody, ncap);
   ws.velocity.Reserve(nbody, ncap, model.max_group_bodies);
   ws.impulse.Reserve(model);
+  if (model.threads == 2) ws.collision.StartWorker(model);
   ResetData(model, data);
   return data;
 }

@@ -103,6 +103,33 @@ TEST_F(SettingsCliTest, ValuesThatCannotBeUsedAreRefusedSayingWhereTheyWereWritt
 
 // a scene law the user wrote that cannot hold a body is used and warned about, in tap as in
 // simulate (tap loads its scene inside the library and printed no load warning)
+// threads (issue 19): the flag beats the config file, both are used (bench reports them) and
+// give the same run bit for bit; a count other than 1 or 2 is refused, naming where it was written
+TEST_F(SettingsCliTest, ThreadsFromTheFlagOrTheConfigAreUsedAndOtherCountsRefused) {
+  const std::string scene = std::string(RIGIDTOUCH_SCENES) + "/pile.xml";
+  const std::string bench = "bench --json --steps 200 --warmup 0 --scene " + scene;
+  const std::string two = Config("two.json", R"({"threads": 2})");
+  const auto one_thread = Json(RunCli(bench));
+  const auto from_file = Json(RunCli(bench + " --config " + two));
+  const auto from_flag = Json(RunCli(bench + " --threads 1 --config " + two));
+  EXPECT_EQ(one_thread["threads"], 1);
+  EXPECT_EQ(from_file["threads"], 2);
+  EXPECT_EQ(from_flag["threads"], 1);
+  EXPECT_EQ(from_file["deepest_penetration_m"], one_thread["deepest_penetration_m"]);
+  EXPECT_EQ(from_file["contacts"], one_thread["contacts"]);
+  const CliResult flag = RunCli(bench + " --threads 3");
+  EXPECT_EQ(flag.exit_code, 2);
+  EXPECT_NE(flag.err.find("rigidtouch: error: --threads: 3 is out of range: valid 1 to 2"),
+            std::string::npos)
+      << flag.err;
+  const std::string five = Config("five.json", R"({"threads": 5})");
+  const CliResult file = RunCli(bench + " --config " + five);
+  EXPECT_EQ(file.exit_code, 2);
+  EXPECT_NE(file.err.find("rigidtouch: error: " + five + ": threads: 5 is out of range"),
+            std::string::npos)
+      << file.err;
+}
+
 TEST_F(SettingsCliTest, TapPrintsTheScenesLoadWarnings) {
   const std::string scene = Config("heavy.xml", R"(<mujoco><worldbody>
     <geom name="wall" type="plane" size="1 1 0.1"/>

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "render/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
@@ -35,11 +36,15 @@ std::uint64_t Hash(const Data& d) {
 }
 
 // FNV-1a over the device command of every tick and the final body states
-std::uint64_t GoldenRun(const std::string& scene, RendererKind renderer, int steps) {
+std::uint64_t GoldenRun(const std::string& scene, RendererKind renderer, int steps,
+                        int threads = 1) {
   LoadOptions o;
   o.render.renderer = renderer;
+  o.threads = threads;
   const Model m = LoadModel(scene, o);
   Data d = MakeData(m);
+  // with two threads the worker exists (and, from 32 pairs, shares the narrow phase)
+  EXPECT_EQ(d.workspace->collision.worker != nullptr, threads == 2);
   TickInput in;
   in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
   std::uint64_t h = 1469598103934665603ull;
@@ -96,11 +101,34 @@ TEST(DeterminismTest, SameInputsGiveBitwiseIdenticalStates) {
 // pushed down by 2 N and sideways by up to 0.3 N. A change to any stage of the tick that moves
 // one bit of one state or command changes them. When a change of behaviour is intended, say why
 // in its commit and put the new values here.
+// With `threads` 2 (a worker thread colliding half of the pairs) the hashes are the same.
 TEST(DeterminismTest, GoldenHashOfTheShippedStackAndPile) {
-  EXPECT_EQ(GoldenRun(std::string(RIGIDTOUCH_SCENES) + "/stack.xml", RendererKind::kTrain, 2000),
-            0xf2ecb8ee119450abull);
-  EXPECT_EQ(GoldenRun(std::string(RIGIDTOUCH_SCENES) + "/pile.xml", RendererKind::kImpulse, 2000),
-            0xf02a2b04814e52f7ull);
+  for (const int threads : {1, 2}) {
+    EXPECT_EQ(GoldenRun(std::string(RIGIDTOUCH_SCENES) + "/stack.xml", RendererKind::kTrain, 2000,
+                        threads),
+              0xf2ecb8ee119450abull)
+        << threads << " threads";
+    EXPECT_EQ(GoldenRun(std::string(RIGIDTOUCH_SCENES) + "/pile.xml", RendererKind::kImpulse, 2000,
+                        threads),
+              0xf02a2b04814e52f7ull)
+        << threads << " threads";
+  }
+}
+
+// threads other than 1 and 2 are refused at load, naming the setting
+TEST(DeterminismTest, ThreadsOtherThanOneOrTwoAreRefused) {
+  for (const int threads : {0, 3, -1}) {
+    LoadOptions o;
+    o.threads = threads;
+    try {
+      LoadModel(std::string(RIGIDTOUCH_SCENES) + "/stack.xml", o);
+      ADD_FAILURE() << threads << " accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("threads is " + std::to_string(threads)),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace
