@@ -14,7 +14,12 @@ namespace {
 
 class RigidtouchEngine final : public Engine {
  public:
-  std::string_view Name() const override { return kReferenceEngine; }
+  // threads 2: the second engine, "rigidtouch_2threads", the same tick with the worker thread
+  // (the same results bit for bit; the peers run one thread)
+  explicit RigidtouchEngine(int threads) : threads_(threads) {}
+  std::string_view Name() const override {
+    return threads_ == 1 ? kReferenceEngine : kTwoThreadsName;
+  }
 
   void Load(const Scene& scene) override {
     LoadOptions options;
@@ -24,6 +29,7 @@ class RigidtouchEngine final : public Engine {
     // train works, and 5e4 N/m makes the tool roll on the stack; 2e4 passes every gate)
     options.contact.stiffness_N_per_m = 2.0e4;
     options.contact.damping_Ns_per_m = 15.0;
+    options.threads = threads_;
     model_ = std::make_unique<Model>(LoadModel(scene.mjcf_path, options));
     data_ = std::make_unique<Data>(MakeData(*model_));
     input_.tool_wrench.force_N = scene.tool_force_N;
@@ -105,7 +111,7 @@ class RigidtouchEngine final : public Engine {
       << " s, tool contact k " << m.contact.stiffness_N_per_m << " N/m b "
       << m.contact.damping_Ns_per_m << " N s/m (explicit), scene contact k "
       << m.contact.scene_stiffness_N_per_m << " N/m b " << m.contact.scene_damping_Ns_per_m
-      << " N s/m (implicit), own narrow phase for plane/sphere/box";
+      << " N s/m (implicit), own narrow phase for plane/sphere/box, threads " << m.threads;
     return s.str();
   }
 
@@ -126,6 +132,8 @@ class RigidtouchEngine final : public Engine {
     int next_contact_id = 0;
   };
 
+  static constexpr std::string_view kTwoThreadsName = "rigidtouch_2threads";
+  int threads_ = 1;
   std::unique_ptr<Model> model_;
   std::unique_ptr<Data> data_;
   TickInput input_;
@@ -133,7 +141,10 @@ class RigidtouchEngine final : public Engine {
 };
 
 const EngineRegistrar registrar("rigidtouch",
-                                [] { return std::unique_ptr<Engine>(new RigidtouchEngine); });
+                                [] { return std::unique_ptr<Engine>(new RigidtouchEngine(1)); });
+const EngineRegistrar registrar_2threads("rigidtouch_2threads", [] {
+  return std::unique_ptr<Engine>(new RigidtouchEngine(2));
+});
 
 }  // namespace
 }  // namespace rigidtouch::bench

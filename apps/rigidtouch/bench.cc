@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "command.h"
+#include "render/workspace.h"
 #include "scene_flags.h"
 
 namespace rigidtouch::cli {
@@ -48,20 +49,23 @@ void Run(const BenchFlags& f) {
   bool finite = true;
   for (const BodyState& b : data.bodies) finite = finite && b.x_W.allFinite();
   std::sort(ns.begin(), ns.end());
-  const nlohmann::json result = {{"scene", model.source},
-                                 {"steps", f.steps},
-                                 {"warmup_steps", f.warmup},
-                                 {"median_ns", Percentile(ns, 0.5)},
-                                 {"p99_ns", Percentile(ns, 0.99)},
-                                 {"p999_ns", Percentile(ns, 0.999)},
-                                 {"max_ns", ns.back()},
-                                 {"contacts", data.ncontact},
-                                 {"max_contacts", max_contacts},
-                                 {"impulses", impulses},
-                                 {"deepest_penetration_m", deepest},
-                                 {"finite", finite},
-                                 {"threads", model.threads},
-                                 {"warnings", WarningsJson(data)}};
+  const nlohmann::json result = {
+      {"scene", model.source},
+      {"steps", f.steps},
+      {"warmup_steps", f.warmup},
+      {"median_ns", Percentile(ns, 0.5)},
+      {"p99_ns", Percentile(ns, 0.99)},
+      {"p999_ns", Percentile(ns, 0.999)},
+      {"max_ns", ns.back()},
+      {"contacts", data.ncontact},
+      {"max_contacts", max_contacts},
+      {"impulses", impulses},
+      {"deepest_penetration_m", deepest},
+      {"finite", finite},
+      {"threads", model.threads},
+      {"worker_jobs_taken_back",
+       data.workspace->worker ? data.workspace->worker->jobs_taken_back() : 0},
+      {"warnings", WarningsJson(data)}};
   if (f.json) {
     std::cout << result.dump() << "\n";
     return;

@@ -96,6 +96,7 @@ void Register(CLI::App& root) {
   auto flags = std::make_shared<SimulateFlags>();
   CLI::App* app = root.add_subcommand("simulate", "run a scene offline with a constant tool force");
   AddSceneFlags(app, flags->scene);
+  AddThreadsFlag(app, flags->scene);
   app->add_option("--steps", flags->steps, "number of steps")->capture_default_str();
   app->add_option("--tool-force", flags->tool_force, "constant force on the tool FX FY FZ [N]")
       ->expected(3);

@@ -316,6 +316,7 @@ void Register(CLI::App& root) {
   auto f = std::make_shared<ViewFlags>();
   CLI::App* app = root.add_subcommand("view", "live viewer: the scene, the tool, the forces");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
+  AddThreadsFlag(app, f->scene);
   app->add_option("--device", f->device,
                   "mouse (drag the tool; wheel: depth; T: tap), sim (the simulated hand's taps), "
                   "udp://HOST:PORT (the device bridge), replay:LOG (a --record file), or a "

@@ -287,7 +287,10 @@ void DefineParams(py::module_& m) {
       .def_readwrite("max_contacts", &LoadOptions::max_contacts,
                      "contact capacity; 0: what the scene can produce")
       .def_readwrite("max_group_bodies", &LoadOptions::max_group_bodies,
-                     "bodies per contact group; 0: every body");
+                     "bodies per contact group; 0: every body")
+      .def_readwrite("threads", &LoadOptions::threads,
+                     "1, or 2: a worker thread shares the narrow phase and the group solves "
+                     "(the results are the same bit for bit)");
 }
 
 // the loaded scene

@@ -52,6 +52,7 @@ class LoadOptions:
     device: DeviceParams
     max_contacts: int
     max_group_bodies: int
+    threads: int
     def __init__(self) -> None: ...
 
 class Model:

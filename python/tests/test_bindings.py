@@ -53,6 +53,23 @@ def test_tick_equals_the_cli_bit_for_bit_on_the_stack():
     assert data.x_W[model.tool].tolist() == out["bodies"][model.tool]["position_m"]
 
 
+def test_two_threads_step_the_pile_as_one_does():
+    # the 100-box pile's groups and pairs are shared with a worker thread: the same bits
+    pile = os.path.join(ROOT, "scenes", "pile.xml")
+    states = []
+    for threads in (1, 2):
+        options = rt.LoadOptions()
+        options.threads = threads
+        model = rt.load_model(pile, options)
+        data = rt.make_data(model)
+        rt.run(model, data, 300, tool_force_N=[0.0, 0.0, -2.0])
+        states.append((data.x_W.tolist(), data.v_W.tolist(), data.w_W.tolist()))
+    assert states[0] == states[1]
+    options.threads = 3
+    with pytest.raises(ValueError, match="threads is 3"):
+        rt.load_model(pile, options)
+
+
 def test_state_arrays_are_live_views():
     model = rt.load_model(STACK)
     data = rt.make_data(model)

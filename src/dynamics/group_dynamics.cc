@@ -33,7 +33,11 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
   if (nb > s.max_bodies || nc > s.max_contacts) return false;
   GroupAssembly& g = s.assembly;
   StructureOf(g, slot, contacts);
-  if (!s.factor.Analyse(nb, g.structure())) return false;
+  if (!s.factor.Analyse(nb, g.structure())) {
+    // a failed analysis has overwritten part of the kept factor's ordering
+    s.lagged.factor_valid = false;
+    return false;
+  }
 
   // a contact may come in inactive (dropped by the caller): then the system is not the one
   // kept factors are made for

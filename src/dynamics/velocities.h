@@ -7,6 +7,7 @@
 
 #include "contact/groups.h"
 #include "dynamics/group_dynamics.h"
+#include "geometry/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -18,9 +19,28 @@ struct VelocityScratch {
   std::vector<ImplicitContact> implicit;  // (max_contacts) implicit contacts, group by group
   std::vector<int> implicit_start;        // (nbody + 1) group g's: [start[g], start[g + 1])
   GroupSolverScratch group_solver;
+  // threads 2: the worker's solver scratch, and the job it is given (UpdateVelocities)
+  GroupSolverScratch worker_solver;
+  struct GroupJob {
+    const Model* model = nullptr;
+    Data* data = nullptr;
+    const contact::Groups* groups = nullptr;
+    VelocityScratch* scratch = nullptr;
+    int failed = 0;        // the worker's solves that failed (counted as warnings afterwards)
+    int last_solved = -1;  // the highest group the worker solved (-1: none)
+  };
+  GroupJob job;
+  geometry::TwoEndedRange shared_groups;  // the groups after the first solved one
+  long shared_steps = 0;  // steps whose groups were split between the threads (since Reserve)
 
-  /// Sizes every buffer; the only allocating call.
-  void Reserve(int nbody, int max_contacts, int max_group_bodies);
+  /// Sizes every buffer (the worker's solver scratch too with threads 2); the only allocating
+  /// call.
+  void Reserve(int nbody, int max_contacts, int max_group_bodies, int threads = 1);
+  /// Drops the solvers' kept factors and back-off (GroupSolverScratch::ForgetFactor).
+  void ForgetFactors() {
+    group_solver.ForgetFactor();
+    worker_solver.ForgetFactor();
+  }
   /// Adds a contact force f_on_a acting +on a and -on b at offsets r_a, r_b.
   void AddContactForce(const Contact& c, const Vec3& f_on_a, const Vec3& r_a, const Vec3& r_b) {
     if (c.body_a >= 0) {
@@ -45,8 +65,13 @@ void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& use
 /// (Warning::kSolverFailed, then free motion, if that fails); every other body moves freely under
 /// its explicit force. Writes each implicit contact's forces at the new velocities back into
 /// data.contacts.
+///
+/// With a worker (threads 2) and at least two groups to solve, this thread takes groups from the
+/// front and the worker from the back (its own solver scratch) until they meet. The groups share
+/// no body or contact, and the kept factor is left as one thread would leave it
+/// (docs/decisions.md), so every result is the same bit for bit.
 void UpdateVelocities(const Model& model, Data& data, const contact::Groups& groups,
-                      VelocityScratch& scratch);
+                      VelocityScratch& scratch, geometry::Worker* worker = nullptr);
 
 /// Stage 7: semi-implicit Euler position update of every body with its new velocity.
 void IntegratePositions(const Model& model, Data& data);

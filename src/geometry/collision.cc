@@ -179,10 +179,9 @@ void CollisionScratch::Reset(const Model& model) {
   SetStaticPoses(model, *this);
 }
 
-void CollisionScratch::StartWorker(const Model& model) {
+void CollisionScratch::ReserveTwoThreads(const Model& model) {
   pair_points.assign(broadphase.pairs.size(), PairPoints{});
   for (auto& points : thread_points) points.assign(model.max_contacts + kMaxPairContacts, {});
-  worker = std::make_unique<Worker>();
 }
 
 CollisionScratch::~CollisionScratch() {
@@ -390,12 +389,12 @@ constexpr int kMinPairsForTwoThreads = 32;
 
 // the narrow phase on two threads (halves of the pair list), then the contacts written and
 // matched in pair order on the tick's thread: the same contacts, bit for bit, as CollidePair's
-void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s) {
+void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
   const int npair = s.broadphase.npair, mid = npair / 2;
   s.job = {&model, &s, mid, npair};
-  s.worker->Post(&RunNarrowJob, &s.job);
+  worker.Post(&RunNarrowJob, &s.job);
   NarrowRange(model, s, 0, mid, 0);
-  s.worker->Wait();
+  worker.Finish();
   for (int k = 0; k < npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const int begin = data.ncontact;
@@ -414,13 +413,13 @@ void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s) {
 
 }  // namespace
 
-void DetectContacts(const Model& model, Data& data, CollisionScratch& s) {
+void DetectContacts(const Model& model, Data& data, CollisionScratch& s, Worker* worker) {
   RememberPrevious(data, s);
   UpdatePoses(model, data, s);
   FindPairs(model, s.poses, s.broadphase);
   if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
-  if (s.worker != nullptr && s.broadphase.npair >= kMinPairsForTwoThreads) {
-    CollideOnTwoThreads(model, data, s);
+  if (worker != nullptr && s.broadphase.npair >= kMinPairsForTwoThreads) {
+    CollideOnTwoThreads(model, data, s, *worker);
     return;
   }
   for (int k = 0; k < s.broadphase.npair; ++k) {

@@ -9,7 +9,6 @@
 #include <mujoco/mujoco.h>
 
 #include <array>
-#include <memory>
 #include <vector>
 
 #include "geometry/broadphase.h"
@@ -56,10 +55,9 @@ struct CollisionScratch {
   std::vector<int> run_start;  // (ngeom + 1)
   std::vector<int> run_fill;   // (ngeom) counting-sort scratch
 
-  // Model::threads 2: the worker thread, which collides the second half of the pair list while
-  // the tick's thread collides the first, each into its own point buffer; the tick's thread then
-  // writes the points into the contact list in pair order, as one thread would (StartWorker)
-  std::unique_ptr<Worker> worker;
+  // Model::threads 2: the worker thread (owned by the Workspace) collides the second half of the
+  // pair list while the tick's thread collides the first, each into its own point buffer; the
+  // tick's thread then writes the points into the contact list in pair order, as one thread would
   struct PairPoints {
     int offset = 0;  // into the point buffer of the pair's half
     int count = 0;   // points; -1: the tick's thread collides the pair itself, in order (MuJoCo's
@@ -76,9 +74,8 @@ struct CollisionScratch {
 
   /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
   void Reserve(const Model& model);
-  /// Starts the worker thread and sizes its buffers (MakeData, for Model::threads 2). Throws Error
-  /// if no thread can be started.
-  void StartWorker(const Model& model);
+  /// Sizes the buffers of the narrow phase on two threads (MakeData, for Model::threads 2).
+  void ReserveTwoThreads(const Model& model);
   /// Puts the persistent sort order back to its initial state; sets the static geoms' poses
   /// again.
   void Reset(const Model& model);
@@ -92,8 +89,10 @@ struct CollisionScratch {
 /// the points of one geom pair contiguous), matching each to the contacts data.contacts held
 /// before the call (they become data.previous) to keep ids and friction anchors and to mark new
 /// contacts. Reads the bodies' rotations from data.R_WB (the kinematics stage). Never allocates or
-/// throws; a full contact list counts Warning::kContactFull.
-void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch);
+/// throws; a full contact list counts Warning::kContactFull. With a worker (Model::threads 2,
+/// buffers sized by ReserveTwoThreads) it collides half of the pairs; the contacts are the same.
+void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch,
+                    Worker* worker = nullptr);
 
 /// Distance within which a contact point (in the first body's frame) is the same contact as one
 /// of last tick on the same geom pair.

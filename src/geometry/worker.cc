@@ -8,9 +8,9 @@
 namespace rigidtouch::geometry {
 namespace {
 
-// loads spent spinning before sleeping on the counter: a job of the tick comes back within
-// microseconds, sooner than a sleep and wake-up take; a worker idle between ticks sleeps
-constexpr int kSpins = 4000;
+// loads spent spinning before sleeping on a counter (about a millisecond): a job of the tick
+// comes within a tick, sooner than a sleep and wake-up take; a worker idle for longer sleeps
+constexpr int kSpins = 400000;
 
 // returns the counter's value once it differs from `old`
 std::uint32_t AwaitChange(const std::atomic<std::uint32_t>& counter, std::uint32_t old) {
@@ -23,6 +23,12 @@ std::uint32_t AwaitChange(const std::atomic<std::uint32_t>& counter, std::uint32
     const std::uint32_t now = counter.load(std::memory_order_acquire);
     if (now != old) return now;
   }
+}
+
+// takes job n (moves `taken` from n - 1 to n); false if the other thread took it first
+bool Take(std::atomic<std::uint32_t>& taken, std::uint32_t n) {
+  std::uint32_t expected = n - 1;
+  return taken.compare_exchange_strong(expected, n, std::memory_order_acq_rel);
 }
 
 }  // namespace
@@ -49,10 +55,20 @@ void Worker::Post(Job job, void* context) {
   posted_.notify_one();
 }
 
+void Worker::Finish() {
+  const std::uint32_t n = posted_.load(std::memory_order_relaxed);
+  if (Take(taken_, n)) {
+    ++taken_back_;
+    job_(context_);
+    return;
+  }
+  Wait();
+}
+
 void Worker::Wait() {
-  const std::uint32_t target = posted_.load(std::memory_order_relaxed);
+  const std::uint32_t n = posted_.load(std::memory_order_relaxed);
   std::uint32_t now = finished_.load(std::memory_order_acquire);
-  while (now != target) now = AwaitChange(finished_, now);
+  while (now != n) now = AwaitChange(finished_, now);
 }
 
 void Worker::Loop() {
@@ -60,6 +76,8 @@ void Worker::Loop() {
   for (;;) {
     seen = AwaitChange(posted_, seen);
     if (quit_.load(std::memory_order_relaxed)) return;
+    // a job taken back by Finish is not run here; the next one is posted only after that
+    if (!Take(taken_, seen)) continue;
     job_(context_);
     finished_.store(seen, std::memory_order_release);
     finished_.notify_one();

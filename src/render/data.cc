@@ -1,5 +1,6 @@
 // Data lifecycle and per-tick reports.
 #include <algorithm>
+#include <memory>
 
 #include "dynamics/kinematics.h"
 #include "dynamics/rigid_body.h"
@@ -51,9 +52,12 @@ Data MakeData(const Model& model) {
   Workspace& ws = *data.workspace;
   ws.collision.Reserve(model);
   ws.contact.Reserve(nbody, ncap);
-  ws.velocity.Reserve(nbody, ncap, model.max_group_bodies);
+  ws.velocity.Reserve(nbody, ncap, model.max_group_bodies, model.threads);
   ws.impulse.Reserve(model);
-  if (model.threads == 2) ws.collision.StartWorker(model);
+  if (model.threads == 2) {
+    ws.collision.ReserveTwoThreads(model);
+    ws.worker = std::make_unique<geometry::Worker>();
+  }
   ResetData(model, data);
   return data;
 }
@@ -79,7 +83,7 @@ void ResetState(const Model& model, Data& data) {
   data.event = EventState{};
   if (data.workspace) {
     data.workspace->collision.Reset(model);
-    data.workspace->velocity.group_solver.ForgetFactor();
+    data.workspace->velocity.ForgetFactors();
   }
 }
 

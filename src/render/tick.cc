@@ -32,7 +32,7 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   dynamics::ComputeKinematics(data);
 
   // 2. geometry: contact points, normals, depths, identities across ticks
-  geometry::DetectContacts(model, data, ws.collision);
+  geometry::DetectContacts(model, data, ws.collision, ws.worker.get());
   if (stale) {
     for (int ci = 0; ci < data.ncontact; ++ci) data.contacts[ci].is_new = false;  // no onset
   }
@@ -46,7 +46,7 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   contact::ContactForces(model, data, ws.contact, ws.velocity);
 
   // 5. dynamics: the new velocities, implicit per group (backward Euler), free elsewhere
-  dynamics::UpdateVelocities(model, data, ws.contact.groups, ws.velocity);
+  dynamics::UpdateVelocities(model, data, ws.contact.groups, ws.velocity, ws.worker.get());
 
   // 6. impulses: Eq. 5 (single impulse) or Eq. 8 (train) where the window's schedule (Eq. 6-7)
   // says one is due, on the velocities after stage 5

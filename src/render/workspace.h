@@ -1,10 +1,13 @@
 // Scratch owned by Data: each stage's buffers, sized once by MakeData and reused every tick.
 #pragma once
 
+#include <memory>
+
 #include "contact/impulse_stage.h"
 #include "contact/phases.h"
 #include "dynamics/velocities.h"
 #include "geometry/collision.h"
+#include "geometry/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -15,6 +18,9 @@ struct Workspace {
   contact::ContactScratch contact;       // stages 3-4: groups, laws, friction anchors
   dynamics::VelocityScratch velocity;    // stages 4-5: force sums, implicit contacts, group solver
   contact::ImpulseScratch impulse;       // stage 6: solver rows and the impulse solvers
+  // Model::threads 2: the second thread, shared by stages 2 (narrow phase) and 5 (group solves);
+  // null with one thread
+  std::unique_ptr<geometry::Worker> worker;
 };
 
 /// Puts the simulated state back to the model's initial state (bodies, contacts and their

@@ -5,10 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <new>
 #include <string>
 #include <thread>
 
+#include "limit_malloc.h"
 #include "render/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
@@ -29,8 +33,9 @@ void AddInput(void* context) {
   if (std::this_thread::get_id() != c->caller) ++c->other;
 }
 
-// each posted job runs once, on the worker, sees what was written before Post, and its writes
-// are seen after Wait: the sum of 1..2000 (a lost or repeated job, or a stale input, changes it)
+// each posted job runs once, on the worker or taken back by Finish, sees what was written before
+// Post, and its writes are seen after Finish: the sum of 1..2000 (a lost or repeated job, or a
+// stale input, changes it)
 TEST(WorkerTest, RunsEachPostedJobOnceOnItsThread) {
   Worker worker;
   Counter c;
@@ -38,14 +43,31 @@ TEST(WorkerTest, RunsEachPostedJobOnceOnItsThread) {
   for (int i = 1; i <= 2000; ++i) {
     c.input = i;
     worker.Post(&AddInput, &c);
-    worker.Wait();
+    worker.Finish();
   }
   EXPECT_EQ(c.sum, 2000L * 2001L / 2);
-  EXPECT_EQ(c.other, 2000);
+  EXPECT_EQ(c.other + worker.jobs_taken_back(), 2000);
 }
 
 bool SameBits(const Vec3& a, const Vec3& b) {
   return std::memcmp(a.data(), b.data(), 24) == 0;
+}
+
+// the state a step leaves for the next one's kept-factor reuse: which system the tick thread's
+// kept factor was made for, and the back-off
+bool SameKeptFactor(const Data& d1, const Data& d2) {
+  const dynamics::LaggedFactor& a = d1.workspace->velocity.group_solver.lagged;
+  const dynamics::LaggedFactor& b = d2.workspace->velocity.group_solver.lagged;
+  if (a.factor_valid != b.factor_valid || a.lag_backoff != b.lag_backoff ||
+      a.lag_skip != b.lag_skip) {
+    return false;
+  }
+  if (!a.factor_valid) return true;
+  return a.factor_nb == b.factor_nb && a.factor_npatch == b.factor_npatch &&
+         std::equal(a.factor_bodies.begin(), a.factor_bodies.begin() + a.factor_nb,
+                    b.factor_bodies.begin()) &&
+         std::equal(a.factor_keys.begin(), a.factor_keys.begin() + a.factor_npatch,
+                    b.factor_keys.begin());
 }
 
 // a 64-box pile (more than the 32 pairs from which the worker takes half) settling under the
@@ -60,8 +82,8 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
   const Model m2 = LoadModel(path, o2);
   Data d1 = MakeData(m1);
   Data d2 = MakeData(m2);
-  ASSERT_EQ(d1.workspace->collision.worker, nullptr);
-  ASSERT_NE(d2.workspace->collision.worker, nullptr);
+  ASSERT_EQ(d1.workspace->worker, nullptr);
+  ASSERT_NE(d2.workspace->worker, nullptr);
   TickInput in;
   in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
   int most = 0;
@@ -69,6 +91,7 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
     Tick(m1, d1, in);
     Tick(m2, d2, in);
     ASSERT_EQ(d1.ncontact, d2.ncontact) << "step " << s;
+    ASSERT_TRUE(SameKeptFactor(d1, d2)) << "step " << s;
     most = std::max(most, d1.workspace->collision.broadphase.npair);
     for (int k = 0; k < d1.ncontact; ++k) {
       const Contact& a = d1.contacts[k];
@@ -84,6 +107,93 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
     EXPECT_TRUE(SameBits(d1.bodies[i].x_W, d2.bodies[i].x_W)) << "body " << i;
   }
   EXPECT_GT(most, 40);  // above the 32 pairs from which the worker takes half
+}
+
+// two columns of 10 boxes settling for 3000 steps, two groups: the worker solves the second. One
+// thread ends each step with the second column's factor, which the first column, solved first,
+// cannot use; were the worker's factor not handed on (or its stale one not dropped), a column would
+// be solved with a kept factor, and its states would differ from one thread's in the last bits
+TEST(WorkerTest, GroupsSolvedOnTwoThreadsKeepOneThreadsFactors) {
+  const std::string path =
+      test::WriteTempFile("columns_threads.xml", test::PileXml(2, 1, 10, 0.051, 0.21));
+  LoadOptions o1, o2;
+  o2.threads = 2;
+  const Model m1 = LoadModel(path, o1);
+  const Model m2 = LoadModel(path, o2);
+  Data d1 = MakeData(m1);
+  Data d2 = MakeData(m2);
+  TickInput in;
+  for (int s = 0; s < 3000; ++s) {
+    Tick(m1, d1, in);
+    Tick(m2, d2, in);
+    for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
+      ASSERT_TRUE(SameBits(d1.bodies[i].x_W, d2.bodies[i].x_W) &&
+                  SameBits(d1.bodies[i].v_W, d2.bodies[i].v_W) &&
+                  SameBits(d1.bodies[i].w_W, d2.bodies[i].w_W))
+          << "step " << s << " body " << i;
+    }
+    ASSERT_TRUE(SameKeptFactor(d1, d2)) << "step " << s;
+  }
+  const dynamics::VelocityScratch& v1 = d1.workspace->velocity;
+  const dynamics::VelocityScratch& v2 = d2.workspace->velocity;
+  EXPECT_GT(v2.shared_steps, 2500);  // the columns were solved on the two threads
+  EXPECT_EQ(v1.group_solver.lagged.lagged_solves, 0);
+  EXPECT_EQ(v2.group_solver.lagged.lagged_solves + v2.worker_solver.lagged.lagged_solves, 0);
+}
+
+// an allocation guard that lives on the worker thread between two of its jobs
+alignas(test::LimitMalloc) unsigned char worker_guard[sizeof(test::LimitMalloc)];
+void StartWorkerGuard(void*) {
+  new (worker_guard) test::LimitMalloc;
+}
+void StopWorkerGuard(void* allocations) {
+  auto* guard = std::launder(reinterpret_cast<test::LimitMalloc*>(worker_guard));
+  *static_cast<long*>(allocations) = guard->allocations();
+  guard->~LimitMalloc();
+}
+void Allocate(void*) {
+  void* volatile probe = std::malloc(64);
+  std::free(probe);
+}
+
+// runs job(context) on the worker thread itself
+void OnWorker(Worker& worker, Worker::Job job, void* context) {
+  worker.Post(job, context);
+  worker.Wait();
+}
+
+// with two threads neither the tick's thread nor the worker allocates while a 100-box pile
+// (its narrow phase and group solves shared with the worker) runs 2000 ticks; the worker's guard
+// sees an allocation made by a job, so that it would see one in the tick
+TEST(WorkerTest, NeitherThreadAllocatesInTheTick) {
+  if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
+  const std::string path =
+      test::WriteTempFile("pile_alloc.xml", test::PileXml(5, 5, 4, 0.051, 0.21));
+  LoadOptions o;
+  o.threads = 2;
+  const Model m = LoadModel(path, o);
+  Data d = MakeData(m);
+  Worker& worker = *d.workspace->worker;
+  TickInput in;
+  in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
+  long probe = -1;
+  OnWorker(worker, &StartWorkerGuard, nullptr);
+  OnWorker(worker, &Allocate, nullptr);
+  OnWorker(worker, &StopWorkerGuard, &probe);
+  ASSERT_EQ(probe, 1);
+  for (int s = 0; s < 10; ++s) Tick(m, d, in);  // warm-up
+  long on_worker = -1;
+  const long shared_before = d.workspace->velocity.shared_steps;
+  OnWorker(worker, &StartWorkerGuard, nullptr);
+  {
+    test::LimitMalloc guard;
+    for (int s = 0; s < 2000; ++s) Tick(m, d, in);
+    EXPECT_EQ(guard.allocations(), 0);
+  }
+  OnWorker(worker, &StopWorkerGuard, &on_worker);
+  EXPECT_EQ(on_worker, 0);
+  EXPECT_GT(d.ncontact, 300);                                    // the pile was in contact
+  EXPECT_GT(d.workspace->velocity.shared_steps, shared_before);  // and its groups were split
 }
 
 }  // namespace

@@ -44,7 +44,7 @@ std::uint64_t GoldenRun(const std::string& scene, RendererKind renderer, int ste
   const Model m = LoadModel(scene, o);
   Data d = MakeData(m);
   // with two threads the worker exists (and, from 32 pairs, shares the narrow phase)
-  EXPECT_EQ(d.workspace->collision.worker != nullptr, threads == 2);
+  EXPECT_EQ(d.workspace->worker != nullptr, threads == 2);
   TickInput in;
   in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
   std::uint64_t h = 1469598103934665603ull;
