@@ -358,7 +358,7 @@ void CollidePair(const Model& model, Data& data, CollisionScratch& s, int g1, in
 void NarrowRange(const Model& model, CollisionScratch& s, int begin, int end, int t) {
   ContactPoint* points = s.thread_points[t].data();
   const int capacity = static_cast<int>(s.thread_points[t].size());
-  int used = 0;
+  int& used = s.thread_used[t];
   for (int k = begin; k < end; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const GeomModel& a = model.geoms[g1];
@@ -367,33 +367,51 @@ void NarrowRange(const Model& model, CollisionScratch& s, int begin, int end, in
     CollisionScratch::PairPoints& out = s.pair_points[k];
     if (c1 == GeomCheck::kMuJoCo || c2 == GeomCheck::kMuJoCo ||
         used + kMaxPairContacts > capacity) {
-      out = {0, -1};
+      out = {0, -1, t};
     } else if ((a.type == GeomType::kPlane && b.type == GeomType::kPlane) ||
                c1 != GeomCheck::kAccepted || c2 != GeomCheck::kAccepted) {
-      out = {used, 0};
+      out = {used, 0, t};
     } else {
-      out = {used, CollideAccepted(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
-                                   points + used, kMaxPairContacts)};
+      out = {used,
+             CollideAccepted(a.type, a.size, s.poses[g1], b.type, b.size, s.poses[g2],
+                             points + used, kMaxPairContacts),
+             t};
       used += out.count;
     }
   }
 }
 
+// pairs per block the two threads take from the pair list
+constexpr int kPairBlock = 16;
+
+// the blocks of the pair list one thread takes, from the front (t = 0) or the back (t = 1)
+void NarrowBlocks(const Model& model, CollisionScratch& s, int t) {
+  const int npair = s.broadphase.npair;
+  for (;;) {
+    const int block = t == 0 ? s.pair_blocks.TakeFront() : s.pair_blocks.TakeBack();
+    if (block < 0) return;
+    NarrowRange(model, s, block * kPairBlock, std::min(npair, (block + 1) * kPairBlock), t);
+  }
+}
+
 void RunNarrowJob(void* context) {
   const auto* job = static_cast<const CollisionScratch::NarrowJob*>(context);
-  NarrowRange(*job->model, *job->scratch, job->begin, job->end, 1);
+  NarrowBlocks(*job->model, *job->scratch, 1);
 }
 
 // fewer pairs than this are not worth the hand-off to the worker
 constexpr int kMinPairsForTwoThreads = 32;
 
-// the narrow phase on two threads (halves of the pair list), then the contacts written and
-// matched in pair order on the tick's thread: the same contacts, bit for bit, as CollidePair's
+// the narrow phase on two threads (blocks of the pair list taken from both ends), then the
+// contacts written and matched in pair order on the tick's thread: the same contacts, bit for
+// bit, as CollidePair's
 void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
-  const int npair = s.broadphase.npair, mid = npair / 2;
-  s.job = {&model, &s, mid, npair};
+  const int npair = s.broadphase.npair;
+  s.thread_used = {0, 0};
+  s.pair_blocks.Reset(0, (npair + kPairBlock - 1) / kPairBlock);
+  s.job = {&model, &s};
   worker.Post(&RunNarrowJob, &s.job);
-  NarrowRange(model, s, 0, mid, 0);
+  NarrowBlocks(model, s, 0);
   worker.Finish();
   for (int k = 0; k < npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
@@ -402,7 +420,7 @@ void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Wo
     if (found.count < 0) {
       CollidePair(model, data, s, g1, g2);
     } else if (found.count > 0) {
-      const ContactPoint* p = s.thread_points[k < mid ? 0 : 1].data() + found.offset;
+      const ContactPoint* p = s.thread_points[found.thread].data() + found.offset;
       const PairWriter w = BeginPair(model, data, g1, g2);
       const int fit = Room(data, found.count);
       for (int i = 0; i < fit; ++i) AddContact(data, w, p[i].p_W, p[i].n_W, p[i].depth_m);

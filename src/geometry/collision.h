@@ -55,20 +55,23 @@ struct CollisionScratch {
   std::vector<int> run_start;  // (ngeom + 1)
   std::vector<int> run_fill;   // (ngeom) counting-sort scratch
 
-  // Model::threads 2: the worker thread (owned by the Workspace) collides the second half of the
-  // pair list while the tick's thread collides the first, each into its own point buffer; the
-  // tick's thread then writes the points into the contact list in pair order, as one thread would
+  // Model::threads 2: the tick's thread takes blocks of the pair list from the front and the
+  // worker thread (owned by the Workspace) from the back, each colliding into its own point
+  // buffer; the tick's thread then writes the points into the contact list in pair order, as one
+  // thread would
   struct PairPoints {
-    int offset = 0;  // into the point buffer of the pair's half
+    int offset = 0;  // into the point buffer of the thread that collided the pair
     int count = 0;   // points; -1: the tick's thread collides the pair itself, in order (MuJoCo's
                      // functions, which share `mj`, or a full buffer)
+    int thread = 0;  // whose buffer: 0 the tick's thread, 1 the worker
   };
   std::vector<PairPoints> pair_points;                     // (pair capacity)
   std::array<std::vector<ContactPoint>, 2> thread_points;  // (max contacts + kMaxPairContacts)
+  std::array<int, 2> thread_used{};                        // points in each buffer this tick
+  TwoEndedRange pair_blocks;                               // blocks of kPairBlock pairs
   struct NarrowJob {
     const Model* model = nullptr;
     CollisionScratch* scratch = nullptr;
-    int begin = 0, end = 0;  // the worker's pairs
   };
   NarrowJob job;
 

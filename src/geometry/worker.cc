@@ -8,15 +8,26 @@
 namespace rigidtouch::geometry {
 namespace {
 
-// loads spent spinning before sleeping on a counter (about a millisecond): a job of the tick
-// comes within a tick, sooner than a sleep and wake-up take; a worker idle for longer sleeps
-constexpr int kSpins = 400000;
+// polls spent spinning before sleeping on a counter (with PAUSE, some tens of microseconds): a
+// job posted within that comes without a wake-up; longer spins slowed the tick's own thread on
+// the 2-core machine (docs/performance.md), and a worker that wakes late still takes its share,
+// since the tick's thread does not wait for it to start (Finish, TwoEndedRange)
+constexpr int kSpins = 2000;
+
+// tells the core that this is a spin (x86's PAUSE): a core shared with the tick's thread (two
+// hardware threads of one core) then gives it more of its issue slots
+inline void Relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
 
 // returns the counter's value once it differs from `old`
 std::uint32_t AwaitChange(const std::atomic<std::uint32_t>& counter, std::uint32_t old) {
   for (int i = 0; i < kSpins; ++i) {
     const std::uint32_t now = counter.load(std::memory_order_acquire);
     if (now != old) return now;
+    Relax();
   }
   for (;;) {
     counter.wait(old, std::memory_order_acquire);

@@ -11,6 +11,7 @@
 #include <new>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "limit_malloc.h"
 #include "render/workspace.h"
@@ -47,6 +48,29 @@ TEST(WorkerTest, RunsEachPostedJobOnceOnItsThread) {
   }
   EXPECT_EQ(c.sum, 2000L * 2001L / 2);
   EXPECT_EQ(c.other + worker.jobs_taken_back(), 2000);
+}
+
+// two threads taking from both ends of a range take every index once: the front's in rising
+// order, the back's in falling order, every front index below every back index
+TEST(WorkerTest, TwoEndedRangeHandsOutEachIndexOnce) {
+  constexpr int kN = 200000;
+  TwoEndedRange range;
+  std::vector<int> front, back;
+  front.reserve(kN);
+  back.reserve(kN);
+  range.Reset(0, kN);
+  std::thread other([&] {
+    for (int i = range.TakeBack(); i >= 0; i = range.TakeBack()) back.push_back(i);
+  });
+  for (int i = range.TakeFront(); i >= 0; i = range.TakeFront()) front.push_back(i);
+  other.join();
+  ASSERT_EQ(front.size() + back.size(), static_cast<std::size_t>(kN));
+  EXPECT_TRUE(std::is_sorted(front.begin(), front.end()));
+  EXPECT_TRUE(std::is_sorted(back.rbegin(), back.rend()));
+  for (std::size_t k = 0; k < front.size(); ++k) ASSERT_EQ(front[k], static_cast<int>(k));
+  for (std::size_t k = 0; k < back.size(); ++k) ASSERT_EQ(back[k], kN - 1 - static_cast<int>(k));
+  EXPECT_EQ(range.TakeFront(), -1);
+  EXPECT_EQ(range.TakeBack(), -1);
 }
 
 bool SameBits(const Vec3& a, const Vec3& b) {
