@@ -93,7 +93,8 @@ struct CollisionScratch {
 /// before the call (they become data.previous) to keep ids and friction anchors and to mark new
 /// contacts. Reads the bodies' rotations from data.R_WB (the kinematics stage). Never allocates or
 /// throws; a full contact list counts Warning::kContactFull. With a worker (Model::threads 2,
-/// buffers sized by ReserveTwoThreads) it collides half of the pairs; the contacts are the same.
+/// buffers sized by ReserveTwoThreads) the two threads share the narrow phase; the contacts are
+/// the same, bit for bit.
 void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch,
                     Worker* worker = nullptr);
 
