@@ -12,6 +12,9 @@
 namespace rigidtouch::bench {
 namespace {
 
+// the name of the two-thread engine
+constexpr std::string_view kTwoThreadsName = "rigidtouch_2threads";
+
 class RigidtouchEngine final : public Engine {
  public:
   // threads 2: the second engine, "rigidtouch_2threads", the same tick with the worker thread
@@ -132,7 +135,6 @@ class RigidtouchEngine final : public Engine {
     int next_contact_id = 0;
   };
 
-  static constexpr std::string_view kTwoThreadsName = "rigidtouch_2threads";
   int threads_ = 1;
   std::unique_ptr<Model> model_;
   std::unique_ptr<Data> data_;
@@ -142,7 +144,7 @@ class RigidtouchEngine final : public Engine {
 
 const EngineRegistrar registrar("rigidtouch",
                                 [] { return std::unique_ptr<Engine>(new RigidtouchEngine(1)); });
-const EngineRegistrar registrar_2threads("rigidtouch_2threads", [] {
+const EngineRegistrar registrar_2threads(std::string(kTwoThreadsName), [] {
   return std::unique_ptr<Engine>(new RigidtouchEngine(2));
 });
 

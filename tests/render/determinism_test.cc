@@ -43,7 +43,7 @@ std::uint64_t GoldenRun(const std::string& scene, RendererKind renderer, int ste
   o.threads = threads;
   const Model m = LoadModel(scene, o);
   Data d = MakeData(m);
-  // with two threads the worker exists (and, from 32 pairs, shares the narrow phase)
+  // with two threads the worker exists (and shares the narrow phase and the group solves)
   EXPECT_EQ(d.workspace->worker != nullptr, threads == 2);
   TickInput in;
   in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
@@ -101,7 +101,8 @@ TEST(DeterminismTest, SameInputsGiveBitwiseIdenticalStates) {
 // pushed down by 2 N and sideways by up to 0.3 N. A change to any stage of the tick that moves
 // one bit of one state or command changes them. When a change of behaviour is intended, say why
 // in its commit and put the new values here.
-// With `threads` 2 (a worker thread colliding half of the pairs) the hashes are the same.
+// With `threads` 2 (a worker thread sharing the narrow phase and the group solves) the hashes are
+// the same.
 TEST(DeterminismTest, GoldenHashOfTheShippedStackAndPile) {
   for (const int threads : {1, 2}) {
     EXPECT_EQ(GoldenRun(std::string(RIGIDTOUCH_SCENES) + "/stack.xml", RendererKind::kTrain, 2000,
