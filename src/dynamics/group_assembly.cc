@@ -379,13 +379,18 @@ int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) 
     int end = begin + 1;
     while (first.patch >= 0 && end < nc && contacts[end].patch == first.patch) ++end;
     double fn = 0.0, ft = 0.0;  // the active contacts' normal force, tangential forces' norms
+    double phi_n = 0.0;         // and their penalty forces, the patch's force scale
     for (int k = begin; k < end; ++k) {
       const ImplicitContact& c = contacts[k];
       if (!c.active) continue;
       fn += std::max(0.0, c.normal_force_N);
       ft += c.friction_force_W.norm();
+      phi_n += std::max(0.0, c.phi_n_N);
     }
-    if (first.stick && ft > first.mu_static * fn) {
+    // a sticking patch slips only if its friction exceeds the cone by more than rounding of its
+    // force scale: a trial friction at rounding level (a patch that neither slides nor is loaded
+    // sideways, at a normal force of zero) has no direction to give the kinetic friction
+    if (first.stick && ft > first.mu_static * (fn + kSlack * phi_n)) {
       // slip: the kinetic friction of each point along its trial force (the resultant's
       // direction for a point without one); the resultant is summed only here, where it is used
       Vec3 resultant = Vec3::Zero();

@@ -77,7 +77,9 @@ enum FrictionChange : int {
 /// Coulomb's cone per friction patch (consecutive contacts with the same ImplicitContact::patch;
 /// dropped ones count for nothing, and so does a pulling normal force) at the forces PatchForces
 /// left in the contacts. A sticking patch whose tangential forces sum to more than mu_static
-/// times its normal force slips: each active contact's tangential force becomes kinetic friction
+/// times its normal force, by more than mu_static 1e-10 times its penalty force (a trial force at
+/// rounding level, as on a face whose normal force is zero, has no direction to give), slips:
+/// each active contact's tangential force becomes kinetic friction
 /// mu_kinetic phi_n along the force it had (its trial stick force, which opposes the slip). A
 /// slipping patch whose kinetic friction sums to more than mu_kinetic times its normal force at
 /// these velocities is scaled down to below it by as much as it was over (at most 1e-3), or, with

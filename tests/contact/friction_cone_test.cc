@@ -1,6 +1,6 @@
 // The friction cone of the implicit solve's patches (dynamics::EnforceFrictionCones): a sticking
-// patch beyond mu_s N slips with kinetic friction along its trial force, a slipping patch beyond
-// mu_k N is scaled back, and nothing changes inside the cone.
+// patch beyond mu_s N (by more than rounding) slips with kinetic friction along its trial force,
+// a slipping patch beyond mu_k N is scaled back, and nothing changes inside the cone.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -79,6 +79,27 @@ TEST(FrictionConeTest, APointWithoutTrialForceSlipsAlongTheActivePointsResultant
   // the points with a trial force slip along their own
   EXPECT_NEAR(cs[0].phi_t_W.x(), -0.4 * cs[0].phi_n_N, 1e-15);
   EXPECT_NEAR(cs[1].phi_t_W.y(), -0.4 * cs[1].phi_n_N, 1e-15);
+}
+
+TEST(FrictionConeTest, ATrialForceAtRoundingLevelDoesNotSlip) {
+  // a sticking face whose solved normal force is zero (its points are about to be dropped for
+  // pulling) and whose trial friction is rounding: the cone is exceeded by nothing but rounding,
+  // so the face keeps sticking instead of slipping with mu_k k d (0.4 * 2.6 N in all) along a
+  // direction that rounding chose. The line is 1e-10 of the face's penalty force, mu_s 1e-10
+  // (0.5 + 0.6 + 0.7 + 0.8) N = 1.3e-10 N; the trial forces sum to 4.6 times `friction_N`.
+  for (const double friction_N : {1e-19, 2.5e-11}) {
+    std::vector<ImplicitContact> cs = Face(0, true, friction_N, 0.0);
+    const std::vector<ImplicitContact> before = cs;
+    EXPECT_EQ(EnforceFrictionCones(cs, false), kFrictionKept) << friction_N;
+    for (std::size_t k = 0; k < cs.size(); ++k) {
+      EXPECT_TRUE(cs[k].stick);
+      EXPECT_EQ(cs[k].phi_t_W, before[k].phi_t_W);
+    }
+  }
+  // just above the line (4.6 * 3e-11 = 1.38e-10 N) it slips, along its trial force
+  std::vector<ImplicitContact> cs = Face(0, true, 3e-11, 0.0);
+  EXPECT_EQ(EnforceFrictionCones(cs, false), kFrictionSlipped);
+  for (const ImplicitContact& c : cs) EXPECT_NEAR(c.phi_t_W.x(), -0.4 * c.phi_n_N, 1e-15);
 }
 
 TEST(FrictionConeTest, ASlippingPatchIsKeptWithinMuKineticTimesItsNormalForce) {

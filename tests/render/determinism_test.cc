@@ -111,7 +111,7 @@ TEST(DeterminismTest, GoldenHashOfTheShippedStackAndPile) {
         << threads << " threads";
     EXPECT_EQ(GoldenRun(std::string(RIGIDTOUCH_SCENES) + "/pile.xml", RendererKind::kImpulse, 2000,
                         threads),
-              0xf02a2b04814e52f7ull)
+              0xdc518d7988c71602ull)
         << threads << " threads";
   }
 }
