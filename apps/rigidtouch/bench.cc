@@ -33,6 +33,7 @@ void Run(const BenchFlags& f) {
   TickInput input;
   input.tool_wrench.force_N = Vec3(f.tool_force[0], f.tool_force[1], f.tool_force[2]);
   for (long s = 0; s < f.warmup; ++s) Tick(model, data, input);
+  const dynamics::GroupSolveCounts before = data.workspace->velocity.Counts();
   std::vector<double> ns(static_cast<std::size_t>(f.steps));
   int max_contacts = 0;
   long impulses = 0;
@@ -46,6 +47,7 @@ void Run(const BenchFlags& f) {
     impulses += data.nimpulse;
     for (int c = 0; c < data.ncontact; ++c) deepest = std::max(deepest, data.contacts[c].depth_m);
   }
+  const dynamics::GroupSolveCounts solves = data.workspace->velocity.Counts() - before;
   bool finite = true;
   for (const BodyState& b : data.bodies) finite = finite && b.x_W.allFinite();
   std::sort(ns.begin(), ns.end());
@@ -65,6 +67,12 @@ void Run(const BenchFlags& f) {
       {"threads", model.threads},
       {"worker_jobs_taken_back",
        data.workspace->worker ? data.workspace->worker->jobs_taken_back() : 0},
+      {"group_solves",
+       {{"factorisations", solves.factorisations},
+        {"lagged", solves.lagged_solves},
+        {"lagged_failures", solves.lagged_failures},
+        {"refinements", solves.refinement_steps},
+        {"unkept_factors", solves.unkept}}},
       {"warnings", WarningsJson(data)}};
   if (f.json) {
     std::cout << result.dump() << "\n";

@@ -63,28 +63,6 @@ void SubtractOuterLower(Mat6& D, const Mat6& L) {
   SubtractOuterColumn<4>(D, L, 5);
 }
 
-// y <- L^-1 y
-void ForwardSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
-#pragma GCC unroll 6
-  for (int j = 0; j < 6; ++j) {
-    double s = y(j);
-#pragma GCC unroll 6
-    for (int m = 0; m < j; ++m) s -= L(j, m) * y(m);
-    y(j) = s * inv(j);
-  }
-}
-
-// y <- L^-T y
-void BackSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
-#pragma GCC unroll 6
-  for (int j = 5; j >= 0; --j) {
-    double s = y(j);
-#pragma GCC unroll 6
-    for (int m = j + 1; m < 6; ++m) s -= L(m, j) * y(m);
-    y(j) = s * inv(j);
-  }
-}
-
 }  // namespace
 
 void BlockCholesky::Reserve(int max_nodes_in, int max_edges_in, int max_blocks_in) {
@@ -191,22 +169,10 @@ bool BlockCholesky::Factor(int n) {
 }
 
 bool BlockCholesky::Solve(int n, std::span<Vec6> y) const {
-  for (int k = 0; k < n; ++k) {  // L z = y
-    ForwardSubstitute(diag[k], diag_inv[k], y[k]);
-    for (int e = col_start[k]; e < col_start[k + 1]; ++e) {
-      y[col_row[e]].noalias() -= off[e] * y[k];
-    }
-  }
-  for (int k = n - 1; k >= 0; --k) {  // L^T y = z
-    for (int e = col_start[k]; e < col_start[k + 1]; ++e) {
-      y[k].noalias() -= off[e].transpose() * y[col_row[e]];
-    }
-    BackSubstitute(diag[k], diag_inv[k], y[k]);
-  }
-  for (int k = 0; k < n; ++k) {
-    if (!y[k].allFinite()) return false;
-  }
-  return true;
+  return SolveByColumns(n, y, [this](int k) {
+    return FactorColumn{diag[k], diag_inv[k], col_row.data() + col_start[k],
+                        off.data() + col_start[k], col_start[k + 1] - col_start[k]};
+  });
 }
 
 }  // namespace rigidtouch::dynamics

@@ -25,6 +25,63 @@ inline std::uint64_t PackEdge(int i, int j) {
   return static_cast<std::uint64_t>(i) << 32 | static_cast<std::uint64_t>(j);
 }
 
+/// One elimination position of a factor L: its diagonal block, 1 / its diagonal, and the
+/// below-diagonal blocks of its column (`count` of them) with their rows.
+struct FactorColumn {
+  const Mat6& diag;
+  const Vec6& diag_inv;
+  const int* row;
+  const Mat6* off;
+  int count;
+};
+
+namespace detail {
+
+// y <- L^-1 y for a lower triangular 6 x 6 block
+inline void ForwardSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
+#pragma GCC unroll 6
+  for (int j = 0; j < 6; ++j) {
+    double s = y(j);
+#pragma GCC unroll 6
+    for (int m = 0; m < j; ++m) s -= L(j, m) * y(m);
+    y(j) = s * inv(j);
+  }
+}
+
+// y <- L^-T y
+inline void BackSubstitute(const Mat6& L, const Vec6& inv, Vec6& y) {
+#pragma GCC unroll 6
+  for (int j = 5; j >= 0; --j) {
+    double s = y(j);
+#pragma GCC unroll 6
+    for (int m = j + 1; m < 6; ++m) s -= L(m, j) * y(m);
+    y(j) = s * inv(j);
+  }
+}
+
+}  // namespace detail
+
+/// y <- (L L^T)^-1 y, by position, for a factor of n positions given column by column
+/// (`column(k)` returns position k's FactorColumn), wherever it is stored; false unless the
+/// result is finite.
+template <class Columns>
+bool SolveByColumns(int n, std::span<Vec6> y, const Columns& column) {
+  for (int k = 0; k < n; ++k) {  // L z = y
+    const FactorColumn c = column(k);
+    detail::ForwardSubstitute(c.diag, c.diag_inv, y[k]);
+    for (int e = 0; e < c.count; ++e) y[c.row[e]].noalias() -= c.off[e] * y[k];
+  }
+  for (int k = n - 1; k >= 0; --k) {  // L^T y = z
+    const FactorColumn c = column(k);
+    for (int e = 0; e < c.count; ++e) y[k].noalias() -= c.off[e].transpose() * y[c.row[e]];
+    detail::BackSubstitute(c.diag, c.diag_inv, y[k]);
+  }
+  for (int k = 0; k < n; ++k) {
+    if (!y[k].allFinite()) return false;
+  }
+  return true;
+}
+
 /// The structure, ordering and factor of one block-sparse SPD system, sized once by Reserve and
 /// reused. Nodes are numbered 0..n-1 by the caller; blocks are stored by elimination position
 /// pos[node].

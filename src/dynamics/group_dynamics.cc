@@ -27,17 +27,13 @@ void GroupSolverScratch::Reserve(int max_group_bodies, int max_group_contacts) {
 bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
                           std::span<const int> slot, std::span<ImplicitContact> contacts,
                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
-                          GroupSolverScratch& s) {
+                          GroupSolverScratch& s, KeptFactors& kept) {
   const int nb = static_cast<int>(bodies.size());
   const int nc = static_cast<int>(contacts.size());
   if (nb > s.max_bodies || nc > s.max_contacts) return false;
   GroupAssembly& g = s.assembly;
   StructureOf(g, slot, contacts);
-  if (!s.factor.Analyse(nb, g.structure())) {
-    // a failed analysis has overwritten part of the kept factor's ordering
-    s.lagged.factor_valid = false;
-    return false;
-  }
+  if (!s.factor.Analyse(nb, g.structure())) return false;
 
   // a contact may come in inactive (dropped by the caller): then the system is not the one
   // kept factors are made for
@@ -46,10 +42,10 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
                                            [](const ImplicitContact& c) { return c.active; });
   // a kept factor's answer stands only if every friction patch keeps within its cone
   bool lagged = reuse && SolveWithKeptFactor(model, data, bodies, slot, contacts, force_W, torque_W,
-                                             s.lagged, g, s.factor);
+                                             s.lagged, kept, g, s.factor);
   if (lagged && EnforceFrictionCones(contacts, false) != kFrictionKept) lagged = false;
   if (!lagged) {
-    s.lagged.factor_valid = false;
+    if (reuse) DropKeptFactor(kept, bodies[0]);
     bool dropped = false;
     bool same_matrix = false;  // only slipping friction changed since the last factorisation
     for (int pass = 0; pass < kMaxPasses; ++pass) {
@@ -86,7 +82,7 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
           continue;
         }
         // a factor of the system with every contact is kept for the next steps
-        if (!dropped && reuse) KeepFactor(s.lagged, g, bodies, contacts);
+        if (!dropped && reuse) KeepFactor(kept, s.lagged, g, bodies, contacts, s.factor);
         break;
       }
       // a contact that stops pushing has no friction either: solve again without it

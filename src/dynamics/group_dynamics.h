@@ -31,14 +31,11 @@ struct GroupSolverScratch {
   int max_bodies = 0, max_contacts = 0;
   BlockCholesky factor;    // ordering, fill-in analysis and factor over the group's bodies
   GroupAssembly assembly;  // structure, patches, right-hand side and solution
-  // the factor kept for later steps (lagged.reuse_factor false: every solve factors afresh), its
-  // back-off and counters (lagged_solves, refinement_steps, lagged_failures)
+  // the use of kept factors (lagged.reuse_factor false: every solve factors afresh) and its
+  // counters (lagged_solves, refinement_steps, lagged_failures, unkept)
   LaggedFactor lagged;
   long factorisations = 0;  // solves that factored since Reserve (each pass counts)
   void Reserve(int max_group_bodies, int max_contacts);
-  /// Drops the kept factor and the back-off, so that the next solves are those of a new scratch
-  /// (ResetData: a run from the start repeats bit for bit).
-  void ForgetFactor() { lagged.Forget(); }
 };
 
 /// Solves the new velocities of the group's bodies, in place in data.bodies. `force_W` and
@@ -53,19 +50,21 @@ struct GroupSolverScratch {
 /// or the factorisation failed (then nothing is written). The ordering and fill-in analysis is
 /// kept in the scratch and reused while the group's bodies touch the same neighbours.
 ///
-/// With scratch.lagged.reuse_factor, a group whose system keeps its shape from the last solve (same
-/// bodies, patches, stick states and coefficients; only the contacts' geometry and forces moved)
-/// is solved with that solve's factorisation by iterative refinement from the current velocities.
+/// With scratch.lagged.reuse_factor, a group whose system keeps its shape from its last solve
+/// (same bodies, patches, stick states and coefficients; only the contacts' geometry and forces
+/// moved) is solved with the factorisation that solve kept in `kept` (each group its own, stored
+/// with its bodies; groups of other bodies in between do not disturb it) by iterative refinement
+/// from the current velocities.
 /// Its result x is accepted only if the residual r of the momentum balance bounds the error in
 /// the kinetic-energy norm, sqrt((x - x*)^T M (x - x*)) <= |r|_M^-1 <= 1e-10 (|M v| + |h F| +
 /// |r(v)|) (A >= M, so A^-1 <= M^-1), within two corrections and with no contact pulling;
 /// otherwise the system is assembled and factored as without it, and the kept factor is not
-/// tried again for the next 1, 3, 7, ... (at most 63) solves. This pays off where contact rests
-/// (a stack, a pile, an object held still), where the step changes the system little; a group
-/// in fast motion factors every step.
+/// tried again for the next 1, 3, 7, ... (at most 63) solves of the group. This pays off where
+/// contact rests (a stack, a pile, an object held still), where the step changes the system little;
+/// a group in fast motion factors every step.
 bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> bodies,
                           std::span<const int> slot, std::span<ImplicitContact> contacts,
                           std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
-                          GroupSolverScratch& scratch);
+                          GroupSolverScratch& scratch, KeptFactors& kept);
 
 }  // namespace rigidtouch::dynamics

@@ -36,22 +36,40 @@ void PatchKeys(LaggedFactor& lag, const GroupAssembly& g,
   std::sort(lag.patch_keys.begin(), lag.patch_keys.begin() + g.npatch);
 }
 
-// true if the kept factor was made for a system of this shape: the same bodies in
-// the same positions and the same patch keys. Its values differ (the contacts moved), which the
-// refinement accounts for; keys that are equal by chance for different systems only cost a
-// refinement that fails. Partitions the contacts into patches when the bodies match.
-bool FactorFits(LaggedFactor& lag, GroupAssembly& g, std::span<const int> bodies,
-                std::span<const ImplicitContact> contacts) {
+// one 64-bit hash of the sorted patch keys (FNV-1a over their words)
+std::uint64_t HashKeys(const LaggedFactor& lag, int npatch) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (int q = 0; q < npatch; ++q) {
+    for (const std::uint64_t word : lag.patch_keys[q]) {
+      h ^= word;
+      h *= 1099511628211ull;
+    }
+  }
+  return h;
+}
+
+// true if the group's kept factor was made for a system of this shape: the same bodies at the
+// same elimination positions as this step's analysis (every body's column written by the one
+// KeepFactor the anchor's record names, for as many bodies) and the same patch keys. Its values
+// differ (the contacts moved), which the refinement accounts for; keys that are equal by chance
+// for different systems only cost a refinement that fails. Partitions the contacts into patches
+// and fills lag.order when the bodies match.
+bool FactorFits(const KeptFactors& kept, LaggedFactor& lag, GroupAssembly& g,
+                std::span<const int> bodies, std::span<const ImplicitContact> contacts,
+                const BlockCholesky& factor) {
   const int nb = static_cast<int>(bodies.size());
-  if (!lag.factor_valid || nb != lag.factor_nb ||
-      !std::equal(bodies.begin(), bodies.end(), lag.factor_bodies.begin())) {
-    return false;
+  const int anchor = bodies[0];
+  const KeptFactors::Record& r = kept.records[anchor];
+  if (!r.valid || r.nb != nb) return false;
+  for (int k = 0; k < nb; ++k) {
+    const KeptFactors::Column& c = kept.columns[bodies[k]];
+    if (c.anchor != anchor || c.version != r.version || c.pos != factor.pos[k]) return false;
+    lag.order[c.pos] = bodies[k];
   }
   PartitionPatches(g, contacts);
-  if (g.npatch != lag.factor_npatch) return false;
+  if (g.npatch != r.npatch) return false;
   PatchKeys(lag, g, contacts);
-  return std::equal(lag.patch_keys.begin(), lag.patch_keys.begin() + g.npatch,
-                    lag.factor_keys.begin());
+  return HashKeys(lag, g.npatch) == r.keys;
 }
 
 // f^T m^-1 f + t^T I^-1 t for a body of rotation R (the M^-1 norm of an impulse, squared)
@@ -101,7 +119,7 @@ double Residual(const Model& model, const Data& data, std::span<const int> bodie
 bool SolveLagged(const Model& model, const Data& data, std::span<const int> bodies,
                  std::span<const int> slot, std::span<ImplicitContact> contacts,
                  std::span<const Vec3> force_W, std::span<const Vec3> torque_W, LaggedFactor& lag,
-                 GroupAssembly& g, const BlockCholesky& factor) {
+                 const KeptFactors& kept, GroupAssembly& g, const BlockCholesky& factor) {
   const double h = model.timestep_s;
   const int nb = static_cast<int>(bodies.size());
   // the momentum scale: |M v| + |h F| + |r(v)|, each in the M^-1 norm
@@ -131,7 +149,11 @@ bool SolveLagged(const Model& model, const Data& data, std::span<const int> bodi
       for (int k = steps; k < kMaxRefinements; ++k) predicted2 *= r2 / last2;
       if (!(predicted2 <= tol2)) return false;
     }
-    if (!factor.Solve(nb, g.b)) return false;
+    const bool finite = SolveByColumns(nb, g.b, [&kept, &lag](int p) {
+      const KeptFactors::Column& c = kept.columns[lag.order[p]];
+      return FactorColumn{c.diag, c.diag_inv, c.row.data(), c.off.data(), c.count};
+    });
+    if (!finite) return false;
     for (int p = 0; p < nb; ++p) g.x[p] += g.b[p];
     last2 = r2;
     r2 = Residual(model, data, bodies, slot, contacts, force_W, torque_W, g, factor, &pulls);
@@ -144,44 +166,79 @@ bool SolveLagged(const Model& model, const Data& data, std::span<const int> bodi
 
 }  // namespace
 
-void LaggedFactor::Reserve(int max_bodies, int max_contacts) {
-  factor_valid = false;
-  factor_nb = factor_npatch = 0;
-  factor_bodies.assign(max_bodies, -1);
-  patch_keys.assign(max_contacts, PatchKey{});
-  factor_keys.assign(max_contacts, PatchKey{});
-  lagged_solves = refinement_steps = lagged_failures = 0;
-  lag_backoff = lag_skip = 0;
+void KeptFactors::Reserve(int nbody) {
+  columns.assign(nbody, Column{});
+  records.assign(nbody, Record{});
 }
 
-void KeepFactor(LaggedFactor& lag, const GroupAssembly& g, std::span<const int> bodies,
-                std::span<const ImplicitContact> contacts) {
+void KeptFactors::Forget() {
+  for (Column& c : columns) {
+    c.anchor = -1;
+    c.version = 0;
+  }
+  std::fill(records.begin(), records.end(), Record{});
+}
+
+void LaggedFactor::Reserve(int max_bodies, int max_contacts) {
+  patch_keys.assign(max_contacts, PatchKey{});
+  order.assign(max_bodies, -1);
+  lagged_solves = refinement_steps = lagged_failures = unkept = 0;
+}
+
+void KeepFactor(KeptFactors& kept, LaggedFactor& lag, const GroupAssembly& g,
+                std::span<const int> bodies, std::span<const ImplicitContact> contacts,
+                const BlockCholesky& factor) {
+  const int nb = static_cast<int>(bodies.size());
+  KeptFactors::Record& r = kept.records[bodies[0]];
+  for (int p = 0; p < nb; ++p) {
+    if (factor.col_start[p + 1] - factor.col_start[p] > KeptFactors::kMaxColumn) {
+      r.valid = false;
+      ++lag.unkept;
+      return;
+    }
+  }
   PatchKeys(lag, g, contacts);
-  lag.factor_nb = static_cast<int>(bodies.size());
-  std::copy(bodies.begin(), bodies.end(), lag.factor_bodies.begin());
-  lag.factor_npatch = g.npatch;
-  std::copy(lag.patch_keys.begin(), lag.patch_keys.begin() + g.npatch, lag.factor_keys.begin());
-  lag.factor_valid = true;
+  r.valid = true;
+  ++r.version;
+  r.nb = nb;
+  r.npatch = g.npatch;
+  r.keys = HashKeys(lag, g.npatch);
+  for (int k = 0; k < nb; ++k) {
+    const int p = factor.pos[k];
+    KeptFactors::Column& c = kept.columns[bodies[k]];
+    c.anchor = bodies[0];
+    c.version = r.version;
+    c.pos = p;
+    c.count = factor.col_start[p + 1] - factor.col_start[p];
+    c.diag = factor.diag[p];
+    c.diag_inv = factor.diag_inv[p];
+    for (int e = 0; e < c.count; ++e) {
+      c.row[e] = factor.col_row[factor.col_start[p] + e];
+      c.off[e] = factor.off[factor.col_start[p] + e];
+    }
+  }
 }
 
 bool SolveWithKeptFactor(const Model& model, const Data& data, std::span<const int> bodies,
                          std::span<const int> slot, std::span<ImplicitContact> contacts,
                          std::span<const Vec3> force_W, std::span<const Vec3> torque_W,
-                         LaggedFactor& lag, GroupAssembly& g, const BlockCholesky& factor) {
-  if (!FactorFits(lag, g, bodies, contacts)) return false;
-  if (lag.lag_skip > 0) {
-    --lag.lag_skip;
+                         LaggedFactor& lag, KeptFactors& kept, GroupAssembly& g,
+                         const BlockCholesky& factor) {
+  if (!FactorFits(kept, lag, g, bodies, contacts, factor)) return false;
+  KeptFactors::Record& r = kept.records[bodies[0]];
+  if (r.lag_skip > 0) {
+    --r.lag_skip;
     return false;
   }
-  if (SolveLagged(model, data, bodies, slot, contacts, force_W, torque_W, lag, g, factor)) {
+  if (SolveLagged(model, data, bodies, slot, contacts, force_W, torque_W, lag, kept, g, factor)) {
     ++lag.lagged_solves;
-    lag.lag_backoff = 0;
+    r.lag_backoff = 0;
     return true;
   }
   // while the group moves too much for the kept factor, try it ever more rarely
   ++lag.lagged_failures;
-  lag.lag_backoff = std::min(2 * lag.lag_backoff + 1, kMaxBackoff);
-  lag.lag_skip = lag.lag_backoff;
+  r.lag_backoff = std::min(2 * r.lag_backoff + 1, kMaxBackoff);
+  r.lag_skip = r.lag_backoff;
   return false;
 }
 

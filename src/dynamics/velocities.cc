@@ -29,7 +29,7 @@ int SolveGroups(const Model& model, Data& data, const contact::Groups& groups,
     if (end > begin) {
       const std::span<ImplicitContact> implicit(scratch.implicit.data() + begin, end - begin);
       solved = SolveGroupVelocities(model, data, bodies, groups.slot, implicit, scratch.force_W,
-                                    scratch.torque_W, solver);
+                                    scratch.torque_W, solver, scratch.kept);
       if (solved) {
         // report the implicit forces at the new velocities
         for (const ImplicitContact& ic : implicit) {
@@ -48,65 +48,26 @@ int SolveGroups(const Model& model, Data& data, const contact::Groups& groups,
   return failed;
 }
 
-// whether SolveGroupVelocities takes group g on (and so sets its scratch's kept factor)
-bool Solved(const contact::Groups& groups, const VelocityScratch& scratch, int g) {
-  const int nc = scratch.implicit_start[g + 1] - scratch.implicit_start[g];
-  const int nb = groups.body_start[g + 1] - groups.body_start[g];
-  return nc > 0 && nb <= scratch.group_solver.max_bodies && nc <= scratch.group_solver.max_contacts;
-}
-
-// The worker's part: groups taken from the back. The first solved group it takes, the highest
-// solved group of the step, is solved last, so that the worker's scratch ends the step with that
-// group's factor state, as one thread's would.
+// The worker's part: groups taken from the back.
 void RunGroupJob(void* context) {
   auto* job = static_cast<VelocityScratch::GroupJob*>(context);
   VelocityScratch& s = *job->scratch;
-  int last = -1;
   for (int g = s.shared_groups.TakeBack(); g >= 0; g = s.shared_groups.TakeBack()) {
-    if (last < 0 && Solved(*job->groups, s, g)) {
-      last = g;
-      continue;
-    }
     job->failed += SolveGroups(*job->model, *job->data, *job->groups, s, s.worker_solver, g, g + 1);
   }
-  if (last >= 0) {
-    job->failed +=
-        SolveGroups(*job->model, *job->data, *job->groups, s, s.worker_solver, last, last + 1);
-  }
-  job->last_solved = last;
 }
 
 // fewer implicit contacts than this are not worth the hand-off to the worker
 constexpr int kMinContactsForTwoThreads = 64;
 
-// the first solved group when the groups are worth sharing with the worker (two or more solved
-// groups, enough implicit contacts); -1 otherwise
-int FirstSharedSolve(const contact::Groups& groups, const VelocityScratch& scratch) {
-  int first = -1, solved = 0, total = 0;
+// whether the groups are worth sharing with the worker: two or more with implicit contacts, and
+// enough implicit contacts
+bool WorthSharing(const contact::Groups& groups, const VelocityScratch& scratch) {
+  int solved = 0;
   for (int g = 0; g < groups.ngroup; ++g) {
-    if (!Solved(groups, scratch, g)) continue;
-    if (first < 0) first = g;
-    ++solved;
-    total += scratch.implicit_start[g + 1] - scratch.implicit_start[g];
+    solved += scratch.implicit_start[g + 1] > scratch.implicit_start[g] ? 1 : 0;
   }
-  return solved >= 2 && total >= kMinContactsForTwoThreads ? first : -1;
-}
-
-// After a step shared with the worker, one thread's scratch would hold the factor state of the
-// last group solved, which is then the worker's, and the back-off of the step's first solve (only
-// a step's first solved group can meet a kept factor made for its bodies: every later one follows
-// a group of other bodies). The factors, assemblies and keys change places; the back-off and the
-// counters stay with their scratch.
-void HandOnKeptFactor(VelocityScratch& s) {
-  GroupSolverScratch& a = s.group_solver;
-  GroupSolverScratch& b = s.worker_solver;
-  std::swap(a, b);
-  std::swap(a.lagged.lag_backoff, b.lagged.lag_backoff);
-  std::swap(a.lagged.lag_skip, b.lagged.lag_skip);
-  std::swap(a.lagged.lagged_solves, b.lagged.lagged_solves);
-  std::swap(a.lagged.refinement_steps, b.lagged.refinement_steps);
-  std::swap(a.lagged.lagged_failures, b.lagged.lagged_failures);
-  std::swap(a.factorisations, b.factorisations);
+  return solved >= 2 && scratch.implicit_start[groups.ngroup] >= kMinContactsForTwoThreads;
 }
 
 }  // namespace
@@ -118,6 +79,19 @@ void VelocityScratch::Reserve(int nbody, int max_contacts, int max_group_bodies,
   implicit_start.assign(nbody + 1, 0);
   group_solver.Reserve(max_group_bodies, max_contacts);
   if (threads == 2) worker_solver.Reserve(max_group_bodies, max_contacts);
+  kept.Reserve(nbody);
+}
+
+GroupSolveCounts VelocityScratch::Counts() const {
+  GroupSolveCounts c;
+  for (const GroupSolverScratch* s : {&group_solver, &worker_solver}) {
+    c.factorisations += s->factorisations;
+    c.lagged_solves += s->lagged.lagged_solves;
+    c.refinement_steps += s->lagged.refinement_steps;
+    c.lagged_failures += s->lagged.lagged_failures;
+    c.unkept += s->lagged.unkept;
+  }
+  return c;
 }
 
 void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& user,
@@ -140,32 +114,24 @@ void UpdateVelocities(const Model& model, Data& data, const contact::Groups& gro
   for (int i = 0; i < nbody; ++i) {
     if (data.body_group[i] < 0) FreeMotion(model, data, scratch, i);
   }
-  const int first = worker != nullptr ? FirstSharedSolve(groups, scratch) : -1;
-  if (first < 0) {
+  if (worker == nullptr || !WorthSharing(groups, scratch)) {
     const int failed =
         SolveGroups(model, data, groups, scratch, scratch.group_solver, 0, groups.ngroup);
     for (int k = 0; k < failed; ++k) data.Warn(Warning::kSolverFailed);
     return;
   }
-  // The groups up to the first solved one stay on this thread: that one may meet the factor kept
-  // from the last step, which is in this thread's scratch. Every later group follows a group of
-  // other bodies, as it would with one thread, and cannot; the worker's scratch starts the step
-  // without a factor.
-  GroupSolverScratch& w = scratch.worker_solver;
-  w.lagged.reuse_factor = scratch.group_solver.lagged.reuse_factor;
-  w.lagged.factor_valid = false;
-  scratch.shared_groups.Reset(first + 1, groups.ngroup);
-  scratch.job = {&model, &data, &groups, &scratch, 0, -1};
+  // no state crosses groups (each keeps its factor with its bodies), so either thread may solve
+  // any group
+  scratch.worker_solver.lagged.reuse_factor = scratch.group_solver.lagged.reuse_factor;
+  scratch.shared_groups.Reset(0, groups.ngroup);
+  scratch.job = {&model, &data, &groups, &scratch, 0};
   worker->Post(&RunGroupJob, &scratch.job);
-  int failed = SolveGroups(model, data, groups, scratch, scratch.group_solver, 0, first + 1);
+  int failed = 0;
   for (int g = scratch.shared_groups.TakeFront(); g >= 0; g = scratch.shared_groups.TakeFront()) {
     failed += SolveGroups(model, data, groups, scratch, scratch.group_solver, g, g + 1);
   }
   worker->Finish();
   failed += scratch.job.failed;
-  // the worker's groups all come after this thread's: if it solved one, one thread would end the
-  // step with the worker's factor state
-  if (scratch.job.last_solved >= 0) HandOnKeptFactor(scratch);
   ++scratch.shared_steps;
   for (int k = 0; k < failed; ++k) data.Warn(Warning::kSolverFailed);
 }

@@ -13,6 +13,16 @@
 
 namespace rigidtouch::dynamics {
 
+/// The group solvers' counters (GroupSolverScratch, LaggedFactor), both threads' together.
+struct GroupSolveCounts {
+  long factorisations = 0, lagged_solves = 0, refinement_steps = 0, lagged_failures = 0, unkept = 0;
+  GroupSolveCounts operator-(const GroupSolveCounts& o) const {
+    return {factorisations - o.factorisations, lagged_solves - o.lagged_solves,
+            refinement_steps - o.refinement_steps, lagged_failures - o.lagged_failures,
+            unkept - o.unkept};
+  }
+};
+
 /// Explicit forces of this tick and the implicit contacts of each group, sized once by Reserve.
 struct VelocityScratch {
   std::vector<Vec3> force_W, torque_W;    // (nbody) explicit force [N] and torque [N m]
@@ -21,26 +31,25 @@ struct VelocityScratch {
   GroupSolverScratch group_solver;
   // threads 2: the worker's solver scratch, and the job it is given (UpdateVelocities)
   GroupSolverScratch worker_solver;
+  KeptFactors kept;  // every group's kept factor, whichever thread solves it
   struct GroupJob {
     const Model* model = nullptr;
     Data* data = nullptr;
     const contact::Groups* groups = nullptr;
     VelocityScratch* scratch = nullptr;
-    int failed = 0;        // the worker's solves that failed (counted as warnings afterwards)
-    int last_solved = -1;  // the highest group the worker solved (-1: none)
+    int failed = 0;  // the worker's solves that failed (counted as warnings afterwards)
   };
   GroupJob job;
-  geometry::TwoEndedRange shared_groups;  // the groups after the first solved one
+  geometry::TwoEndedRange shared_groups;  // the groups of a shared step
   long shared_steps = 0;  // steps whose groups were split between the threads (since Reserve)
 
   /// Sizes every buffer (the worker's solver scratch too with threads 2); the only allocating
   /// call.
   void Reserve(int nbody, int max_contacts, int max_group_bodies, int threads = 1);
-  /// Drops the solvers' kept factors and back-off (GroupSolverScratch::ForgetFactor).
-  void ForgetFactors() {
-    group_solver.ForgetFactor();
-    worker_solver.ForgetFactor();
-  }
+  /// The counters since Reserve, both solver scratches' together.
+  GroupSolveCounts Counts() const;
+  /// Drops the kept factors and their back-off (KeptFactors::Forget).
+  void ForgetFactors() { kept.Forget(); }
   /// Adds a contact force f_on_a acting +on a and -on b at offsets r_a, r_b.
   void AddContactForce(const Contact& c, const Vec3& f_on_a, const Vec3& r_a, const Vec3& r_b) {
     if (c.body_a >= 0) {
@@ -68,8 +77,8 @@ void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& use
 ///
 /// With a worker (threads 2) and at least two groups to solve, this thread takes groups from the
 /// front and the worker from the back (its own solver scratch) until they meet. The groups share
-/// no body or contact, and the kept factor is left as one thread would leave it
-/// (docs/decisions.md), so every result is the same bit for bit.
+/// no body or contact, and each group's kept factor is stored with its bodies, whichever thread
+/// solved it, so every result is the same bit for bit.
 void UpdateVelocities(const Model& model, Data& data, const contact::Groups& groups,
                       VelocityScratch& scratch, geometry::Worker* worker = nullptr);
 

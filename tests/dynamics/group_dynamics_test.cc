@@ -26,13 +26,14 @@ struct Fixture {
   std::vector<int> bodies, slot;
   std::vector<Vec3> force, torque;
   GroupSolverScratch scratch;
+  KeptFactors kept;  // the factors f.scratch keeps, by body
 };
 
 // a pile model of nx x ny x nz boxes, the group = every box, random velocities and forces
 Fixture MakeFixture(int nx, int ny, int nz, unsigned seed) {
   const std::string path = test::WriteTempFile("group_" + std::to_string(nx * ny * nz) + ".xml",
                                                test::PileXml(nx, ny, nz, 0.051, 0.5));
-  Fixture f{LoadModel(path, LoadOptions{}), Data{}, {}, {}, {}, {}, {}};
+  Fixture f{LoadModel(path, LoadOptions{}), Data{}, {}, {}, {}, {}, {}, {}};
   f.data = MakeData(f.model);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -52,6 +53,7 @@ Fixture MakeFixture(int nx, int ny, int nz, unsigned seed) {
     f.bodies.push_back(i);
   }
   f.scratch.Reserve(static_cast<int>(f.bodies.size()), 3 * 4000);
+  f.kept.Reserve(nbody);
   return f;
 }
 
@@ -179,7 +181,7 @@ Eigen::VectorXd Solved(const Fixture& f) {
 void ExpectMatchesDense(Fixture& f, std::vector<ImplicitContact> contacts) {
   const Eigen::VectorXd expected = DenseSolve(f, contacts);
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
-                                   f.scratch));
+                                   f.scratch, f.kept));
   for (const ImplicitContact& c : contacts) ASSERT_TRUE(c.active);  // none dropped: same system
   const Eigen::VectorXd v = Solved(f);
   EXPECT_LE((v - expected).lpNorm<Eigen::Infinity>(),
@@ -275,7 +277,7 @@ TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
   for (ImplicitContact& c : expected_contacts) c.active = c.body_b != f.bodies[0];
   const Eigen::VectorXd expected = DenseSolve(f, expected_contacts);
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
-                                   f.scratch));
+                                   f.scratch, f.kept));
   EXPECT_LE((Solved(f) - expected).lpNorm<Eigen::Infinity>(),
             kTol * expected.lpNorm<Eigen::Infinity>());
   for (const ImplicitContact& c : contacts) {
@@ -311,7 +313,7 @@ TEST(GroupDynamics, DroppedContactsBetweenKeptOnesReportNoForce) {
   for (ImplicitContact& c : kept) c.active = c.body_b < 0;
   const Eigen::VectorXd expected = DenseSolve(f, kept);
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
-                                   f.scratch));
+                                   f.scratch, f.kept));
   EXPECT_LE((Solved(f) - expected).lpNorm<Eigen::Infinity>(),
             kTol * expected.lpNorm<Eigen::Infinity>());
   for (const ImplicitContact& c : contacts) {
@@ -340,7 +342,7 @@ TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
   AddContact(contacts, -1, f.bodies[1], Vec3::UnitZ(), top + Vec3(0.01, 0.02, 0.025), 20.0, true);
   for (int i : f.bodies) f.data.bodies[i].w_W = Vec3(0.3, -0.2, 0.5);
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
-                                   f.scratch));
+                                   f.scratch, f.kept));
   for (const ImplicitContact& c : contacts) {
     ASSERT_TRUE(c.active);
     Vec3 u = Vec3::Zero();
@@ -380,8 +382,8 @@ GroupSolverScratch FreshScratch(const Fixture& f) {
 Eigen::VectorXd SolveWith(Fixture& f, std::vector<ImplicitContact> contacts,
                           GroupSolverScratch& s) {
   const std::vector<BodyState> before = f.data.bodies;
-  EXPECT_TRUE(
-      SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque, s));
+  EXPECT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
+                                   s, f.kept));
   const Eigen::VectorXd v = Solved(f);
   f.data.bodies = before;
   return v;
@@ -453,7 +455,7 @@ TEST(GroupDynamics, KeptFactorSolvesTheNextStepsWithinItsBound) {
     const DenseSystem d = DenseSystemOf(f, contacts);
     std::vector<ImplicitContact> solved = contacts;
     ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, solved, f.force, f.torque,
-                                     f.scratch));
+                                     f.scratch, f.kept));
     v = Solved(f);
     EXPECT_EQ(f.scratch.factorisations, 1) << "step " << step;
     EXPECT_EQ(f.scratch.lagged.lagged_solves, step);
@@ -470,6 +472,67 @@ TEST(GroupDynamics, KeptFactorSolvesTheNextStepsWithinItsBound) {
   }
   EXPECT_GE(f.scratch.lagged.refinement_steps, 5);  // no step was solved by its old velocities
   EXPECT_EQ(f.scratch.lagged.lagged_failures, 0);
+}
+
+// the group of f reduced to every `stride`-th body from `first` (a column of a pile), numbered
+// from 0
+void Restrict(Fixture& f, int first, int stride) {
+  std::vector<int> column;
+  for (std::size_t k = first; k < f.bodies.size(); k += stride) column.push_back(f.bodies[k]);
+  f.bodies = column;
+  for (std::size_t k = 0; k < f.bodies.size(); ++k) f.slot[f.bodies[k]] = static_cast<int>(k);
+}
+
+// the velocities at which the group rests under these contacts: the same step repeated from its
+// own answer, with a scratch that factors every solve, until they stop changing
+Eigen::VectorXd Settle(Fixture& f, const std::vector<ImplicitContact>& contacts) {
+  GroupSolverScratch settle = FreshScratch(f);
+  Eigen::VectorXd v = Solved(f);
+  for (int k = 0; k < 200; ++k) {
+    SetVelocities(f, v);
+    v = SolveWith(f, contacts, settle);
+  }
+  return v;
+}
+
+TEST(GroupDynamics, EveryGroupKeepsItsOwnFactor) {
+  // two columns of four boxes at rest, solved in turn as a tick solves its groups, by two
+  // scratches in turn (as two threads may) sharing one KeptFactors: each column keeps its own
+  // factor, and every solve after its first is a lagged solve within the bound. (With one kept
+  // factor for all groups, each column would meet the other's and factor every step.)
+  Fixture left = MakeFixture(2, 1, 4, 18), right = MakeFixture(2, 1, 4, 18);
+  Restrict(left, 0, 2);
+  Restrict(right, 1, 2);
+  std::mt19937 rng(27);
+  std::vector<ImplicitContact> lc = ColumnContacts(left, rng), rc = ColumnContacts(right, rng);
+  Eigen::VectorXd lv = Settle(left, lc), rv = Settle(right, rc);
+  GroupSolverScratch* scratches[2] = {&left.scratch, &right.scratch};
+  KeptFactors& kept = left.kept;
+  for (int step = 0; step < 6; ++step) {
+    for (int column = 0; column < 2; ++column) {
+      Fixture& f = column == 0 ? left : right;
+      std::vector<ImplicitContact>& contacts = column == 0 ? lc : rc;
+      Eigen::VectorXd& v = column == 0 ? lv : rv;
+      if (step == 0) {
+        SetVelocities(f, v);
+      } else {
+        NextStep(f, contacts, v, 1e-6, 1e-4, rng);
+      }
+      const DenseSystem d = DenseSystemOf(f, contacts);
+      std::vector<ImplicitContact> solved = contacts;
+      ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, solved, f.force, f.torque,
+                                       *scratches[(step + column) % 2], kept));
+      v = Solved(f);
+      for (const ImplicitContact& c : solved) ASSERT_TRUE(c.active);  // the dense system's
+      ExpectWithinRefinementBound(d, v);
+    }
+  }
+  const long factorisations = left.scratch.factorisations + right.scratch.factorisations;
+  const long lagged = left.scratch.lagged.lagged_solves + right.scratch.lagged.lagged_solves;
+  EXPECT_EQ(factorisations, 2);  // the first solve of each column
+  EXPECT_EQ(lagged, 10);
+  EXPECT_GT(left.scratch.lagged.lagged_solves, 0);  // each scratch used a factor
+  EXPECT_GT(right.scratch.lagged.lagged_solves, 0);
 }
 
 TEST(GroupDynamics, TriesTheKeptFactorEverMoreRarelyWhileTheGroupMoves) {
@@ -545,14 +608,14 @@ TEST(GroupDynamics, NeverTrustsAWrongFactor) {
   std::mt19937 rng(24);
   const std::vector<ImplicitContact> contacts = ColumnContacts(f, rng);
   for (int damage = 0; damage < 2; ++damage) {
-    f.scratch.ForgetFactor();
+    f.kept.Forget();
     (void)SolveWith(f, contacts, f.scratch);
-    ASSERT_TRUE(f.scratch.lagged.factor_valid);
+    ASSERT_TRUE(f.kept.records[f.bodies[0]].valid);
     if (damage == 0) {
-      f.scratch.factor.diag[1] *= 3.0;
-      f.scratch.factor.diag_inv[1] /= 3.0;
+      f.kept.columns[f.bodies[1]].diag *= 3.0;
+      f.kept.columns[f.bodies[1]].diag_inv /= 3.0;
     } else {
-      f.scratch.factor.diag[2](4, 3) = std::numeric_limits<double>::quiet_NaN();
+      f.kept.columns[f.bodies[2]].diag(4, 3) = std::numeric_limits<double>::quiet_NaN();
     }
     const long factorisations = f.scratch.factorisations;
     GroupSolverScratch fresh = FreshScratch(f);
@@ -586,7 +649,7 @@ TEST(GroupDynamics, FactorsAfreshWhenTheLaggedAnswerWouldPull) {
   const Eigen::VectorXd expected = SolveWith(f, contacts, fresh);
   std::vector<ImplicitContact> solved = contacts;
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, solved, f.force, f.torque,
-                                   f.scratch));
+                                   f.scratch, f.kept));
   EXPECT_EQ(Solved(f), expected);
   EXPECT_EQ(f.scratch.lagged.lagged_solves, 1);
   EXPECT_EQ(f.scratch.factorisations, 1 + fresh.factorisations);  // two passes: all, then kept
@@ -601,7 +664,7 @@ TEST(GroupDynamics, RefusesAGroupBeyondItsCapacity) {
   AddFace(f, contacts, f.bodies[0], -1, Vec3::UnitZ(), false, rng);
   const BodyState before = f.data.bodies[f.bodies[0]];
   EXPECT_FALSE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
-                                    f.scratch));
+                                    f.scratch, f.kept));
   EXPECT_EQ(f.data.bodies[f.bodies[0]].v_W, before.v_W);  // nothing written
 }
 

@@ -78,21 +78,31 @@ bool SameBits(const Vec3& a, const Vec3& b) {
   return std::memcmp(a.data(), b.data(), 24) == 0;
 }
 
-// the state a step leaves for the next one's kept-factor reuse: which system the tick thread's
-// kept factor was made for, and the back-off
-bool SameKeptFactor(const Data& d1, const Data& d2) {
-  const dynamics::LaggedFactor& a = d1.workspace->velocity.group_solver.lagged;
-  const dynamics::LaggedFactor& b = d2.workspace->velocity.group_solver.lagged;
-  if (a.factor_valid != b.factor_valid || a.lag_backoff != b.lag_backoff ||
-      a.lag_skip != b.lag_skip) {
-    return false;
+// the state a step leaves for the next one's kept-factor reuse: every group's record (what its
+// factor was made for, the back-off) and every body's column of it, bit for bit
+bool SameKeptFactors(const Data& d1, const Data& d2) {
+  const dynamics::KeptFactors& a = d1.workspace->velocity.kept;
+  const dynamics::KeptFactors& b = d2.workspace->velocity.kept;
+  for (std::size_t i = 0; i < a.records.size(); ++i) {
+    const dynamics::KeptFactors::Record &ra = a.records[i], &rb = b.records[i];
+    if (ra.valid != rb.valid || ra.version != rb.version || ra.nb != rb.nb ||
+        ra.npatch != rb.npatch || ra.keys != rb.keys || ra.lag_backoff != rb.lag_backoff ||
+        ra.lag_skip != rb.lag_skip) {
+      return false;
+    }
+    const dynamics::KeptFactors::Column &ca = a.columns[i], &cb = b.columns[i];
+    if (ca.anchor != cb.anchor || ca.version != cb.version || ca.pos != cb.pos ||
+        ca.count != cb.count || std::memcmp(ca.diag.data(), cb.diag.data(), 36 * 8) != 0 ||
+        std::memcmp(ca.diag_inv.data(), cb.diag_inv.data(), 6 * 8) != 0) {
+      return false;
+    }
+    for (int e = 0; e < ca.count; ++e) {
+      if (ca.row[e] != cb.row[e] || std::memcmp(ca.off[e].data(), cb.off[e].data(), 36 * 8) != 0) {
+        return false;
+      }
+    }
   }
-  if (!a.factor_valid) return true;
-  return a.factor_nb == b.factor_nb && a.factor_npatch == b.factor_npatch &&
-         std::equal(a.factor_bodies.begin(), a.factor_bodies.begin() + a.factor_nb,
-                    b.factor_bodies.begin()) &&
-         std::equal(a.factor_keys.begin(), a.factor_keys.begin() + a.factor_npatch,
-                    b.factor_keys.begin());
+  return true;
 }
 
 // one scene file loaded and made with one and with two threads
@@ -124,7 +134,7 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
     Tick(m1, d1, in);
     Tick(m2, d2, in);
     ASSERT_EQ(d1.ncontact, d2.ncontact) << "step " << s;
-    ASSERT_TRUE(SameKeptFactor(d1, d2)) << "step " << s;
+    ASSERT_TRUE(SameKeptFactors(d1, d2)) << "step " << s;
     most = std::max(most, d1.workspace->collision.broadphase.npair);
     for (int k = 0; k < d1.ncontact; ++k) {
       const Contact& a = d1.contacts[k];
@@ -142,14 +152,11 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
   EXPECT_GT(most, 40);  // above the 32 pairs from which the worker takes half
 }
 
-// two columns of 10 boxes settling for 3000 steps, two groups, one of them on the worker. One
-// thread ends each step with the second column's factor, which the first column, solved first,
-// cannot use; were the worker's factor not handed on, the first column would be solved with its
-// own kept factor, and its states would differ from one thread's in the last bits (checked: it
-// failed within 120 steps). The kept factor's state is compared after every step too. (The worker's
-// stale factor, dropped before each step, matters when a group moves to the worker: the golden
-// hashes with two threads fail without the drop.)
-TEST(WorkerTest, GroupsSolvedOnTwoThreadsKeepOneThreadsFactors) {
+// two columns of 10 boxes settling for 3000 steps, two groups, which the two threads share
+// (either may solve either column in a step). Each column keeps its own factor with its bodies,
+// whichever thread made it, and the states and kept factors are those of one thread after every
+// step, bit for bit; almost every solve is a lagged one on both.
+TEST(WorkerTest, GroupsSolvedOnTwoThreadsKeepTheirFactors) {
   OneAndTwoThreads t(
       test::WriteTempFile("columns_threads.xml", test::PileXml(2, 1, 10, 0.051, 0.21)));
   const Model &m1 = t.m1, &m2 = t.m2;
@@ -164,13 +171,15 @@ TEST(WorkerTest, GroupsSolvedOnTwoThreadsKeepOneThreadsFactors) {
                   SameBits(d1.bodies[i].w_W, d2.bodies[i].w_W))
           << "step " << s << " body " << i;
     }
-    ASSERT_TRUE(SameKeptFactor(d1, d2)) << "step " << s;
+    ASSERT_TRUE(SameKeptFactors(d1, d2)) << "step " << s;
   }
   const dynamics::VelocityScratch& v1 = d1.workspace->velocity;
   const dynamics::VelocityScratch& v2 = d2.workspace->velocity;
   EXPECT_GT(v2.shared_steps, 2500);  // the columns were solved on the two threads
-  EXPECT_EQ(v1.group_solver.lagged.lagged_solves, 0);
-  EXPECT_EQ(v2.group_solver.lagged.lagged_solves + v2.worker_solver.lagged.lagged_solves, 0);
+  const long lagged1 = v1.group_solver.lagged.lagged_solves;
+  EXPECT_GT(lagged1, 2 * 2500);  // both columns, most steps
+  EXPECT_EQ(v2.group_solver.lagged.lagged_solves + v2.worker_solver.lagged.lagged_solves, lagged1);
+  EXPECT_GT(v2.worker_solver.lagged.lagged_solves, 0);
 }
 
 // an allocation guard that lives on the worker thread between two of its jobs
