@@ -179,6 +179,7 @@ TEST(WorkerTest, GroupsSolvedOnTwoThreadsKeepTheirFactors) {
   const long lagged1 = v1.group_solver.lagged.lagged_solves;
   EXPECT_GT(lagged1, 2 * 2500);  // both columns, most steps
   EXPECT_EQ(v2.group_solver.lagged.lagged_solves + v2.worker_solver.lagged.lagged_solves, lagged1);
+  // and the worker solved some of them (measured 1059-2215 of 5954 on a loaded machine)
   EXPECT_GT(v2.worker_solver.lagged.lagged_solves, 0);
 }
 
