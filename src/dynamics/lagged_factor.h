@@ -48,7 +48,8 @@ struct KeptFactors {
   std::vector<Record> records;  // (nbody) by anchor body
 
   void Reserve(int nbody);
-  /// Drops every kept factor and back-off: the state Reserve leaves.
+  /// Drops every kept factor and back-off: no record or column is used again until written anew,
+  /// as after Reserve.
   void Forget();
 };
 
