@@ -57,8 +57,11 @@ void RememberPrevious(Data& data, CollisionScratch& s) {
   data.nprevious_runs = nruns;
 }
 
-// matches the contacts of one geom pair [begin, end) in data.contacts against last tick's
-void MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
+// matches the contacts of one geom pair [begin, end) in data.contacts against last tick's. A new
+// point gets no id here (-1): AssignNewIds gives the ids, in contact order, so that the two
+// threads, which match pairs in any order, number new contacts as one thread would. Returns
+// whether the pair has a new point. Reads only last tick's contacts and the pair's own.
+bool MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
   const Contact& key = data.contacts[begin];
   // last tick's run of this pair, if any
   const PairRun* run = nullptr;
@@ -77,6 +80,7 @@ void MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
   // first 32 points not matched yet, one bit each: visiting the set bits from the lowest keeps the
   // index order, so ties still go to the lowest index, without a test per matched point.
   unsigned unused = nprev >= 32 ? ~0u : (1u << nprev) - 1u;
+  bool any_new = false;
   for (int c = begin; c < end; ++c) {
     Contact& con = data.contacts[c];
     int best = single ? 0 : -1;
@@ -102,14 +106,28 @@ void MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
       con.anchor_B = prev.anchor_B;
       con.phase = prev.phase;
     } else {
-      con.id = data.next_contact_id++;
+      con.id = -1;
       con.is_new = true;
       con.sticking = false;
       con.anchor_A = con.p_A;
       con.anchor_B = con.p_B;
       con.phase = ContactPhase::kResting;
+      any_new = true;
     }
   }
+  return any_new;
+}
+
+// the ids of the new points of the pair [begin, end) that MatchPair left without one
+void AssignNewIds(Data& data, int begin, int end) {
+  for (int c = begin; c < end; ++c) {
+    if (data.contacts[c].id < 0) data.contacts[c].id = data.next_contact_id++;
+  }
+}
+
+// MatchPair and AssignNewIds on one thread
+void MatchAndNumber(Data& data, const CollisionScratch& s, int begin, int end) {
+  if (MatchPair(data, s, begin, end)) AssignNewIds(data, begin, end);
 }
 
 // what the narrow phase makes of a geom of this kind at this pose
@@ -181,6 +199,8 @@ void CollisionScratch::Reset(const Model& model) {
 
 void CollisionScratch::ReserveTwoThreads(const Model& model) {
   pair_points.assign(broadphase.pairs.size(), PairPoints{});
+  pair_first.assign(broadphase.pairs.size(), 0);
+  pair_new.assign(broadphase.pairs.size(), 0);
   for (auto& points : thread_points) points.assign(model.max_contacts + kMaxPairContacts, {});
 }
 
@@ -232,10 +252,9 @@ int Room(Data& data, int n) {
   return room;
 }
 
-// appends one contact point of the pair, for which Room has made room. The id is left to
-// MatchPair, which gives every point of the pair one.
-void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_W, double depth_m) {
-  Contact& c = data.contacts[data.ncontact++];
+// writes one contact point of the pair into c. The id is left to MatchPair and AssignNewIds.
+void WriteContact(Contact& c, const PairWriter& w, const Vec3& p_W, const Vec3& n_W,
+                  double depth_m) {
   c.geom_a = w.ga;
   c.geom_b = w.gb;
   c.body_a = w.body_a;
@@ -250,6 +269,11 @@ void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_
   c.friction_force_W.setZero();
   c.impulse_Ns = 0.0;
   c.group = -1;
+}
+
+// appends one contact point of the pair, for which Room has made room
+void AddContact(Data& data, const PairWriter& w, const Vec3& p_W, const Vec3& n_W, double depth_m) {
+  WriteContact(data.contacts[data.ncontact++], w, p_W, n_W, depth_m);
 }
 
 // MuJoCo's own function for one pair (capsules, meshes, cylinders, ellipsoids); it reads only the
@@ -399,20 +423,86 @@ void RunNarrowJob(void* context) {
   NarrowBlocks(*job->model, *job->scratch, 1);
 }
 
+// writes and matches the points of pairs [begin, end) at the places WritePlaces gave them
+void WriteRange(const Model& model, Data& data, CollisionScratch& s, int begin, int end) {
+  for (int k = begin; k < end; ++k) {
+    const CollisionScratch::PairPoints found = s.pair_points[k];
+    s.pair_new[k] = 0;
+    if (found.count == 0) continue;
+    const auto [g1, g2] = s.broadphase.pairs[k];
+    const ContactPoint* p = s.thread_points[found.thread].data() + found.offset;
+    const PairWriter w = BeginPair(model, data, g1, g2);
+    const int first = s.pair_first[k];
+    for (int i = 0; i < found.count; ++i) {
+      WriteContact(data.contacts[first + i], w, p[i].p_W, p[i].n_W, p[i].depth_m);
+    }
+    s.pair_new[k] = MatchPair(data, s, first, first + found.count) ? 1 : 0;
+  }
+}
+
+// the blocks of the pair list one thread writes, from the front (t = 0) or the back (t = 1)
+void WriteBlocks(const Model& model, Data& data, CollisionScratch& s, int t) {
+  const int npair = s.broadphase.npair;
+  for (;;) {
+    const int block = t == 0 ? s.pair_blocks.TakeFront() : s.pair_blocks.TakeBack();
+    if (block < 0) return;
+    WriteRange(model, data, s, block * kPairBlock, std::min(npair, (block + 1) * kPairBlock));
+  }
+}
+
+void RunWriteJob(void* context) {
+  const auto* job = static_cast<const CollisionScratch::NarrowJob*>(context);
+  WriteBlocks(*job->model, *job->data, *job->scratch, 1);
+}
+
+// the first contact of each pair in the contact list, as one thread writing in pair order would
+// place it, and the contacts' count in *total; false if some pair is left to the tick's thread
+// (its count is not known yet) or the points do not all fit (the one-thread path then counts the
+// warning and drops the same points)
+bool WritePlaces(const Data& data, CollisionScratch& s, int* total) {
+  const int npair = s.broadphase.npair;
+  int next = data.ncontact;
+  for (int k = 0; k < npair; ++k) {
+    const int count = s.pair_points[k].count;
+    if (count < 0) return false;
+    s.pair_first[k] = next;
+    next += count;
+  }
+  *total = next;
+  return next <= static_cast<int>(data.contacts.size());
+}
+
 // fewer pairs than this are not worth the hand-off to the worker
 constexpr int kMinPairsForTwoThreads = 32;
 
 // the narrow phase on two threads (blocks of the pair list taken from both ends), then the
-// contacts written and matched in pair order on the tick's thread: the same contacts, bit for
-// bit, as CollidePair's
+// contacts written and matched in pair order: on both threads again when every pair's count is
+// known and fits, each pair at the place one thread would give it and the new contacts numbered
+// afterwards in contact order; otherwise on the tick's thread. Either way the same contacts, bit
+// for bit, as CollidePair's and MatchAndNumber's
 void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
   const int npair = s.broadphase.npair;
+  const int nblock = (npair + kPairBlock - 1) / kPairBlock;
   s.thread_used = {0, 0};
-  s.pair_blocks.Reset(0, (npair + kPairBlock - 1) / kPairBlock);
-  s.job = {&model, &s};
+  s.pair_blocks.Reset(0, nblock);
+  s.job = {&model, &s, &data};
   worker.Post(&RunNarrowJob, &s.job);
   NarrowBlocks(model, s, 0);
   worker.Finish();
+  int total = 0;
+  if (WritePlaces(data, s, &total)) {
+    s.pair_blocks.Reset(0, nblock);
+    worker.Post(&RunWriteJob, &s.job);
+    WriteBlocks(model, data, s, 0);
+    worker.Finish();
+    for (int k = 0; k < npair; ++k) {
+      if (s.pair_new[k])
+        AssignNewIds(data, s.pair_first[k], s.pair_first[k] + s.pair_points[k].count);
+    }
+    data.ncontact = total;
+    ++s.written_on_two_threads;
+    return;
+  }
   for (int k = 0; k < npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const int begin = data.ncontact;
@@ -425,7 +515,7 @@ void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Wo
       const int fit = Room(data, found.count);
       for (int i = 0; i < fit; ++i) AddContact(data, w, p[i].p_W, p[i].n_W, p[i].depth_m);
     }
-    if (data.ncontact > begin) MatchPair(data, s, begin, data.ncontact);
+    if (data.ncontact > begin) MatchAndNumber(data, s, begin, data.ncontact);
   }
 }
 
@@ -444,7 +534,7 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s, Worker*
     const auto [g1, g2] = s.broadphase.pairs[k];
     const int begin = data.ncontact;
     CollidePair(model, data, s, g1, g2);
-    if (data.ncontact > begin) MatchPair(data, s, begin, data.ncontact);
+    if (data.ncontact > begin) MatchAndNumber(data, s, begin, data.ncontact);
   }
 }
 

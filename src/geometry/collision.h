@@ -69,9 +69,15 @@ struct CollisionScratch {
   std::array<std::vector<ContactPoint>, 2> thread_points;  // (max contacts + kMaxPairContacts)
   std::array<int, 2> thread_used{};                        // points in each buffer this tick
   TwoEndedRange pair_blocks;                               // blocks of kPairBlock pairs
+  // when the two threads also write the contacts (every pair's count known, and all fit): each
+  // pair's first contact in the list, and whether it has a new one (numbered afterwards)
+  std::vector<int> pair_first;          // (pair capacity)
+  std::vector<unsigned char> pair_new;  // (pair capacity)
+  long written_on_two_threads = 0;      // ticks whose contacts both threads wrote, since made
   struct NarrowJob {
     const Model* model = nullptr;
     CollisionScratch* scratch = nullptr;
+    Data* data = nullptr;  // written by the write job, each pair's contacts by one thread
   };
   NarrowJob job;
 

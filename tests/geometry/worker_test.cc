@@ -140,12 +140,17 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
       const Contact& a = d1.contacts[k];
       const Contact& b = d2.contacts[k];
       ASSERT_TRUE(a.id == b.id && a.geom_a == b.geom_a && a.geom_b == b.geom_b &&
-                  SameBits(a.p_W, b.p_W) && SameBits(a.n_W, b.n_W) &&
-                  std::memcmp(&a.depth_m, &b.depth_m, 8) == 0 &&
+                  a.is_new == b.is_new && a.sticking == b.sticking && a.phase == b.phase &&
+                  a.pair_points == b.pair_points && SameBits(a.p_W, b.p_W) &&
+                  SameBits(a.n_W, b.n_W) && SameBits(a.anchor_A, b.anchor_A) &&
+                  SameBits(a.anchor_B, b.anchor_B) && std::memcmp(&a.depth_m, &b.depth_m, 8) == 0 &&
                   std::memcmp(&a.normal_force_N, &b.normal_force_N, 8) == 0)
           << "step " << s << " contact " << k;
     }
+    ASSERT_EQ(d1.next_contact_id, d2.next_contact_id) << "step " << s;
   }
+  // the contacts were written and matched on the two threads in the steps with enough pairs
+  EXPECT_GT(d2.workspace->collision.written_on_two_threads, 100);
   for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
     EXPECT_TRUE(SameBits(d1.bodies[i].x_W, d2.bodies[i].x_W)) << "body " << i;
   }
