@@ -106,41 +106,54 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
   return true;
 }
 
-void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
-                   dynamics::VelocityScratch& forces) {
+namespace {
+
+// group g's contacts: the explicit ones' forces on its bodies, in contact order, and the implicit
+// ones linearised into forces.implicit from the group's first contact's place on (every contact
+// of a group touches only the group's bodies, so groups are independent)
+void GroupContactForces(const Model& model, Data& data, const ContactScratch& scratch,
+                        dynamics::VelocityScratch& forces, int g) {
   const Groups& G = scratch.groups;
-  const auto too_large = [&](int g) {
-    return G.body_start[g + 1] - G.body_start[g] > model.max_group_bodies;
-  };
-  for (int ci = 0; ci < data.ncontact; ++ci) {
-    if (!scratch.laws[ci].implicit || too_large(data.contacts[ci].group)) {
+  const bool too_large = G.body_start[g + 1] - G.body_start[g] > model.max_group_bodies;
+  int n = G.contact_start[g];
+  forces.implicit_start[g] = n;
+  // a geom pair's points are consecutive in data.contacts and in the same group, so its patch
+  // (first point) is known from the previous point instead of searched for again
+  int patch = -1;
+  for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
+    const int ci = G.contacts[k];
+    if (!scratch.laws[ci].implicit || too_large) {
       ExplicitContact(data, scratch.laws[ci], ci, forces);
+      continue;
     }
+    const Contact& c = data.contacts[ci];
+    const bool same_pair = patch >= 0 && G.contacts[k - 1] == ci - 1 &&
+                           data.contacts[ci - 1].geom_a == c.geom_a &&
+                           data.contacts[ci - 1].geom_b == c.geom_b;
+    if (!same_pair) patch = PatchStart(data, ci);
+    if (LinearizeContact(model, data, scratch, ci, patch, forces.implicit[n])) ++n;
   }
-  int n = 0;
-  forces.implicit_start[0] = 0;
+  forces.implicit_end[g] = n;
+}
+
+// fewer contacts than this are not worth the hand-off to the worker
+constexpr int kMinContactsForTwoThreads = 128;
+
+}  // namespace
+
+void ContactForces(const Model& model, Data& data, ContactScratch& scratch,
+                   dynamics::VelocityScratch& forces, geometry::Worker* worker) {
+  const Groups& G = scratch.groups;
   for (int g = 0; g < G.ngroup; ++g) {
-    if (too_large(g)) {
+    if (G.body_start[g + 1] - G.body_start[g] > model.max_group_bodies) {
       data.Warn(Warning::kGroupTooLarge);
-    } else {
-      // a geom pair's points are consecutive in data.contacts and in the same group, so its
-      // patch (first point) is known from the previous point instead of searched for again
-      int patch = -1;
-      for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
-        const int ci = G.contacts[k];
-        const Contact& c = data.contacts[ci];
-        const bool same_pair = patch >= 0 && G.contacts[k - 1] == ci - 1 &&
-                               data.contacts[ci - 1].geom_a == c.geom_a &&
-                               data.contacts[ci - 1].geom_b == c.geom_b;
-        if (!same_pair) patch = PatchStart(data, ci);
-        if (scratch.laws[ci].implicit &&
-            LinearizeContact(model, data, scratch, ci, patch, forces.implicit[n])) {
-          ++n;
-        }
-      }
     }
-    forces.implicit_start[g + 1] = n;
   }
+  const bool share = G.ngroup >= 2 && data.ncontact >= kMinContactsForTwoThreads;
+  geometry::ShareRange(share ? worker : nullptr, scratch.blocks, G.ngroup,
+                       [&model, &data, &scratch, &forces](int g) {
+                         GroupContactForces(model, data, scratch, forces, g);
+                       });
 }
 
 }  // namespace rigidtouch::contact

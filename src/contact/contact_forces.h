@@ -26,9 +26,12 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
                       int patch, dynamics::ImplicitContact& ic);
 
 /// Stage 4 over data.contacts: the explicit contacts' forces, and each group's implicit contacts
-/// in forces.implicit (group g's at [implicit_start[g], implicit_start[g + 1])). A group with more
-/// than Model::max_group_bodies bodies counts Warning::kGroupTooLarge: its contacts are explicit.
-void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
-                   dynamics::VelocityScratch& forces);
+/// in forces.implicit (group g's at [implicit_start[g], implicit_end[g]), implicit_start[g] its
+/// first contact's place in the groups' contact list). A group with more than
+/// Model::max_group_bodies bodies counts Warning::kGroupTooLarge: its contacts are explicit. With
+/// a worker (threads 2), two or more groups and enough contacts, the two threads share the groups
+/// (no contact touches two): the same results, bit for bit.
+void ContactForces(const Model& model, Data& data, ContactScratch& scratch,
+                   dynamics::VelocityScratch& forces, geometry::Worker* worker = nullptr);
 
 }  // namespace rigidtouch::contact

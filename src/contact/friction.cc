@@ -10,27 +10,17 @@ void SlideAnchor(const Data& data, Contact& c, const Vec3& s, const Vec3& f_t, d
 }
 
 void DecidePatchFriction(Data& data, std::span<const PenaltyLaw> laws,
-                         std::span<Vec3> anchor_displacement) {
-  for (int begin = 0; begin < data.ncontact;) {
-    const Contact& first = data.contacts[begin];
-    int end = begin + 1;
-    while (end < data.ncontact && data.contacts[end].geom_a == first.geom_a &&
-           data.contacts[end].geom_b == first.geom_b) {
-      ++end;
-    }
-    if (laws[begin].implicit) {
-      double fn = 0.0, ft = 0.0;
-      for (int ci = begin; ci < end; ++ci) {
-        const Contact& c = data.contacts[ci];
-        fn += laws[ci].k_N_per_m * c.depth_m;
-        anchor_displacement[ci] = AnchorDisplacement(data, c);
-        ft += laws[ci].kt_N_per_m * anchor_displacement[ci].norm();
-      }
-      const bool stick = ft <= laws[begin].mu_static * fn;
-      for (int ci = begin; ci < end; ++ci) data.contacts[ci].sticking = stick;
-    }
-    begin = end;
+                         std::span<Vec3> anchor_displacement, int begin, int end) {
+  if (!laws[begin].implicit) return;
+  double fn = 0.0, ft = 0.0;
+  for (int ci = begin; ci < end; ++ci) {
+    const Contact& c = data.contacts[ci];
+    fn += laws[ci].k_N_per_m * c.depth_m;
+    anchor_displacement[ci] = AnchorDisplacement(data, c);
+    ft += laws[ci].kt_N_per_m * anchor_displacement[ci].norm();
   }
+  const bool stick = ft <= laws[begin].mu_static * fn;
+  for (int ci = begin; ci < end; ++ci) data.contacts[ci].sticking = stick;
 }
 
 }  // namespace rigidtouch::contact

@@ -24,11 +24,12 @@ namespace rigidtouch::contact {
 /// slip limit); `s` is the anchor's stretch before the move.
 void SlideAnchor(const Data& data, Contact& c, const Vec3& s, const Vec3& f_t, double kt);
 
-/// Decides stick or slip per geom pair, from the anchor springs alone: the points of one face are
-/// one contact patch with one friction cone (sum |kt s| <= mu_s sum k d), and a decision on state,
-/// not on velocities, cannot chatter with velocity noise. Only implicit (scene) contacts; writes
-/// their anchor stretch into `anchor_displacement`. A tool contact decides alone (penalty stage).
+/// Decides stick or slip for the geom pair whose points are data.contacts[begin, end), from the
+/// anchor springs alone: the points of one face are one contact patch with one friction cone
+/// (sum |kt s| <= mu_s sum k d), and a decision on state, not on velocities, cannot chatter with
+/// velocity noise. Only implicit (scene) contacts; writes their anchor stretch into
+/// `anchor_displacement`. A tool contact decides alone (penalty stage).
 void DecidePatchFriction(Data& data, std::span<const PenaltyLaw> laws,
-                         std::span<Vec3> anchor_displacement);
+                         std::span<Vec3> anchor_displacement, int begin, int end);
 
 }  // namespace rigidtouch::contact

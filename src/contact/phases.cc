@@ -1,5 +1,7 @@
 #include "contact/phases.h"
 
+#include <algorithm>
+
 #include "contact/friction.h"
 #include "contact/relative_motion.h"
 
@@ -38,24 +40,59 @@ bool InWindow(const Model& model, const WindowState& window, std::int64_t step) 
   return model.render.renderer == RendererKind::kTrain ? k < model.schedule.window_steps : k == 0;
 }
 
-void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch) {
-  BuildGroups(data, scratch.groups);
-  for (int ci = 0; ci < data.ncontact; ++ci) {
-    const Contact& c = data.contacts[ci];
-    // the approach speed only matters for a new contact (a collision onset, GroupWindow)
-    scratch.normal_velocity[ci] = 0.0;
-    if (c.is_new) {
-      Vec3 r_a, r_b;
-      Offsets(data, c, &r_a, &r_b);
-      scratch.normal_velocity[ci] = RelativeVelocity(data, c, r_a, r_b).dot(c.n_W);
+namespace {
+
+// contacts per block the two threads take in ClassifyContacts
+constexpr int kContactBlock = 64;
+// fewer contacts than this are not worth the hand-off to the worker
+constexpr int kMinContactsForTwoThreads = 128;
+
+bool SamePair(const Contact& a, const Contact& b) {
+  return a.geom_a == b.geom_a && a.geom_b == b.geom_b;
+}
+
+// the first contact at or after ci that starts a geom pair's points
+int PairStartFrom(const Data& data, int ci) {
+  while (ci > 0 && ci < data.ncontact && SamePair(data.contacts[ci - 1], data.contacts[ci])) ++ci;
+  return std::min(ci, data.ncontact);
+}
+
+// the geom pairs whose points start in [begin, end): each contact's law (one per pair) and, when
+// new, its approach speed; stick or slip per pair. Writes only those pairs' contacts and entries.
+void ClassifyPairs(const Model& model, Data& data, ContactScratch& scratch, int begin, int end) {
+  for (int first = PairStartFrom(data, begin); first < end;) {
+    int last = first + 1;
+    while (last < data.ncontact && SamePair(data.contacts[first], data.contacts[last])) ++last;
+    const PenaltyLaw law = LawFor(model, data.contacts[first]);
+    for (int ci = first; ci < last; ++ci) {
+      const Contact& c = data.contacts[ci];
+      // the approach speed only matters for a new contact (a collision onset, GroupWindow)
+      scratch.normal_velocity[ci] = 0.0;
+      if (c.is_new) {
+        Vec3 r_a, r_b;
+        Offsets(data, c, &r_a, &r_b);
+        scratch.normal_velocity[ci] = RelativeVelocity(data, c, r_a, r_b).dot(c.n_W);
+      }
+      scratch.laws[ci] = law;
     }
-    // one law per geom pair: its points are consecutive
-    const bool same_pair = ci > 0 && data.contacts[ci - 1].geom_a == c.geom_a &&
-                           data.contacts[ci - 1].geom_b == c.geom_b &&
-                           data.contacts[ci - 1].pair_points == c.pair_points;
-    scratch.laws[ci] = same_pair ? scratch.laws[ci - 1] : LawFor(model, c);
+    DecidePatchFriction(data, scratch.laws, scratch.anchor_displacement, first, last);
+    first = last;
   }
-  DecidePatchFriction(data, scratch.laws, scratch.anchor_displacement);
+}
+
+}  // namespace
+
+void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
+                      geometry::Worker* worker) {
+  BuildGroups(data, scratch.groups);
+  // the pairs are independent: blocks of contacts, each taking the pairs that start in it
+  const int n = data.ncontact;
+  const int nblock = (n + kContactBlock - 1) / kContactBlock;
+  geometry::ShareRange(n >= kMinContactsForTwoThreads ? worker : nullptr, scratch.blocks, nblock,
+                       [&model, &data, &scratch, n](int k) {
+                         ClassifyPairs(model, data, scratch, k * kContactBlock,
+                                       std::min(n, (k + 1) * kContactBlock));
+                       });
   const Groups& G = scratch.groups;
   for (int g = 0; g < G.ngroup; ++g) {
     const WindowState w = GroupWindow(model, data, scratch, g);

@@ -7,6 +7,7 @@
 
 #include "contact/groups.h"
 #include "contact/penalty.h"
+#include "geometry/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -18,6 +19,7 @@ struct ContactScratch {
   std::vector<PenaltyLaw> laws;           // (max_contacts) each contact's law this tick
   std::vector<Vec3> anchor_displacement;  // (max_contacts) stick-anchor stretch (implicit ones)
   std::vector<double> normal_velocity;    // (max_contacts) approach speed of new contacts  [m/s]
+  geometry::TwoEndedRange blocks;         // threads 2: what the two threads share in stages 3, 4
 
   /// Sizes every buffer; the only allocating call.
   void Reserve(int nbody, int max_contacts);
@@ -25,8 +27,11 @@ struct ContactScratch {
 
 /// Stage 3 over data.contacts: builds the groups, gives every contact its law (one per geom pair)
 /// and, when new, its normal velocity, decides stick or slip per patch, and updates each group's
-/// window (data.window) and its contacts' phase.
-void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch);
+/// window (data.window) and its contacts' phase. With a worker (threads 2) and enough contacts,
+/// the two threads share the laws, approach speeds and stick-or-slip decisions (each geom pair's
+/// on one thread): the same results, bit for bit.
+void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
+                      geometry::Worker* worker = nullptr);
 
 /// The collision window of group g: restarted by a new contact that approaches faster than
 /// ContactParams::onset_speed_mps (a collision onset), otherwise the most recent window among

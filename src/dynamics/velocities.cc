@@ -24,7 +24,7 @@ int SolveGroups(const Model& model, Data& data, const contact::Groups& groups,
   for (int g = first; g < last; ++g) {
     const int nb = groups.body_start[g + 1] - groups.body_start[g];
     const std::span<const int> bodies(groups.bodies.data() + groups.body_start[g], nb);
-    const int begin = scratch.implicit_start[g], end = scratch.implicit_start[g + 1];
+    const int begin = scratch.implicit_start[g], end = scratch.implicit_end[g];
     bool solved = false;
     if (end > begin) {
       const std::span<ImplicitContact> implicit(scratch.implicit.data() + begin, end - begin);
@@ -63,11 +63,13 @@ constexpr int kMinContactsForTwoThreads = 64;
 // whether the groups are worth sharing with the worker: two or more with implicit contacts, and
 // enough implicit contacts
 bool WorthSharing(const contact::Groups& groups, const VelocityScratch& scratch) {
-  int solved = 0;
+  int solved = 0, implicit = 0;
   for (int g = 0; g < groups.ngroup; ++g) {
-    solved += scratch.implicit_start[g + 1] > scratch.implicit_start[g] ? 1 : 0;
+    const int n = scratch.implicit_end[g] - scratch.implicit_start[g];
+    solved += n > 0 ? 1 : 0;
+    implicit += n;
   }
-  return solved >= 2 && scratch.implicit_start[groups.ngroup] >= kMinContactsForTwoThreads;
+  return solved >= 2 && implicit >= kMinContactsForTwoThreads;
 }
 
 }  // namespace
@@ -76,7 +78,8 @@ void VelocityScratch::Reserve(int nbody, int max_contacts, int max_group_bodies,
   force_W.resize(nbody);
   torque_W.resize(nbody);
   implicit.resize(max_contacts);
-  implicit_start.assign(nbody + 1, 0);
+  implicit_start.assign(nbody, 0);
+  implicit_end.assign(nbody, 0);
   group_solver.Reserve(max_group_bodies, max_contacts);
   if (threads == 2) worker_solver.Reserve(max_group_bodies, max_contacts);
   kept.Reserve(nbody);

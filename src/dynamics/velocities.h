@@ -27,7 +27,8 @@ struct GroupSolveCounts {
 struct VelocityScratch {
   std::vector<Vec3> force_W, torque_W;    // (nbody) explicit force [N] and torque [N m]
   std::vector<ImplicitContact> implicit;  // (max_contacts) implicit contacts, group by group
-  std::vector<int> implicit_start;        // (nbody + 1) group g's: [start[g], start[g + 1])
+  std::vector<int> implicit_start;        // (nbody) group g's: [start[g], end[g])
+  std::vector<int> implicit_end;          // (nbody)
   GroupSolverScratch group_solver;
   // threads 2: the worker's solver scratch, and the job it is given (UpdateVelocities)
   GroupSolverScratch worker_solver;

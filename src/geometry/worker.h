@@ -68,6 +68,8 @@ class Worker {
   void Wait();
   /// Jobs that Finish ran on the calling thread, since the start.
   long jobs_taken_back() const { return taken_back_; }
+  /// Jobs posted since the start (for the posting thread).
+  long jobs_posted() const { return posted_.load(std::memory_order_relaxed); }
 
  private:
   void Loop();
@@ -81,5 +83,29 @@ class Worker {
   long taken_back_ = 0;  // the calling thread's own count
   std::thread thread_;
 };
+
+/// Runs body(k) for every k in [0, n), once each: with a worker, shared through `range` (this
+/// thread from the front, the worker from the back, until they meet); without one, in order here.
+/// body must be safe to run for different k on the two threads at once. Never allocates.
+template <class Body>
+void ShareRange(Worker* worker, TwoEndedRange& range, int n, const Body& body) {
+  if (worker == nullptr) {
+    for (int k = 0; k < n; ++k) body(k);
+    return;
+  }
+  struct Context {
+    const Body* body;
+    TwoEndedRange* range;
+  } context{&body, &range};
+  range.Reset(0, n);
+  worker->Post(
+      [](void* c) {
+        const auto* x = static_cast<const Context*>(c);
+        for (int k = x->range->TakeBack(); k >= 0; k = x->range->TakeBack()) (*x->body)(k);
+      },
+      &context);
+  for (int k = range.TakeFront(); k >= 0; k = range.TakeFront()) body(k);
+  worker->Finish();
+}
 
 }  // namespace rigidtouch::geometry

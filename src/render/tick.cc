@@ -38,12 +38,12 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   }
 
   // 3. groups and windows: contact groups, laws, stick or slip, collision windows and phases
-  contact::ClassifyContacts(model, data, ws.contact);
+  contact::ClassifyContacts(model, data, ws.contact, ws.worker.get());
 
   // 4. penalty: gravity, gyroscopic and user forces; explicit contacts (tool contacts, Eq. 1's
   // penalty term), scene contacts linearised for the implicit solve
   dynamics::AddFreeMotionForces(model, data, coupling.user, ws.velocity);
-  contact::ContactForces(model, data, ws.contact, ws.velocity);
+  contact::ContactForces(model, data, ws.contact, ws.velocity, ws.worker.get());
 
   // 5. dynamics: the new velocities, implicit per group (backward Euler), free elsewhere
   dynamics::UpdateVelocities(model, data, ws.contact.groups, ws.velocity, ws.worker.get());
