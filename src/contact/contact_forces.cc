@@ -141,7 +141,7 @@ constexpr int kMinContactsForTwoThreads = 128;
 
 }  // namespace
 
-void ContactForces(const Model& model, Data& data, ContactScratch& scratch,
+void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
                    dynamics::VelocityScratch& forces, geometry::Worker* worker) {
   const Groups& G = scratch.groups;
   for (int g = 0; g < G.ngroup; ++g) {
@@ -150,7 +150,7 @@ void ContactForces(const Model& model, Data& data, ContactScratch& scratch,
     }
   }
   const bool share = G.ngroup >= 2 && data.ncontact >= kMinContactsForTwoThreads;
-  geometry::ShareRange(share ? worker : nullptr, scratch.blocks, G.ngroup,
+  geometry::ShareRange(share ? worker : nullptr, G.ngroup,
                        [&model, &data, &scratch, &forces](int g) {
                          GroupContactForces(model, data, scratch, forces, g);
                        });

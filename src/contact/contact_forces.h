@@ -31,7 +31,7 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
 /// Model::max_group_bodies bodies counts Warning::kGroupTooLarge: its contacts are explicit. With
 /// a worker (threads 2), two or more groups and enough contacts, the two threads share the groups
 /// (no contact touches two): the same results, bit for bit.
-void ContactForces(const Model& model, Data& data, ContactScratch& scratch,
+void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
                    dynamics::VelocityScratch& forces, geometry::Worker* worker = nullptr);
 
 }  // namespace rigidtouch::contact

@@ -93,10 +93,7 @@ void BuildGroups(Data& data, Groups& g) {
     for (int i = 0; i < nbody; ++i) {
       if (slot[i] >= 0) g.bodies[slot[i]] = i;
     }
-    for (int c = 0; c < ncontact; ++c) {
-      data.contacts[c].group = 0;
-      g.contacts[c] = c;
-    }
+    for (int c = 0; c < ncontact; ++c) g.contacts[c] = c;
     contact_start[1] = ncontact;
     return;
   }
@@ -105,17 +102,18 @@ void BuildGroups(Data& data, Groups& g) {
   for (int i = 0; i < nbody; ++i) {
     if (body_group[i] >= 0) g.bodies[body_start[body_group[i]] + slot[i]] = i;
   }
-  // contacts per group (counting sort keeps contact order inside a group)
-  for (int c = 0; c < ncontact; ++c) {
-    Contact& con = data.contacts[c];
-    con.group = body_group[con.body_a >= 0 ? con.body_a : con.body_b];
-    ++contact_start[con.group + 1];
-  }
+  // contacts per group (counting sort keeps contact order inside a group); each contact's group
+  // is its dynamic body's (contacts are only read here: the tick's second thread may be working
+  // on other fields of them, ClassifyContacts)
+  const auto group_of = [contacts, body_group](int c) {
+    return body_group[contacts[c].body_a >= 0 ? contacts[c].body_a : contacts[c].body_b];
+  };
+  for (int c = 0; c < ncontact; ++c) ++contact_start[group_of(c) + 1];
   for (int k = 0; k < ngroup; ++k) {
     contact_start[k + 1] += contact_start[k];
     count[k] = contact_start[k];
   }
-  for (int c = 0; c < ncontact; ++c) g.contacts[count[contacts[c].group]++] = c;
+  for (int c = 0; c < ncontact; ++c) g.contacts[count[group_of(c)]++] = c;
 }
 
 }  // namespace rigidtouch::contact

@@ -25,8 +25,9 @@ struct Groups {
   void Reserve(int nbody, int max_contacts);
 };
 
-/// Builds the groups of data.contacts[0 .. ncontact) and writes data.body_group and each
-/// contact's group. Bodies in no contact get group -1. Order is deterministic (by lowest body).
+/// Builds the groups of data.contacts[0 .. ncontact) and writes data.body_group; reads the
+/// contacts' bodies only (ClassifyContacts writes each contact's group). Bodies in no contact get
+/// group -1. Order is deterministic (by lowest body).
 void BuildGroups(Data& data, Groups& groups);
 
 }  // namespace rigidtouch::contact

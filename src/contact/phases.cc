@@ -80,29 +80,40 @@ void ClassifyPairs(const Model& model, Data& data, ContactScratch& scratch, int 
   }
 }
 
+// group g's window (data.window of its bodies), and its contacts' group and phase
+void UpdateWindow(const Model& model, Data& data, const ContactScratch& scratch, int g) {
+  const Groups& G = scratch.groups;
+  const WindowState w = GroupWindow(model, data, scratch, g);
+  for (int k = G.body_start[g]; k < G.body_start[g + 1]; ++k) data.window[G.bodies[k]] = w;
+  const ContactPhase phase =
+      InWindow(model, w, data.step) ? ContactPhase::kColliding : ContactPhase::kResting;
+  for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
+    Contact& c = data.contacts[G.contacts[k]];
+    c.group = g;
+    c.phase = phase;
+  }
+}
+
 }  // namespace
 
 void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
                       geometry::Worker* worker) {
-  BuildGroups(data, scratch.groups);
-  // the pairs are independent: blocks of contacts, each taking the pairs that start in it
+  // the pairs are independent: blocks of contacts, each taking the pairs that start in it. The
+  // groups, whose building only reads the contacts' bodies and which no pair's work reads, are
+  // built first on this thread while the worker starts on the pairs
   const int n = data.ncontact;
   const int nblock = (n + kContactBlock - 1) / kContactBlock;
-  geometry::ShareRange(n >= kMinContactsForTwoThreads ? worker : nullptr, scratch.blocks, nblock,
-                       [&model, &data, &scratch, n](int k) {
-                         ClassifyPairs(model, data, scratch, k * kContactBlock,
-                                       std::min(n, (k + 1) * kContactBlock));
-                       });
+  geometry::ShareRange(
+      n >= kMinContactsForTwoThreads ? worker : nullptr, nblock,
+      [&model, &data, &scratch, n](int k) {
+        ClassifyPairs(model, data, scratch, k * kContactBlock,
+                      std::min(n, (k + 1) * kContactBlock));
+      },
+      [&data, &scratch] { BuildGroups(data, scratch.groups); });
+  // the windows, group by group (each group's bodies and contacts are its own)
   const Groups& G = scratch.groups;
-  for (int g = 0; g < G.ngroup; ++g) {
-    const WindowState w = GroupWindow(model, data, scratch, g);
-    for (int k = G.body_start[g]; k < G.body_start[g + 1]; ++k) data.window[G.bodies[k]] = w;
-    const ContactPhase phase =
-        InWindow(model, w, data.step) ? ContactPhase::kColliding : ContactPhase::kResting;
-    for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
-      data.contacts[G.contacts[k]].phase = phase;
-    }
-  }
+  geometry::ShareRange(n >= kMinContactsForTwoThreads && G.ngroup >= 2 ? worker : nullptr, G.ngroup,
+                       [&model, &data, &scratch](int g) { UpdateWindow(model, data, scratch, g); });
 }
 
 }  // namespace rigidtouch::contact

@@ -19,7 +19,6 @@ struct ContactScratch {
   std::vector<PenaltyLaw> laws;           // (max_contacts) each contact's law this tick
   std::vector<Vec3> anchor_displacement;  // (max_contacts) stick-anchor stretch (implicit ones)
   std::vector<double> normal_velocity;    // (max_contacts) approach speed of new contacts  [m/s]
-  geometry::TwoEndedRange blocks;         // threads 2: what the two threads share in stages 3, 4
 
   /// Sizes every buffer; the only allocating call.
   void Reserve(int nbody, int max_contacts);

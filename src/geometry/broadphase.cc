@@ -151,12 +151,14 @@ void Broadphase::Reserve(const Model& model, int pair_capacity) {
     bound->assign(order.size() + kMaxLanes - 1, std::numeric_limits<float>::quiet_NaN());
   }
   hits.assign(order.size(), 0);
+  upper_hits.assign(order.size(), 0);
 #if defined(RIGIDTOUCH_SWEEP_AVX2)
   wide = __builtin_cpu_supports("avx2") != 0;
 #else
   wide = false;
 #endif
   pairs.assign(pair_capacity, {-1, -1});
+  upper_pairs.assign(pair_capacity, {-1, -1});
   npair = 0;
   dropped = 0;
 }
@@ -180,11 +182,19 @@ bool CanCollide(const GeomModel& a, const GeomModel& b) {
 
 namespace {
 
+// candidate pairs as one part of the sweep writes them
+struct PairSink {
+  std::pair<int, int>* pairs;
+  int capacity;
+  int count = 0;
+  int dropped = 0;
+};
+
 // appends candidate pair (a, b) unless the scene excludes its bodies (`excluded`: MJCF
-// <contact><exclude>, sorted; empty in most scenes); beyond `capacity` pairs it counts the pair as
-// dropped
-void AddPair(const std::vector<std::pair<int, int>>& excluded, int capacity, Broadphase& bp, int a,
-             int b) {
+// <contact><exclude>, sorted; empty in most scenes); beyond the sink's capacity it counts the pair
+// as dropped
+void AddPair(const std::vector<std::pair<int, int>>& excluded, const Broadphase& bp, PairSink& out,
+             int a, int b) {
   if (!excluded.empty()) {
     const int ba = bp.filters[a].body, bb = bp.filters[b].body;
     if (std::binary_search(excluded.begin(), excluded.end(),
@@ -192,10 +202,10 @@ void AddPair(const std::vector<std::pair<int, int>>& excluded, int capacity, Bro
       return;
     }
   }
-  if (bp.npair < capacity) {
-    bp.pairs[bp.npair++] = {a, b};
+  if (out.count < out.capacity) {
+    out.pairs[out.count++] = {a, b};
   } else {
-    ++bp.dropped;
+    ++out.dropped;
   }
 }
 
@@ -208,27 +218,31 @@ void AddPair(const std::vector<std::pair<int, int>>& excluded, int capacity, Bro
 // exceeds i's float upper bound: the double bounds compare the same way, so the double sweep has
 // stopped by then, and the places past its stop within the block fail the double test (their
 // lower bounds are larger still).
-void Sweep(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
+void FloatBoundsOf(Broadphase& bp) {
+  const int n = static_cast<int>(bp.order.size());
+  for (int i = 0; i < n; ++i) {
+    bp.flo_s[i] = FloatOf(bp.lo_s[i]);
+    bp.fhi_s[i] = FloatOf(bp.hi_s[i]);
+    bp.flo_p[i] = FloatOf(bp.lo_p[i]);
+    bp.fhi_p[i] = FloatOf(bp.hi_p[i]);
+    bp.flo_q[i] = FloatOf(bp.lo_q[i]);
+    bp.fhi_q[i] = FloatOf(bp.hi_q[i]);
+  }
+}
+
+// the sweep's pairs of places [begin, end) (each with the places after it, then the planes), in
+// order, into `out`, with `hits` as scratch; reads the float bounds of every place
+void Sweep(const Model& model, std::span<const GeomPose> poses, const Broadphase& bp, int begin,
+           int end, int* hits, PairSink& out) {
   const int n = static_cast<int>(bp.order.size());
   const int* order = bp.order.data();
   const double *lo_s = bp.lo_s.data(), *hi_s = bp.hi_s.data(), *lo_p = bp.lo_p.data(),
                *hi_p = bp.hi_p.data(), *lo_q = bp.lo_q.data(), *hi_q = bp.hi_q.data();
   const Broadphase::Filter* filters = bp.filters.data();
   const std::vector<std::pair<int, int>>& excluded = model.excluded_body_pairs;
-  const int capacity = static_cast<int>(bp.pairs.size());
-  float *flo_s = bp.flo_s.data(), *fhi_s = bp.fhi_s.data(), *flo_p = bp.flo_p.data(),
-        *fhi_p = bp.fhi_p.data(), *flo_q = bp.flo_q.data(), *fhi_q = bp.fhi_q.data();
-  for (int i = 0; i < n; ++i) {
-    flo_s[i] = FloatOf(lo_s[i]);
-    fhi_s[i] = FloatOf(hi_s[i]);
-    flo_p[i] = FloatOf(lo_p[i]);
-    fhi_p[i] = FloatOf(hi_p[i]);
-    flo_q[i] = FloatOf(lo_q[i]);
-    fhi_q[i] = FloatOf(hi_q[i]);
-  }
-  const FloatBounds fb{flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q};
-  int* hits = bp.hits.data();
-  for (int i = 0; i < n; ++i) {
+  const FloatBounds fb{bp.flo_s.data(), bp.fhi_s.data(), bp.flo_p.data(),
+                       bp.fhi_p.data(), bp.flo_q.data(), bp.fhi_q.data()};
+  for (int i = begin; i < end; ++i) {
     const int a = order[i];
 #if defined(RIGIDTOUCH_SWEEP_AVX2)
     const int nhit = bp.wide ? ScanAvx2(fb, i, n, hits) : ScanPortable(fb, i, n, hits);
@@ -240,20 +254,53 @@ void Sweep(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) 
       const int j = hits[k];
       if (lo_q[i] <= hi_q[j] && lo_q[j] <= hi_q[i] && lo_p[i] <= hi_p[j] && lo_p[j] <= hi_p[i] &&
           lo_s[i] <= hi_s[j] && lo_s[j] <= hi_s[i] && CanCollide(filters[a], filters[order[j]])) {
-        AddPair(excluded, capacity, bp, a, order[j]);
+        AddPair(excluded, bp, out, a, order[j]);
       }
     }
     for (int p : bp.planes) {
       if (CanCollide(filters[a], filters[p]) && BelowPlane(bp.boxes[a], poses[p])) {
-        AddPair(excluded, capacity, bp, a, p);
+        AddPair(excluded, bp, out, a, p);
       }
     }
   }
 }
 
+// fewer boxes than this are not worth the hand-off to the worker
+constexpr int kMinBoxesForTwoThreads = 256;
+
+// the sweep of all places: the pairs of the first half of the places into bp.pairs and those of
+// the second into bp.upper_pairs, on either thread (with a worker, one half each), then appended
+// in order: the list and the dropped count of one sweep from the first place to the last
+void SweepAll(const Model& model, std::span<const GeomPose> poses, Broadphase& bp, Worker* worker) {
+  const int n = static_cast<int>(bp.order.size());
+  const int capacity = static_cast<int>(bp.pairs.size());
+  if (worker == nullptr || n < kMinBoxesForTwoThreads) {
+    PairSink out{bp.pairs.data(), capacity};
+    Sweep(model, poses, bp, 0, n, bp.hits.data(), out);
+    bp.npair = out.count;
+    bp.dropped = out.dropped;
+    return;
+  }
+  const int half = n / 2;
+  PairSink lower{bp.pairs.data(), capacity}, upper{bp.upper_pairs.data(), capacity};
+  ShareRange(worker, 2, [&](int part) {
+    if (part == 0) {
+      Sweep(model, poses, bp, 0, half, bp.hits.data(), lower);
+    } else {
+      Sweep(model, poses, bp, half, n, bp.upper_hits.data(), upper);
+    }
+  });
+  const int room = capacity - lower.count;
+  const int kept = std::min(room, upper.count);
+  std::copy(upper.pairs, upper.pairs + kept, bp.pairs.data() + lower.count);
+  bp.npair = lower.count + kept;
+  bp.dropped = lower.dropped + (upper.count - kept) + upper.dropped;
+}
+
 }  // namespace
 
-void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
+void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp,
+               Worker* worker) {
   bp.npair = 0;
   bp.dropped = 0;
   const int n = static_cast<int>(bp.order.size());
@@ -330,7 +377,8 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
     lo_q[j] = q0;
     hi_q[j] = q1;
   }
-  Sweep(model, poses, bp);
+  FloatBoundsOf(bp);
+  SweepAll(model, poses, bp, worker);
 }
 
 }  // namespace rigidtouch::geometry

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "geometry/narrow_phase.h"
+#include "geometry/worker.h"
 #include "rigidtouch/model.h"
 
 namespace rigidtouch::geometry {
@@ -34,13 +35,16 @@ struct Broadphase {
   // NaN past the last geom, so that a block read there overlaps nothing
   std::vector<float> flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q;  // (non-plane geoms + 7)
   std::vector<int> hits;  // (non-plane geoms) the places whose float boxes overlap one place's
-  bool wide = false;      // the float test runs eight places at once (AVX2, from the CPU)
+  std::vector<int> upper_hits;  // (non-plane geoms) the same for the worker's half of the sweep
+  bool wide = false;            // the float test runs eight places at once (AVX2, from the CPU)
   // each geom's collision filter from the model (Reserve), read for every candidate pair
   struct Filter {
     int body = -1, contype = 0, conaffinity = 0;
   };
   std::vector<Filter> filters;             // (ngeom)
   std::vector<std::pair<int, int>> pairs;  // (capacity) candidate pairs, geom indices
+  // (capacity) with a worker: the pairs of the sweep's second half, appended to `pairs` after it
+  std::vector<std::pair<int, int>> upper_pairs;
   int npair = 0;
   int dropped = 0;  // candidates beyond capacity this tick
 
@@ -55,7 +59,10 @@ void GeomPoses(const Model& model, std::span<const BodyState> bodies, std::span<
 /// (contype1 & conaffinity2) || (contype2 & conaffinity1).
 bool CanCollide(const GeomModel& a, const GeomModel& b);
 
-/// Fills bp.pairs with the candidate pairs for the current poses, in a deterministic order.
-void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp);
+/// Fills bp.pairs with the candidate pairs for the current poses, in a deterministic order. With
+/// a worker (threads 2) and enough boxes the two threads sweep half of the boxes each: the same
+/// pairs in the same order.
+void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp,
+               Worker* worker = nullptr);
 
 }  // namespace rigidtouch::geometry

@@ -487,6 +487,9 @@ void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Wo
   s.pair_blocks.Reset(0, nblock);
   s.job = {&model, &s, &data};
   worker.Post(&RunNarrowJob, &s.job);
+  // while the worker starts, last tick's contacts are indexed (the narrow phase does not read
+  // them)
+  RememberPrevious(data, s);
   NarrowBlocks(model, s, 0);
   worker.Finish();
   int total = 0;
@@ -522,14 +525,14 @@ void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Wo
 }  // namespace
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s, Worker* worker) {
-  RememberPrevious(data, s);
   UpdatePoses(model, data, s);
-  FindPairs(model, s.poses, s.broadphase);
+  FindPairs(model, s.poses, s.broadphase, worker);
   if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
   if (worker != nullptr && s.broadphase.npair >= kMinPairsForTwoThreads) {
     CollideOnTwoThreads(model, data, s, *worker);
     return;
   }
+  RememberPrevious(data, s);
   for (int k = 0; k < s.broadphase.npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const int begin = data.ncontact;

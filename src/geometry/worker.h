@@ -1,11 +1,11 @@
 // A second thread for the tick (Model::threads 2): started when the Data is made (the Workspace
 // owns it), it waits for a job, runs it, and says it is done. The stages that share work with it
-// (the narrow phase, the group solves) take it as an argument. It lives in geometry/, the folder
-// every other stage may include. Posting and finishing never allocate, lock or throw: the
-// hand-off is three counters (C++20 atomic wait / notify after a spin), so the haptic thread stays
-// lock-free, and a job the worker has not taken when the tick's thread is ready for it is run on
-// the tick's thread, so a worker that the system has not scheduled never holds the tick up
-// (docs/decisions.md, "A second thread in the tick").
+// (collision, classification, contact forces, the group solves) take it as an argument. It lives
+// in geometry/, the folder every other stage may include. Posting and finishing never allocate,
+// lock or throw: the hand-off is three counters (C++20 atomic wait / notify after a spin), so the
+// haptic thread stays lock-free, and a job the worker has not taken when the tick's thread is
+// ready for it is run on the tick's thread, so a worker that the system has not scheduled never
+// holds the tick up (docs/decisions.md, "A second thread in the tick").
 #pragma once
 
 #include <atomic>
@@ -70,6 +70,8 @@ class Worker {
   long jobs_taken_back() const { return taken_back_; }
   /// Jobs posted since the start (for the posting thread).
   long jobs_posted() const { return posted_.load(std::memory_order_relaxed); }
+  /// A range for the posting thread and the job to share (ShareRange).
+  TwoEndedRange& range() { return range_; }
 
  private:
   void Loop();
@@ -81,31 +83,41 @@ class Worker {
   Job job_ = nullptr;  // written before posted_ is raised, read by whoever takes the job
   void* context_ = nullptr;
   long taken_back_ = 0;  // the calling thread's own count
+  TwoEndedRange range_;
   std::thread thread_;
 };
 
-/// Runs body(k) for every k in [0, n), once each: with a worker, shared through `range` (this
-/// thread from the front, the worker from the back, until they meet); without one, in order here.
-/// body must be safe to run for different k on the two threads at once. Never allocates.
-template <class Body>
-void ShareRange(Worker* worker, TwoEndedRange& range, int n, const Body& body) {
+/// Runs body(k) for every k in [0, n), once each: with a worker, shared through the worker's
+/// range (this thread from the front, the worker from the back, until they meet); without one, in
+/// order here. body must be safe to run for different k on the two threads at once. before(),
+/// if given, runs first on this thread while the worker starts on the range: for work of the
+/// tick's thread that the range's work neither reads nor writes. Never allocates.
+template <class Body, class Before>
+void ShareRange(Worker* worker, int n, const Body& body, const Before& before) {
   if (worker == nullptr) {
+    before();
     for (int k = 0; k < n; ++k) body(k);
     return;
   }
   struct Context {
     const Body* body;
     TwoEndedRange* range;
-  } context{&body, &range};
-  range.Reset(0, n);
+  } context{&body, &worker->range()};
+  worker->range().Reset(0, n);
   worker->Post(
       [](void* c) {
         const auto* x = static_cast<const Context*>(c);
         for (int k = x->range->TakeBack(); k >= 0; k = x->range->TakeBack()) (*x->body)(k);
       },
       &context);
-  for (int k = range.TakeFront(); k >= 0; k = range.TakeFront()) body(k);
+  before();
+  for (int k = worker->range().TakeFront(); k >= 0; k = worker->range().TakeFront()) body(k);
   worker->Finish();
+}
+
+template <class Body>
+void ShareRange(Worker* worker, int n, const Body& body) {
+  ShareRange(worker, n, body, [] {});
 }
 
 }  // namespace rigidtouch::geometry

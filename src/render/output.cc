@@ -73,8 +73,13 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequenc
   data.tool_penetration_m = 0.0;
   data.tool_contacts = 0;
   Vec3 tool_torque = Vec3::Zero();
-  for (int ci = 0; ci < data.ncontact; ++ci) {
-    const Contact& c = data.contacts[ci];
+  // the tool's contacts are among its group's (this tick's groups, stage 3), in contact order
+  const contact::Groups& G = data.workspace->contact.groups;
+  const int group = data.ncontact > 0 ? data.body_group[tool] : -1;
+  const int begin = group >= 0 ? G.contact_start[group] : 0;
+  const int end = group >= 0 ? G.contact_start[group + 1] : 0;
+  for (int k = begin; k < end; ++k) {
+    const Contact& c = data.contacts[G.contacts[k]];
     if (c.body_a != tool && c.body_b != tool) continue;
     const double sign = c.body_a == tool ? 1.0 : -1.0;
     const Vec3 f = sign * (c.normal_force_N * c.n_W + c.friction_force_W);

@@ -12,8 +12,9 @@ namespace rigidtouch::render {
 /// Returns whether it scaled. Used by the render stage and by the haptic loop's last guard.
 bool LimitForce(double max_force_N, Vec3& force_N, Vec3& torque_Nm);
 
-/// Sums the tool's contact forces into data (tool_penalty_force_W, penetration, normal, count)
-/// and returns the command: penalty (or coupling) + Eq. 9 impulsive force, clipped to
+/// Sums the tool's contact forces into data (tool_penalty_force_W, penetration, normal, count;
+/// the contacts of the tool's group, as this tick's stage 3 built the groups) and returns the
+/// command: penalty (or coupling) + Eq. 9 impulsive force, clipped to
 /// DeviceParams::max_force_N (Warning::kForceClipped, and kImpulseClipped when it held an
 /// impulsive part). Where the impulse over h or the sum overflows, the parts are added in units
 /// of the larger one, so a finite clipped answer is still found.

@@ -390,10 +390,12 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
     m.geoms.push_back(ball);
     poses.push_back(GeomPose{Vec3(-0.125 + 0.015625 * k, 0.0, 0.25), Mat3::Identity()});
   }
-  Broadphase wide, narrow;
+  Broadphase wide, narrow, shared;
   wide.Reserve(m, 1 << 16);
   narrow.Reserve(m, 1 << 16);
   narrow.wide = false;
+  shared.Reserve(m, 1 << 16);
+  Worker worker;  // `shared` sweeps half of the places on it
   ReferenceSweep reference(m);
   std::normal_distribution<double> jitter(0.0, 1e-4);
   int total = 0, compared = 0, axis_switches = 0;
@@ -428,6 +430,7 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
     const int axis_before = wide.axis;
     FindPairs(m, used, wide);
     FindPairs(m, used, narrow);
+    FindPairs(m, used, shared, &worker);
     axis_switches += wide.axis != axis_before ? 1 : 0;
     const std::vector<std::pair<int, int>> expected = reference.Find(m, used);
     const std::vector<std::pair<int, int>> found(wide.pairs.begin(),
@@ -437,6 +440,10 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
     ASSERT_EQ(wide.dropped, 0);
     ASSERT_EQ(found, expected) << "tick " << tick;
     ASSERT_EQ(found4, expected) << "tick " << tick;
+    const std::vector<std::pair<int, int>> found_shared(shared.pairs.begin(),
+                                                        shared.pairs.begin() + shared.npair);
+    ASSERT_EQ(found_shared, expected) << "tick " << tick;
+    ASSERT_EQ(shared.dropped, 0);
     EXPECT_NE(std::find(expected.begin(), expected.end(), std::pair(touching, touching + 1)),
               expected.end())
         << "tick " << tick;
@@ -477,6 +484,30 @@ TEST(BroadphaseTest, CapacityDropsAndCounts) {
   EXPECT_EQ(few.npair, 5);
   EXPECT_EQ(few.dropped, all.npair - 5);
   for (int k = 0; k < 5; ++k) EXPECT_EQ(few.pairs[k], all.pairs[k]);
+}
+
+// the sweep shared by two threads (each half of the places into its own list, appended) keeps
+// and drops what one sweep does, wherever the capacity ends: in the first half's pairs, at its
+// end, or in the second half's
+TEST(BroadphaseTest, TwoThreadsKeepAndDropAsOne) {
+  std::mt19937_64 rng(23);
+  std::vector<GeomPose> poses;
+  const Model m = PileModel(6, 6, 10, poses, rng);
+  Broadphase all;
+  all.Reserve(m, 1 << 16);
+  FindPairs(m, poses, all);
+  ASSERT_GT(all.npair, 1000);
+  Worker worker;
+  for (const int capacity : {5, all.npair / 3, all.npair / 2, 2 * all.npair / 3, all.npair - 1,
+                             all.npair, all.npair + 7}) {
+    Broadphase some;
+    some.Reserve(m, capacity);
+    FindPairs(m, poses, some, &worker);
+    const int kept = std::min(capacity, all.npair);
+    ASSERT_EQ(some.npair, kept) << capacity;
+    EXPECT_EQ(some.dropped, all.npair - kept) << capacity;
+    for (int k = 0; k < kept; ++k) ASSERT_EQ(some.pairs[k], all.pairs[k]) << capacity << " " << k;
+  }
 }
 
 }  // namespace
