@@ -26,9 +26,10 @@ struct ContactScratch {
 
 /// Stage 3 over data.contacts: builds the groups, gives every contact its law (one per geom pair)
 /// and, when new, its normal velocity, decides stick or slip per patch, and updates each group's
-/// window (data.window) and its contacts' phase. With a worker (threads 2) and enough contacts,
-/// the two threads share the laws, approach speeds and stick-or-slip decisions (each geom pair's
-/// on one thread): the same results, bit for bit.
+/// window (data.window) and its contacts' group and phase. With a worker (threads 2) and enough
+/// contacts, the two threads share the laws, approach speeds and stick-or-slip decisions (each
+/// geom pair's on one thread, while this thread builds the groups) and then the windows (each
+/// group's on one thread): the same results, bit for bit.
 void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
                       geometry::Worker* worker = nullptr);
 

@@ -209,15 +209,7 @@ void AddPair(const std::vector<std::pair<int, int>>& excluded, const Broadphase&
   }
 }
 
-// the pairs of the boxes in sweep order (bp.order and the bounds at their places): those of the
-// plain sweep (for each place i, the places j > i in order whose double boxes overlap i's, then
-// the planes), which float copies of the bounds find faster: a block of places is tested at once
-// against i's float box. Every bound goes through the same non-decreasing FloatOf, so the float
-// test passes every pair the double test passes; the double test then decides each pair the
-// float test let through, in order. The scan stops after the block where a float lower bound
-// exceeds i's float upper bound: the double bounds compare the same way, so the double sweep has
-// stopped by then, and the places past its stop within the block fail the double test (their
-// lower bounds are larger still).
+// the float copies of the bounds, in sweep order (Sweep)
 void FloatBoundsOf(Broadphase& bp) {
   const int n = static_cast<int>(bp.order.size());
   for (int i = 0; i < n; ++i) {
@@ -230,8 +222,16 @@ void FloatBoundsOf(Broadphase& bp) {
   }
 }
 
-// the sweep's pairs of places [begin, end) (each with the places after it, then the planes), in
-// order, into `out`, with `hits` as scratch; reads the float bounds of every place
+// the pairs of the boxes in sweep order (bp.order and the bounds at their places): those of the
+// plain sweep (for each place i, the places j > i in order whose double boxes overlap i's, then
+// the planes), which float copies of the bounds find faster: a block of places is tested at once
+// against i's float box. Every bound goes through the same non-decreasing FloatOf, so the float
+// test passes every pair the double test passes; the double test then decides each pair the
+// float test let through, in order. The scan stops after the block where a float lower bound
+// exceeds i's float upper bound: the double bounds compare the same way, so the double sweep has
+// stopped by then, and the places past its stop within the block fail the double test (their
+// lower bounds are larger still). This sweeps places [begin, end) only (each with every place
+// after it, then the planes), in order, into `out`, with `hits` as scratch.
 void Sweep(const Model& model, std::span<const GeomPose> poses, const Broadphase& bp, int begin,
            int end, int* hits, PairSink& out) {
   const int n = static_cast<int>(bp.order.size());
