@@ -499,8 +499,9 @@ void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Wo
     WriteBlocks(model, data, s, 0);
     worker.Finish();
     for (int k = 0; k < npair; ++k) {
-      if (s.pair_new[k])
+      if (s.pair_new[k]) {
         AssignNewIds(data, s.pair_first[k], s.pair_first[k] + s.pair_points[k].count);
+      }
     }
     data.ncontact = total;
     ++s.written_on_two_threads;

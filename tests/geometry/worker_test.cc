@@ -142,10 +142,13 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
       const Contact& b = d2.contacts[k];
       ASSERT_TRUE(a.id == b.id && a.geom_a == b.geom_a && a.geom_b == b.geom_b &&
                   a.is_new == b.is_new && a.sticking == b.sticking && a.phase == b.phase &&
-                  a.pair_points == b.pair_points && SameBits(a.p_W, b.p_W) &&
+                  a.group == b.group && a.pair_points == b.pair_points && SameBits(a.p_W, b.p_W) &&
                   SameBits(a.n_W, b.n_W) && SameBits(a.anchor_A, b.anchor_A) &&
                   SameBits(a.anchor_B, b.anchor_B) && std::memcmp(&a.depth_m, &b.depth_m, 8) == 0 &&
                   std::memcmp(&a.normal_force_N, &b.normal_force_N, 8) == 0)
+          << "step " << s << " contact " << k;
+      // each contact's group is its dynamic body's (stage 3 writes it with the windows)
+      ASSERT_EQ(a.group, d1.body_group[a.body_a >= 0 ? a.body_a : a.body_b])
           << "step " << s << " contact " << k;
     }
     ASSERT_EQ(d1.next_contact_id, d2.next_contact_id) << "step " << s;
