@@ -11,8 +11,9 @@ import csv
 import math
 import sys
 
-COLOURS = {'rigidtouch': '#1b6ac9', 'bullet': '#d9731a', 'mujoco': '#2a9d3a'}
-W, H, L, R, T, B = 640, 420, 70, 130, 20, 50
+COLOURS = {'rigidtouch': '#1b6ac9', 'rigidtouch_2threads': '#7a3fc4', 'bullet': '#d9731a',
+           'mujoco': '#2a9d3a'}
+W, H, L, R, T, B = 660, 420, 70, 150, 20, 50
 
 
 def main():
