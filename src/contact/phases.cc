@@ -97,7 +97,7 @@ void UpdateWindow(const Model& model, Data& data, const ContactScratch& scratch,
 }  // namespace
 
 void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
-                      geometry::Worker* worker) {
+                      geometry::Worker* worker, geometry::Task alongside) {
   // the pairs are independent: blocks of contacts, each taking the pairs that start in it. The
   // groups, whose building only reads the contacts' bodies and which no pair's work reads, are
   // built first on this thread while the worker starts on the pairs
@@ -109,7 +109,10 @@ void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
         ClassifyPairs(model, data, scratch, k * kContactBlock,
                       std::min(n, (k + 1) * kContactBlock));
       },
-      [&data, &scratch] { BuildGroups(data, scratch.groups); });
+      [&data, &scratch, alongside] {
+        BuildGroups(data, scratch.groups);
+        alongside();
+      });
   // the windows, group by group (each group's bodies and contacts are its own)
   const Groups& G = scratch.groups;
   geometry::ShareRange(n >= kMinContactsForTwoThreads && G.ngroup >= 2 ? worker : nullptr, G.ngroup,

@@ -29,9 +29,10 @@ struct ContactScratch {
 /// window (data.window) and its contacts' group and phase. With a worker (threads 2) and enough
 /// contacts, the two threads share the laws, approach speeds and stick-or-slip decisions (each
 /// geom pair's on one thread, while this thread builds the groups) and then the windows (each
-/// group's on one thread): the same results, bit for bit.
+/// group's on one thread): the same results, bit for bit. `alongside` runs on this thread with the
+/// building of the groups: work of the caller's that reads and writes nothing this stage does.
 void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
-                      geometry::Worker* worker = nullptr);
+                      geometry::Worker* worker = nullptr, geometry::Task alongside = {});
 
 /// The collision window of group g: restarted by a new contact that approaches faster than
 /// ContactParams::onset_speed_mps (a collision onset), otherwise the most recent window among

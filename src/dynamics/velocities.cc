@@ -111,6 +111,14 @@ void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& use
   scratch.torque_W[model.tool] += user.torque_Nm;
 }
 
+geometry::Task FreeMotionForces::AsTask() {
+  return {[](void* context) {
+            const auto& f = *static_cast<const FreeMotionForces*>(context);
+            AddFreeMotionForces(f.model, f.data, f.user, f.scratch);
+          },
+          this};
+}
+
 void UpdateVelocities(const Model& model, Data& data, const contact::Groups& groups,
                       VelocityScratch& scratch, geometry::Worker* worker) {
   const int nbody = static_cast<int>(model.bodies.size());

@@ -71,6 +71,18 @@ struct VelocityScratch {
 void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& user,
                          VelocityScratch& scratch);
 
+/// AddFreeMotionForces's arguments, for running it as a task alongside another stage's shared
+/// work (it reads only the model, the bodies' rotations and angular velocities, and the user
+/// wrench, and writes only the scratch's force sums).
+struct FreeMotionForces {
+  const Model& model;
+  const Data& data;
+  const Wrench& user;
+  VelocityScratch& scratch;
+  /// A task that calls AddFreeMotionForces with these arguments (this object must outlive it).
+  geometry::Task AsTask();
+};
+
 /// Stage 5: the new velocities. A group with implicit contacts is solved by SolveGroupVelocities
 /// (Warning::kSolverFailed, then free motion, if that fails); every other body moves freely under
 /// its explicit force. Writes each implicit contact's forces at the new velocities back into

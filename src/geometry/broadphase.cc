@@ -16,6 +16,9 @@ namespace {
 // far as over the current one, so that a scene about as wide as it is deep keeps its order
 constexpr double kAxisSwitchRatio = 2.0;
 
+// places per block of the sweep the two threads share
+constexpr int kPlaceBlock = 32;
+
 Aabb Bounds(const GeomModel& g, const GeomPose& pose) {
   Vec3 half;
   switch (g.type) {
@@ -152,6 +155,8 @@ void Broadphase::Reserve(const Model& model, int pair_capacity) {
   }
   hits.assign(order.size(), 0);
   upper_hits.assign(order.size(), 0);
+  block_begin.assign(order.size() / kPlaceBlock + 1, 0);
+  block_count.assign(order.size() / kPlaceBlock + 1, 0);
 #if defined(RIGIDTOUCH_SWEEP_AVX2)
   wide = __builtin_cpu_supports("avx2") != 0;
 #else
@@ -265,36 +270,77 @@ void Sweep(const Model& model, std::span<const GeomPose> poses, const Broadphase
   }
 }
 
-// fewer boxes than this are not worth the hand-off to the worker
-constexpr int kMinBoxesForTwoThreads = 256;
+struct SweepJob {
+  const Model* model;
+  std::span<const GeomPose> poses;
+  Broadphase* bp;
+  PairSink* sink;
+};
 
-// the sweep of all places: the pairs of the first half of the places into bp.pairs and those of
-// the second into bp.upper_pairs, on either thread (with a worker, one half each), then appended
-// in order: the list and the dropped count of one sweep from the first place to the last
+// the blocks of places one thread sweeps: from the front (t = 0, into `out` in order) or the
+// back (t = 1, each block's place in `out` recorded); returns how many it took (from the front:
+// blocks 0 to that count - 1)
+int SweepBlocks(const Model& model, std::span<const GeomPose> poses, Broadphase& bp, PairSink& out,
+                int t) {
+  const int n = static_cast<int>(bp.order.size());
+  int taken = 0;
+  for (;;) {
+    const int block = t == 0 ? bp.place_blocks.TakeFront() : bp.place_blocks.TakeBack();
+    if (block < 0) return taken;
+    ++taken;
+    const int begin = block * kPlaceBlock, end = std::min(n, begin + kPlaceBlock);
+    if (t == 0) {
+      Sweep(model, poses, bp, begin, end, bp.hits.data(), out);
+    } else {
+      const int first = out.count + out.dropped;
+      Sweep(model, poses, bp, begin, end, bp.upper_hits.data(), out);
+      bp.block_begin[block] = first;
+      bp.block_count[block] = out.count + out.dropped - first;
+    }
+  }
+}
+
+void RunSweepJob(void* context) {
+  const auto* job = static_cast<const SweepJob*>(context);
+  SweepBlocks(*job->model, job->poses, *job->bp, *job->sink, 1);
+}
+
+// the sweep of all places, the list and the dropped count of one sweep from the first place to
+// the last. With a worker, the threads take blocks of places from both ends: the front's pairs go
+// to bp.pairs in order, the back's to bp.upper_pairs block by block (the last block first), and
+// are then appended in block order. If the back's buffer ran out (it holds the last blocks, not
+// the first), the back's blocks are swept again here, in order.
 void SweepAll(const Model& model, std::span<const GeomPose> poses, Broadphase& bp, Worker* worker) {
   const int n = static_cast<int>(bp.order.size());
   const int capacity = static_cast<int>(bp.pairs.size());
+  PairSink lower{bp.pairs.data(), capacity};
   if (worker == nullptr || n < kMinBoxesForTwoThreads) {
-    PairSink out{bp.pairs.data(), capacity};
-    Sweep(model, poses, bp, 0, n, bp.hits.data(), out);
-    bp.npair = out.count;
-    bp.dropped = out.dropped;
+    Sweep(model, poses, bp, 0, n, bp.hits.data(), lower);
+    bp.npair = lower.count;
+    bp.dropped = lower.dropped;
     return;
   }
-  const int half = n / 2;
-  PairSink lower{bp.pairs.data(), capacity}, upper{bp.upper_pairs.data(), capacity};
-  ShareRange(worker, 2, [&](int part) {
-    if (part == 0) {
-      Sweep(model, poses, bp, 0, half, bp.hits.data(), lower);
-    } else {
-      Sweep(model, poses, bp, half, n, bp.upper_hits.data(), upper);
+  const int nblock = (n + kPlaceBlock - 1) / kPlaceBlock;
+  PairSink upper{bp.upper_pairs.data(), capacity};
+  SweepJob job{&model, poses, &bp, &upper};
+  bp.place_blocks.Reset(0, nblock);
+  worker->Post(&RunSweepJob, &job);
+  const int front = SweepBlocks(model, poses, bp, lower, 0);
+  worker->Finish();
+  if (upper.dropped > 0) {
+    ++bp.resweeps;
+    Sweep(model, poses, bp, front * kPlaceBlock, n, bp.hits.data(), lower);
+  } else {
+    for (int b = front; b < nblock; ++b) {
+      const auto* from = bp.upper_pairs.data() + bp.block_begin[b];
+      const int kept = std::min(capacity - lower.count, bp.block_count[b]);
+      std::copy(from, from + kept, bp.pairs.data() + lower.count);
+      lower.count += kept;
+      lower.dropped += bp.block_count[b] - kept;
     }
-  });
-  const int room = capacity - lower.count;
-  const int kept = std::min(room, upper.count);
-  std::copy(upper.pairs, upper.pairs + kept, bp.pairs.data() + lower.count);
-  bp.npair = lower.count + kept;
-  bp.dropped = lower.dropped + (upper.count - kept) + upper.dropped;
+  }
+  bp.npair = lower.count;
+  bp.dropped = lower.dropped;
 }
 
 }  // namespace

@@ -35,7 +35,7 @@ struct Broadphase {
   // NaN past the last geom, so that a block read there overlaps nothing
   std::vector<float> flo_s, fhi_s, flo_p, fhi_p, flo_q, fhi_q;  // (non-plane geoms + 7)
   std::vector<int> hits;  // (non-plane geoms) the places whose float boxes overlap one place's
-  std::vector<int> upper_hits;  // (non-plane geoms) the same for the worker's half of the sweep
+  std::vector<int> upper_hits;  // (non-plane geoms) the same for the worker's part of the sweep
   bool wide = false;            // the float test runs eight places at once (AVX2, from the CPU)
   // each geom's collision filter from the model (Reserve), read for every candidate pair
   struct Filter {
@@ -43,8 +43,14 @@ struct Broadphase {
   };
   std::vector<Filter> filters;             // (ngeom)
   std::vector<std::pair<int, int>> pairs;  // (capacity) candidate pairs, geom indices
-  // (capacity) with a worker: the pairs of the sweep's second half, appended to `pairs` after it
+  // (capacity) with a worker: the pairs of the blocks of places the worker swept (from the last
+  // block down), appended to `pairs` in block order
   std::vector<std::pair<int, int>> upper_pairs;
+  // with a worker: the blocks of places the two threads take (from the front and the back), and
+  // where each of the worker's blocks begins in upper_pairs and how many pairs it has
+  TwoEndedRange place_blocks;
+  std::vector<int> block_begin, block_count;  // (places / block + 1)
+  long resweeps = 0;  // ticks whose worker's blocks did not fit upper_pairs and were swept again
   int npair = 0;
   int dropped = 0;  // candidates beyond capacity this tick
 
@@ -59,9 +65,12 @@ void GeomPoses(const Model& model, std::span<const BodyState> bodies, std::span<
 /// (contype1 & conaffinity2) || (contype2 & conaffinity1).
 bool CanCollide(const GeomModel& a, const GeomModel& b);
 
+/// With fewer boxes (non-plane geoms) than this, one thread sweeps: the hand-off would cost more.
+inline constexpr int kMinBoxesForTwoThreads = 256;
+
 /// Fills bp.pairs with the candidate pairs for the current poses, in a deterministic order. With
-/// a worker (threads 2) and enough boxes the two threads sweep half of the boxes each: the same
-/// pairs in the same order.
+/// a worker (threads 2) and enough boxes the two threads share the sweep in blocks of places, taken
+/// from both ends: the same pairs in the same order.
 void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp,
                Worker* worker = nullptr);
 

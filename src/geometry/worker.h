@@ -46,6 +46,17 @@ class TwoEndedRange {
   std::atomic<std::uint64_t> ends_{0};  // the front (low half) and the back (high half)
 };
 
+/// Work a stage's caller gives the tick's thread to do while the worker starts on the stage's
+/// shared range (ShareRange's `before`): a function and its argument, so that it passes a stage's
+/// interface without allocating. An empty task does nothing.
+struct Task {
+  void (*run)(void* context) = nullptr;
+  void* context = nullptr;
+  void operator()() const {
+    if (run != nullptr) run(context);
+  }
+};
+
 class Worker {
  public:
   using Job = void (*)(void* context);

@@ -37,12 +37,14 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
     for (int ci = 0; ci < data.ncontact; ++ci) data.contacts[ci].is_new = false;  // no onset
   }
 
-  // 3. groups and windows: contact groups, laws, stick or slip, collision windows and phases
-  contact::ClassifyContacts(model, data, ws.contact, ws.worker.get());
+  // 3. groups and windows: contact groups, laws, stick or slip, collision windows and phases;
+  // with them, on this thread while the worker starts on the contacts, stage 4's gravity,
+  // gyroscopic and user forces (they read only the bodies, which stage 3 does not write)
+  dynamics::FreeMotionForces free{model, data, coupling.user, ws.velocity};
+  contact::ClassifyContacts(model, data, ws.contact, ws.worker.get(), free.AsTask());
 
-  // 4. penalty: gravity, gyroscopic and user forces; explicit contacts (tool contacts, Eq. 1's
+  // 4. penalty: (the free-motion forces, with stage 3) explicit contacts (tool contacts, Eq. 1's
   // penalty term), scene contacts linearised for the implicit solve
-  dynamics::AddFreeMotionForces(model, data, coupling.user, ws.velocity);
   contact::ContactForces(model, data, ws.contact, ws.velocity, ws.worker.get());
 
   // 5. dynamics: the new velocities, implicit per group (backward Euler), free elsewhere
