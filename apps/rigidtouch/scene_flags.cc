@@ -98,9 +98,9 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
 
 void AddThreadsFlag(CLI::App* app, SceneFlags& flags) {
   app->add_option("--threads", flags.threads,
-                  "threads stepping the scene: 1, or 2 (a worker thread shares the narrow phase "
-                  "and the contact groups' solves; the results are the same bit for bit; "
-                  "default 1)")
+                  "threads stepping the scene: 1, or 2 (a worker thread shares collision "
+                  "detection, the contacts' classification and forces, and the contact groups' "
+                  "solves; the results are the same bit for bit; default 1)")
       ->check(InRange(1, 2, "threads"));
 }
 

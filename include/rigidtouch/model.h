@@ -169,8 +169,9 @@ struct Model {
   int max_contacts = 0;                 // capacity of the contact list; extra contacts are dropped
   int max_group_bodies = 0;             // capacity of one group (implicit penalty solve is dense)
   std::shared_ptr<mjModel_> collision;  // compiled MJCF, owned (shared by copies of the Model)
-  /// Threads stepping the scene: 1, or 2 (a worker thread shares the narrow phase and the
-  /// contact groups' solves; the results are the same bit for bit).
+  /// Threads stepping the scene: 1, or 2 (a worker thread shares collision detection, the
+  /// contacts' classification and forces, and the contact groups' solves; the results are the
+  /// same bit for bit).
   int threads = 1;
   /// Problems found at load that do not stop the scene (e.g. a contact stiffness that cannot hold
   /// a body or is unstable for it at h; an MJCF element accepted but not simulated as MuJoCo would,

@@ -25,8 +25,8 @@ struct LoadOptions {
   DeviceParams device;
   int max_contacts = 0;      // 0: what the scene can produce; less than that is refused
   int max_group_bodies = 0;  // 0: every body
-  int threads = 1;  // 1, or 2: a worker thread shares the narrow phase and the group solves
-                    // (the results are the same bit for bit)
+  int threads = 1;  // 1, or 2: a worker thread shares collision, the contacts' classification
+                    // and forces, and the group solves (the results are the same bit for bit)
 };
 
 /// Loads an MJCF scene compiled by MuJoCo. Throws Error naming the file (and MuJoCo's line) on

@@ -289,8 +289,9 @@ void DefineParams(py::module_& m) {
       .def_readwrite("max_group_bodies", &LoadOptions::max_group_bodies,
                      "bodies per contact group; 0: every body")
       .def_readwrite("threads", &LoadOptions::threads,
-                     "1, or 2: a worker thread shares the narrow phase and the group solves "
-                     "(the results are the same bit for bit)");
+                     "1, or 2: a worker thread shares collision detection, the contacts' "
+                     "classification and forces, and the group solves (the results are the "
+                     "same bit for bit)");
 }
 
 // the loaded scene

@@ -43,7 +43,7 @@ std::uint64_t GoldenRun(const std::string& scene, RendererKind renderer, int ste
   o.threads = threads;
   const Model m = LoadModel(scene, o);
   Data d = MakeData(m);
-  // with two threads the worker exists (and shares the narrow phase and the group solves)
+  // with two threads the worker exists (and shares most of the tick's stages)
   EXPECT_EQ(d.workspace->worker != nullptr, threads == 2);
   TickInput in;
   in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
