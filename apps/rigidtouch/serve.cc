@@ -142,6 +142,8 @@ analysis::TapSetup PrepareServeTap(const ServeRun& s) {
   analysis::TapExperimentConfig c =
       TapConfig(s.f.scene, s.choice.spec_text, s.rate_hz, s.f.speed_mps, s.f.taps);
   c.load.device.coupling = Coupling::kDirect;
+  // the hand taps what lies below the scene's tool (a pile's top box, not the floor under it)
+  c.aim_below_tool = true;
   analysis::TapSetup setup = analysis::PrepareTap(c);
   PrintLoadWarnings(setup.model);
   return setup;

@@ -234,6 +234,7 @@ void Run(const ViewFlags& f) {
   // the model as on serve's simulated path: the preset's wall, the device and hand on the tool
   analysis::TapExperimentConfig c = TapConfig(f.scene, f.preset, rate_hz, f.speed_mps, f.taps);
   c.load.device.coupling = Coupling::kDirect;
+  c.aim_below_tool = true;
   analysis::TapSetup setup = analysis::PrepareTap(c);
   Model& model = setup.model;
   PrintLoadWarnings(model);

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
+
+#include "geometry/broadphase.h"
 
 namespace rigidtouch::analysis {
 namespace {
@@ -110,6 +113,71 @@ Wall FindWall(const Model& model, const std::string& scene_path, const std::stri
   return wall;
 }
 
+namespace {
+
+// how far along the unit direction d from o the ray enters geom g at `pose`; negative if it misses
+// the geom or starts inside it
+double RayEntry(const GeomModel& g, const geometry::GeomPose& pose, const Vec3& o, const Vec3& d) {
+  constexpr double kMiss = -1.0;
+  if (g.type == GeomType::kPlane) {
+    const Vec3 m = pose.R_WG.col(2);
+    const double height = (o - pose.p_W).dot(m), along = d.dot(m);
+    return height > 0.0 && along < 0.0 ? height / -along : kMiss;
+  }
+  if (g.type == GeomType::kBox) {
+    // the slabs of the box's three axes, in its frame
+    const Vec3 ob = pose.R_WG.transpose() * (o - pose.p_W), db = pose.R_WG.transpose() * d;
+    double enter = -std::numeric_limits<double>::infinity();
+    double leave = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      if (db[a] == 0.0) {
+        if (std::abs(ob[a]) > g.size[a]) return kMiss;
+        continue;
+      }
+      const double t1 = (-g.size[a] - ob[a]) / db[a], t2 = (g.size[a] - ob[a]) / db[a];
+      enter = std::max(enter, std::min(t1, t2));
+      leave = std::min(leave, std::max(t1, t2));
+    }
+    return enter <= leave && enter > 0.0 ? enter : kMiss;
+  }
+  // a sphere, and the bounding sphere of the other shapes
+  const double r = g.type == GeomType::kSphere ? g.size.x() : g.rbound_m;
+  const Vec3 c = o - pose.p_W;
+  const double b = c.dot(d), outside = c.squaredNorm() - r * r;
+  const double disc = b * b - outside;
+  return outside > 0.0 && b < 0.0 && disc >= 0.0 ? -b - std::sqrt(disc) : kMiss;
+}
+
+}  // namespace
+
+std::optional<Wall> SurfaceBelowTool(const Model& model, const Vec3& normal) {
+  const Vec3 n = normal.normalized(), d = -n;
+  const Vec3 o = model.initial[model.tool].x_W;
+  std::vector<geometry::GeomPose> poses(model.geoms.size());
+  geometry::GeomPoses(model, model.initial, poses);
+  double nearest = std::numeric_limits<double>::infinity();
+  int hit = -1;
+  for (std::size_t i = 0; i < model.geoms.size(); ++i) {
+    const GeomModel& g = model.geoms[i];
+    if (g.body == model.tool) continue;
+    const bool touchable = std::any_of(model.geoms.begin(), model.geoms.end(), [&](const auto& t) {
+      return t.body == model.tool && geometry::CanCollide(t, g);
+    });
+    if (!touchable) continue;
+    const double t = RayEntry(g, poses[i], o, d);
+    if (t > 0.0 && t < nearest) {
+      nearest = t;
+      hit = static_cast<int>(i);
+    }
+  }
+  if (hit < 0) return std::nullopt;
+  Wall wall;
+  wall.point_m = o + nearest * d;
+  wall.normal = n;
+  wall.geom = model.geoms[hit].name;
+  return wall;
+}
+
 RenderParams WallRenderParams(int wall) {
   RenderParams r;
   r.restitution = 0.0;
@@ -191,6 +259,11 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
     setup.wall.normal = config.wall_normal.normalized();
   } else {
     setup.wall = FindWall(model, config.scene_path, config.wall_geom);
+    if (config.aim_below_tool) {
+      if (const std::optional<Wall> below = SurfaceBelowTool(model, setup.wall.normal)) {
+        setup.wall = *below;
+      }
+    }
   }
   const Vec3 n = setup.wall.normal;
   script.surface_normal = n;

@@ -23,7 +23,7 @@ RenderParams WallRenderParams(int wall);
 struct Wall {
   Vec3 point_m = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ();
-  std::string geom;  // the static geom it belongs to; empty when given as a point and normal
+  std::string geom;  // the geom it belongs to; empty when given as a point and normal
 };
 
 /// Everything a tap run needs.
@@ -43,6 +43,11 @@ struct TapExperimentConfig {
   std::string wall_geom;
   std::optional<Vec3> wall_point_m;
   Vec3 wall_normal = Vec3::UnitZ();
+  // true: aim at the first surface below the scene's tool along the wall's normal (any body's,
+  // SurfaceBelowTool), falling back to the wall itself when there is none; for running a scene
+  // (serve, view), where the surface under the tool need not be the wall. The tap experiment's
+  // metrics describe the static wall and keep false.
+  bool aim_below_tool = false;
   device::HandParams hand;
   // default: the device spec's inertia and sensing; tick_rate_hz is set from rate_hz
   std::optional<device::DeviceModelParams> device_model;
@@ -68,6 +73,12 @@ struct TapRun {
 /// face whose outward normal is its frame's z axis. Throws Error naming the scene and listing its
 /// static planes and boxes when there is no such geom, it is not static, or it is another type.
 Wall FindWall(const Model& model, const std::string& scene_path, const std::string& geom);
+
+/// The first surface that a ray from the tool's position in the scene (`model.initial`) along
+/// -normal meets: its point and the geom's name, or nothing. Geoms of the tool's own body, geoms
+/// the tool's geoms cannot collide with and geoms the ray starts inside are skipped. Planes,
+/// spheres and boxes are met exactly; other shapes at their bounding spheres.
+std::optional<Wall> SurfaceBelowTool(const Model& model, const Vec3& normal);
 
 /// Makes the tool the end effector of a directly coupled device: its mass in Eq. 1 becomes the
 /// device's apparent mass plus the hand's (the rotational inertia keeps its shape).

@@ -237,5 +237,74 @@ TEST(TapExperimentTest, ATapThatMeetsAnotherBodyBeforeTheWallIsAnError) {
   EXPECT_GT(run.taps.at(0).max_penetration_m, 0.0);
 }
 
+// a scene is run (serve, view) by tapping what lies below its tool: the nearest surface along the
+// wall's normal, of any body, skipping the tool's own geoms, geoms it cannot touch and geoms the
+// ray starts inside; planes, boxes and spheres exactly
+TEST(TapExperimentTest, TheSurfaceBelowTheToolIsTheNearestTheToolCanTouch) {
+  const std::string scene = test::WriteTempFile("below.xml", R"(
+<mujoco>
+  <worldbody>
+    <geom name="floor" type="plane" size="1 1 0.1"/>
+    <geom name="ghost" type="box" size="0.1 0.1 0.01" pos="0.3 0 0.4" contype="0" conaffinity="0"/>
+    <geom name="shelf" type="box" size="0.1 0.1 0.01" pos="0.3 0 0.2" euler="0 0 45"/>
+    <body name="ball" pos="-0.3 0 0.1"><freejoint/><geom name="ball" type="sphere" size="0.05" mass="1"/></body>
+    <body name="crate" pos="0 0.3 0.6"><freejoint/><geom type="box" size="0.2 0.2 0.2" mass="1"/></body>
+    <body name="tool" pos="0 0 0.5"><freejoint/><geom type="sphere" size="0.005" mass="0.1"/></body>
+  </worldbody>
+</mujoco>)");
+  const auto below = [&scene](const Vec3& tool_m) {
+    LoadOptions o;
+    Model model = LoadModel(scene, o);
+    model.initial[model.tool].x_W = tool_m;
+    return SurfaceBelowTool(model, Vec3(0.0, 0.0, 2.0));  // any length: normalised
+  };
+  // above the shelf (rotated about z), under the ghost the tool cannot touch
+  std::optional<Wall> w = below(Vec3(0.3, 0.05, 0.5));
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->geom, "shelf");
+  EXPECT_NEAR((w->point_m - Vec3(0.3, 0.05, 0.21)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((w->normal - Vec3::UnitZ()).norm(), 0.0, 1e-15);
+  // above the ball (a moving body): its top, 0.15 m
+  w = below(Vec3(-0.3, 0.0, 0.5));
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->geom, "ball");
+  EXPECT_NEAR(w->point_m.z(), 0.15, 1e-12);
+  // 3 cm off the ball's axis: the sphere, not its box, sqrt(0.05^2 - 0.03^2) = 0.04 above centre
+  w = below(Vec3(-0.3, 0.03, 0.5));
+  ASSERT_TRUE(w);
+  EXPECT_NEAR(w->point_m.z(), 0.14, 1e-12);
+  // inside the crate: the crate is skipped, the floor is below
+  w = below(Vec3(0.0, 0.3, 0.6));
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->geom, "floor");
+  EXPECT_NEAR((w->point_m - Vec3(0.0, 0.3, 0.0)).norm(), 0.0, 1e-12);
+  // nothing below a tool under the floor
+  EXPECT_FALSE(below(Vec3(0.0, 0.0, -0.1)));
+}
+
+// the shipped pile: serve's hand (aim_below_tool) starts 20 mm plus the tool's radius above the
+// top box of the tool's column, where the scene puts the tool; the tap experiment's hand starts
+// above the floor, inside the pile (what serve did before)
+TEST(TapExperimentTest, RunningAPileTapsItsTopBox) {
+  TapExperimentConfig c = Config(1, "touch", 0.2);
+  c.scene_path = std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/pile400.xml";
+  c.aim_below_tool = true;
+  const TapSetup aimed = PrepareTap(c);
+  // 4 layers: the top face at 0.025 + 3 x 0.051 + 0.025
+  const double top = 0.025 + 3 * 0.051 + 0.025;
+  EXPECT_EQ(aimed.wall.geom.rfind("box_", 0), 0u) << aimed.wall.geom;
+  EXPECT_NEAR(aimed.wall.point_m.z(), top, 1e-9);
+  // the tool starts at the device's first reading: within half an encoder count (the Touch's
+  // 0.055 mm) of the hand's start
+  const double count = 0.055e-3;
+  const Vec3 start = aimed.model.initial[aimed.model.tool].x_W;
+  EXPECT_NEAR(start.z(), top + 0.005 + 0.02, count / 2);
+  EXPECT_NEAR(start.x(), -0.0255, count / 2);
+  c.aim_below_tool = false;
+  const TapSetup floor = PrepareTap(c);
+  EXPECT_EQ(floor.wall.geom, "floor");
+  EXPECT_NEAR(floor.model.initial[floor.model.tool].x_W.z(), 0.025, count / 2);
+}
+
 }  // namespace
 }  // namespace rigidtouch::analysis

@@ -215,6 +215,7 @@ Model ViewModel(const std::string& scene) {
   analysis::TapExperimentConfig c;
   c.scene_path = scene;
   c.load.device.coupling = Coupling::kDirect;
+  c.aim_below_tool = true;  // as the viewer does: the hand starts above what lies below the tool
   return analysis::PrepareTap(c).model;
 }
 
