@@ -83,6 +83,9 @@ class Worker {
   long jobs_posted() const { return posted_.load(std::memory_order_relaxed); }
   /// A range for the posting thread and the job to share (ShareRange).
   TwoEndedRange& range() { return range_; }
+  /// The worker thread's handle, for a real-time loop that gives it its own scheduling policy
+  /// and keeps it off its CPU (loop::LoopOptions::helper_threads).
+  std::thread::native_handle_type native_handle() { return thread_.native_handle(); }
 
  private:
   void Loop();

@@ -6,6 +6,7 @@
 
 #include "render/limits.h"
 #include "render/output.h"
+#include "render/workspace.h"
 
 namespace rigidtouch::loop {
 namespace {
@@ -127,7 +128,12 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
                                const LoopOptions& options, const std::atomic<bool>* stop,
                                TraceQueue* traces, RecordQueue* records, TickObserver* observer) {
   HapticLoopResult r;
-  RateLoop loop(options);
+  // the tick's worker runs with the loop's priority, off its CPU (LoopOptions::helper_threads)
+  LoopOptions with_worker = options;
+  if (data.workspace != nullptr && data.workspace->worker != nullptr) {
+    with_worker.helper_threads.push_back(data.workspace->worker->native_handle());
+  }
+  RateLoop loop(with_worker);
   HapticStep step(model, data, device, 1.0 / options.rate_hz, traces, records, observer, r);
   r.timing = loop.Run([&step](std::int64_t, double) { return step(); }, stop);
   return r;

@@ -10,6 +10,7 @@ nlohmann::json ToJson(const LoopStats& stats) {
       {"ticks", stats.ticks},
       {"overruns", stats.overruns},
       {"skipped_periods", stats.skipped_periods},
+      {"yielded_periods", stats.yielded_periods},
       {"period_error_p50_s", stats.period_error_p50_s},
       {"period_error_p99_s", stats.period_error_p99_s},
       {"period_error_p999_s", stats.period_error_p999_s},
@@ -21,6 +22,9 @@ nlohmann::json ToJson(const LoopStats& stats) {
       {"realtime_priority_active", stats.realtime_priority_active},
       {"memory_locked", stats.memory_locked},
       {"pinned_cpu", stats.pinned_cpu},
+      {"helper_threads", stats.helper_threads},
+      {"helpers_realtime", stats.helpers_realtime},
+      {"helpers_off_loop_cpu", stats.helpers_off_loop_cpu},
       {"stop_requested", stats.stop_requested},
       {"warnings", stats.warnings},
   };

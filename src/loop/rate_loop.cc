@@ -4,8 +4,10 @@
 #include <sched.h>
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <limits>
@@ -22,6 +24,8 @@ constexpr std::int64_t kHistogramBinNs = 1'000;
 constexpr std::size_t kHistogramBins = 10'000;
 // stack prefaulted when memory is locked, so the first deep call does not page-fault
 constexpr std::size_t kPrefaultStackBytes = std::size_t{256} * 1024;
+// BusyBudget's window: the running share is judged over the last 100-200 ms
+constexpr std::int64_t kBusyWindowNs = 100'000'000;
 
 std::int64_t NowNs() noexcept {
   timespec now{};
@@ -110,7 +114,149 @@ class RealtimeScope {
   bool pinned_ = false;
 };
 
+// gives the helper threads (the tick's worker) the loop's policy and keeps them off its CPU for
+// the duration of a run; restores both on exit. Allocates once, before the first tick.
+class HelperScope {
+ public:
+  HelperScope(const LoopOptions& options, LoopStats* stats) {
+    stats->helper_threads = static_cast<int>(options.helper_threads.size());
+    saved_.reserve(options.helper_threads.size());
+    for (const std::thread::native_handle_type thread : options.helper_threads) {
+      Saved& h = saved_.emplace_back();
+      h.thread = thread;
+      if (options.realtime_priority && pthread_getschedparam(thread, &h.policy, &h.param) == 0) {
+        sched_param param{};
+        param.sched_priority = options.fifo_priority;
+        const int error = pthread_setschedparam(thread, SCHED_FIFO, &param);
+        if (error == 0) {
+          h.policy_changed = true;
+          ++stats->helpers_realtime;
+        } else {
+          stats->warnings.push_back(std::string("could not set SCHED_FIFO for the tick's worker "
+                                                "thread: ") +
+                                    std::strerror(error) + "; it runs at normal priority");
+        }
+      }
+      if (options.cpu >= 0) {
+        // the CPUs the helper may use now, less the loop's
+        int error = pthread_getaffinity_np(thread, sizeof(h.cpus), &h.cpus);
+        cpu_set_t others = h.cpus;
+        CPU_CLR(options.cpu, &others);
+        if (error == 0) {
+          error = CPU_COUNT(&others) == 0 ? EINVAL
+                                          : pthread_setaffinity_np(thread, sizeof(others), &others);
+        }
+        if (error == 0) {
+          h.pinned = true;
+          ++stats->helpers_off_loop_cpu;
+        } else {
+          stats->warnings.push_back("could not keep the tick's worker thread off CPU " +
+                                    std::to_string(options.cpu) + ": " + std::strerror(error));
+        }
+      }
+    }
+  }
+  ~HelperScope() {
+    for (Saved& h : saved_) {
+      if (h.pinned) pthread_setaffinity_np(h.thread, sizeof(h.cpus), &h.cpus);
+      if (h.policy_changed) pthread_setschedparam(h.thread, h.policy, &h.param);
+    }
+  }
+  HelperScope(const HelperScope&) = delete;
+  HelperScope& operator=(const HelperScope&) = delete;
+
+ private:
+  struct Saved {
+    std::thread::native_handle_type thread{};
+    int policy = SCHED_OTHER;
+    sched_param param{};
+    bool policy_changed = false;
+    cpu_set_t cpus{};
+    bool pinned = false;
+  };
+  std::vector<Saved> saved_;
+};
+
 }  // namespace
+
+namespace {
+
+// after the run, never inside it: the loop only counts
+void AddRunWarnings(double rate_hz, double busy_share, LoopStats* stats) {
+  if (stats->overruns > 0) {
+    stats->warnings.push_back(
+        std::to_string(stats->overruns) + " of " + std::to_string(stats->ticks) +
+        " ticks ended after the next deadline and " + std::to_string(stats->skipped_periods) +
+        " whole periods were skipped: the loop did not keep " +
+        std::to_string(static_cast<long long>(std::lround(rate_hz))) +
+        " Hz here (a lower --rate, --realtime or a less loaded machine)");
+  }
+  if (stats->yielded_periods > 0) {
+    stats->warnings.push_back(
+        std::to_string(stats->yielded_periods) +
+        " periods were slept through because the loop had run for more than " +
+        std::to_string(static_cast<int>(std::lround(busy_share * 100.0))) +
+        "% of its recent time: at SCHED_FIFO the kernel would otherwise have stopped it for the "
+        "rest of its real-time period (sched_rt_runtime_us)");
+  }
+}
+
+}  // namespace
+
+BusyBudget::BusyBudget(double max_share, std::int64_t window_ns)
+    : max_share_(max_share), window_ns_(window_ns) {}
+
+void BusyBudget::Roll(std::int64_t now_ns) {
+  if (start_ns_ < 0) {
+    start_ns_ = now_ns;
+    return;
+  }
+  const std::int64_t elapsed = now_ns - start_ns_;
+  if (elapsed < window_ns_) return;
+  // a window ended: it becomes the previous one, unless more than one has passed (then the
+  // previous window was idle)
+  previous_busy_ns_ = elapsed < 2 * window_ns_ ? busy_ns_ : 0;
+  previous_length_ns_ = window_ns_;
+  start_ns_ += (elapsed / window_ns_) * window_ns_;
+  busy_ns_ = 0;
+}
+
+void BusyBudget::Ran(std::int64_t start_ns, std::int64_t end_ns) {
+  Roll(start_ns);
+  // a run that crosses the window's end is counted in the window it ends in
+  Roll(end_ns);
+  busy_ns_ += std::max<std::int64_t>(0, end_ns - std::max(start_ns, start_ns_));
+  previous_busy_ns_ = std::min(
+      previous_length_ns_,
+      previous_busy_ns_ + std::max<std::int64_t>(0, std::min(end_ns, start_ns_) - start_ns));
+}
+
+bool BusyBudget::Spent(std::int64_t now_ns) const {
+  if (start_ns_ < 0) return false;
+  const std::int64_t span = previous_length_ns_ + (now_ns - start_ns_);
+  if (span < window_ns_) return false;
+  return static_cast<double>(previous_busy_ns_ + busy_ns_) > max_share_ * static_cast<double>(span);
+}
+
+double RealtimeBusyShare() {
+  constexpr double kDefault = 0.9;  // 950000 / 1000000, less the margin
+  const auto read = [](const char* path, long long* value) {
+    std::FILE* file = std::fopen(path, "r");
+    if (file == nullptr) return false;
+    const bool ok = std::fscanf(file, "%lld", value) == 1;
+    std::fclose(file);
+    return ok;
+  };
+  long long runtime_us = 0;
+  long long period_us = 0;
+  if (!read("/proc/sys/kernel/sched_rt_runtime_us", &runtime_us) ||
+      !read("/proc/sys/kernel/sched_rt_period_us", &period_us) || period_us <= 0) {
+    return kDefault;
+  }
+  if (runtime_us < 0) return 0.0;  // not throttled
+  return std::clamp(static_cast<double>(runtime_us) / static_cast<double>(period_us) - 0.05, 0.05,
+                    1.0);
+}
 
 void ValidateLoopOptions(const LoopOptions& options) {
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 20000.0)) {
@@ -150,6 +296,7 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
   stats.warnings.reserve(4);
   period_error_.Clear();
   const RealtimeScope realtime(options_, &stats);
+  const HelperScope helpers(options_, &stats);
 
   // deadlines are computed from the slot index, so rounding never accumulates into drift
   const double period_ns = 1e9 / options_.rate_hz;
@@ -163,6 +310,11 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
   const auto deadline_of = [&](std::int64_t slot) {
     return static_cast<std::int64_t>(std::llround(static_cast<double>(slot) * period_ns));
   };
+
+  // the kernel's real-time throttle concerns SCHED_FIFO loops only (BusyBudget)
+  const double busy_share = stats.realtime_priority_active ? RealtimeBusyShare() : 0.0;
+  const bool guard_budget = busy_share > 0.0;
+  BusyBudget budget(guard_budget ? busy_share : 1.0, kBusyWindowNs);
 
   const std::int64_t start_ns = NowNs();
   std::int64_t slot = 0;
@@ -186,7 +338,8 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
       stats.stop_requested = true;
       break;
     }
-    std::int64_t wake_ns = NowNs();
+    const std::int64_t awake_ns = NowNs();
+    std::int64_t wake_ns = awake_ns;
     while (wake_ns < deadline_ns) wake_ns = NowNs();  // the optional end-of-period spin
 
     max_latency_ns = std::max(max_latency_ns, wake_ns - deadline_ns);
@@ -205,14 +358,25 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
 
     ++slot;
     const std::int64_t late_ns = end_ns - (start_ns + deadline_of(slot));
+    // late by whole periods: drop those deadlines, keep at most one late tick
+    std::int64_t drop = 0;
     if (late_ns > 0) {
       ++stats.overruns;
-      // late by whole periods: drop those deadlines, keep at most one late tick
-      // (never past the end of the run, so ticks + skipped_periods = the scheduled count)
-      const std::int64_t whole_periods = std::min(late_ns / period_whole_ns, max_slots - slot);
-      slot += whole_periods;
-      stats.skipped_periods += whole_periods;
+      drop = late_ns / period_whole_ns;
     }
+    if (guard_budget) {
+      budget.Ran(awake_ns, end_ns);
+      // a SCHED_FIFO loop that has run for nearly all its recent time sleeps through the next
+      // deadline, which the kernel's throttle would otherwise take ~50 ms later
+      if (budget.Spent(end_ns)) {
+        ++drop;
+        ++stats.yielded_periods;
+      }
+    }
+    // never past the end of the run, so ticks + skipped_periods = the scheduled count
+    drop = std::min(drop, max_slots - slot);
+    slot += drop;
+    stats.skipped_periods += drop;
   }
 
   stats.elapsed_s = static_cast<double>(end_ns - start_ns) * 1e-9;
@@ -228,15 +392,7 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
   stats.period_error_max_s = period_error_.max_s();
   stats.period_error_mean_s = period_error_.mean_s();
   stats.wakeup_latency_max_s = static_cast<double>(max_latency_ns) * 1e-9;
-  if (stats.overruns > 0) {
-    // after the run, never inside it: the loop only counts
-    stats.warnings.push_back(std::to_string(stats.overruns) + " of " + std::to_string(stats.ticks) +
-                             " ticks ended after the next deadline and " +
-                             std::to_string(stats.skipped_periods) +
-                             " whole periods were skipped: the loop did not keep " +
-                             std::to_string(static_cast<long long>(std::lround(options_.rate_hz))) +
-                             " Hz here (a lower --rate, --realtime or a less loaded machine)");
-  }
+  AddRunWarnings(options_.rate_hz, busy_share, &stats);
   return stats;
 }
 

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -28,10 +29,48 @@ struct LoopOptions {
   // pin the calling thread to this CPU during Run (-1: not pinned), in [-1, CPU_SETSIZE); a CPU
   // the process may not use is a warning, not an error (the loop then runs unpinned)
   int cpu = -1;
+  // threads the step waits for (the tick's worker, Model::threads 2): during Run they get the
+  // loop's SCHED_FIFO priority when realtime_priority is set, and are kept off `cpu` when it is
+  // set, so that a tick never waits for a helper that an ordinary process has preempted; both
+  // are restored after the run
+  std::vector<std::thread::native_handle_type> helper_threads;
 };
 
 /// Throws Error naming the field, its value and the valid range when an option is invalid.
 void ValidateLoopOptions(const LoopOptions& options);
+
+/// The share of recent time a loop has spent running, against a budget: Linux stops SCHED_FIFO
+/// threads that use more than sched_rt_runtime_us of each sched_rt_period_us (95% of every
+/// second by default) until the period ends, a stall of about 50 ms. A real-time loop whose steps
+/// take (nearly) the whole period runs them back to back and meets that limit; RateLoop asks this
+/// budget after every step and, when it is spent, sleeps until the next deadline but one, so the
+/// device misses one period instead of fifty. Busy time is counted over the current window and
+/// the one before it; no verdict until a whole window has passed. Plain arithmetic, no
+/// allocation.
+class BusyBudget {
+ public:
+  /// `max_share` in (0, 1]; `window_ns` > 0.
+  BusyBudget(double max_share, std::int64_t window_ns);
+  /// The loop ran from start_ns to end_ns (times from one monotonic clock, non-decreasing).
+  void Ran(std::int64_t start_ns, std::int64_t end_ns);
+  /// Whether the running time over the counted windows, up to now_ns, exceeds the share.
+  bool Spent(std::int64_t now_ns) const;
+
+ private:
+  void Roll(std::int64_t now_ns);
+  double max_share_;
+  std::int64_t window_ns_;
+  std::int64_t start_ns_ = -1;  // the current window's start; -1 before the first Ran
+  std::int64_t busy_ns_ = 0;    // running time in the current window
+  std::int64_t previous_busy_ns_ = 0;
+  std::int64_t previous_length_ns_ = 0;  // 0 until a window has ended
+};
+
+/// The share of each second a SCHED_FIFO loop may run before Linux throttles it, less a margin
+/// of 5 points: from /proc/sys/kernel/sched_rt_runtime_us and sched_rt_period_us (0.9 with the
+/// default 950000 / 1000000); 0 when the kernel does not throttle (runtime -1), and the default's
+/// 0.9 when the files cannot be read.
+double RealtimeBusyShare();
 
 /// Timing statistics of one Run (plain data; loop_json.h turns it into JSON).
 struct LoopStats {
@@ -41,6 +80,9 @@ struct LoopStats {
   std::int64_t ticks = 0;         // steps called
   std::int64_t overruns = 0;      // steps that ended after the next deadline
   std::int64_t skipped_periods = 0;  // deadlines dropped after an overrun longer than a period
+  // of those, dropped so that a SCHED_FIFO loop stays within the kernel's real-time budget
+  // (BusyBudget): the loop slept through one deadline instead of being stopped for ~50 ms
+  std::int64_t yielded_periods = 0;
   // |wake-up interval - period| between consecutive ticks (ticks - 1 samples), 1 us bins
   double period_error_p50_s = 0.0;
   double period_error_p99_s = 0.0;
@@ -53,6 +95,9 @@ struct LoopStats {
   bool realtime_priority_active = false;    // SCHED_FIFO was set for this run
   bool memory_locked = false;               // mlockall succeeded for this run
   int pinned_cpu = -1;                      // the CPU the loop thread was pinned to, or -1
+  int helper_threads = 0;                   // LoopOptions::helper_threads given
+  int helpers_realtime = 0;                 // of them, run at SCHED_FIFO for this run
+  int helpers_off_loop_cpu = 0;             // of them, kept off the loop's pinned CPU
   bool stop_requested = false;              // the run ended on a stop request
   std::vector<std::string> warnings;        // e.g. "could not set SCHED_FIFO: ..."
 };

@@ -252,6 +252,26 @@ TEST(HapticLoop, EveryCommandIsClippedToTheStricterOfModelAndDeviceLimits) {
   }
 }
 
+// with threads 2 the tick's worker is the loop's helper: at the loop's SCHED_FIFO priority when
+// the loop has it (a tick never waits for a worker that an ordinary process preempted)
+TEST(HapticLoop, TheTicksWorkerRunsWithTheLoopsPriority) {
+  for (const int threads : {1, 2}) {
+    LoadOptions o;
+    o.device.coupling = Coupling::kDirect;
+    o.timestep_s = 1.0 / kRateHz;
+    o.threads = threads;
+    const Model model = LoadModel(std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml", o);
+    Data data = MakeData(model);
+    FreezingDevice dev(1000, 0, 0.0);
+    LoopOptions options = Options(0.02);
+    options.realtime_priority = true;
+    const HapticLoopResult r = RunHapticLoop(model, data, dev, options, nullptr);
+    EXPECT_EQ(r.timing.helper_threads, threads - 1) << threads << " threads";
+    EXPECT_EQ(r.timing.helpers_realtime, r.timing.realtime_priority_active ? threads - 1 : 0)
+        << threads << " threads";
+  }
+}
+
 // no answering device: AwaitFirstState gives up after its timeout, having written only zero
 // wrenches flagged safe-fallback; a device that answers is found at once
 TEST(HapticLoop, AwaitFirstStateTimesOutWithoutADevice) {

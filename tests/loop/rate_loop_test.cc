@@ -262,6 +262,158 @@ TEST(RateLoop, PinningKeepsTheLoopOnItsCpuAndRestoresTheAffinity) {
   EXPECT_TRUE(CPU_EQUAL(&before, &after));
 }
 
+// a thread that waits until told to end: a stand-in for the tick's worker
+class IdleHelper {
+ public:
+  IdleHelper() : thread_([this] { ended_.wait(false); }) {}
+  ~IdleHelper() {
+    ended_.store(true);
+    ended_.notify_one();
+    thread_.join();
+  }
+  std::thread::native_handle_type handle() { return thread_.native_handle(); }
+
+ private:
+  std::atomic<bool> ended_{false};
+  std::thread thread_;
+};
+
+TEST(RateLoop, HelperThreadsTakeTheLoopsPriorityAndKeepOffItsCpu) {
+  cpu_set_t allowed;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(allowed), &allowed), 0);
+  if (CPU_COUNT(&allowed) < 2) GTEST_SKIP() << "needs two CPUs";
+  int target = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (CPU_ISSET(c, &allowed)) target = c;
+  }
+  IdleHelper helper;
+  int policy_before = -1;
+  sched_param param_before{};
+  ASSERT_EQ(pthread_getschedparam(helper.handle(), &policy_before, &param_before), 0);
+  cpu_set_t cpus_before;
+  ASSERT_EQ(pthread_getaffinity_np(helper.handle(), sizeof(cpus_before), &cpus_before), 0);
+
+  LoopOptions options;
+  options.rate_hz = 1000.0;
+  options.duration_s = 0.01;
+  options.realtime_priority = true;
+  options.cpu = target;
+  options.helper_threads.push_back(helper.handle());
+  RateLoop loop(options);
+  int policy_inside = -1;
+  int priority_inside = -1;
+  bool on_loop_cpu = true;
+  const LoopStats stats = loop.Run([&](std::int64_t, double) {
+    sched_param param{};
+    pthread_getschedparam(helper.handle(), &policy_inside, &param);
+    priority_inside = param.sched_priority;
+    cpu_set_t cpus;
+    pthread_getaffinity_np(helper.handle(), sizeof(cpus), &cpus);
+    on_loop_cpu = CPU_ISSET(target, &cpus);
+    return true;
+  });
+  EXPECT_EQ(stats.helper_threads, 1);
+  if (stats.realtime_priority_active) {
+    // the loop may use SCHED_FIFO, so its helper may too
+    EXPECT_EQ(stats.helpers_realtime, 1);
+    EXPECT_EQ(policy_inside, SCHED_FIFO);
+    EXPECT_EQ(priority_inside, options.fifo_priority);
+  } else {
+    EXPECT_EQ(stats.helpers_realtime, 0);
+    EXPECT_NE(policy_inside, SCHED_FIFO);
+  }
+  if (stats.pinned_cpu == target) {
+    EXPECT_EQ(stats.helpers_off_loop_cpu, 1);
+    EXPECT_FALSE(on_loop_cpu);
+  }
+  // both restored after the run
+  int policy_after = -1;
+  sched_param param_after{};
+  ASSERT_EQ(pthread_getschedparam(helper.handle(), &policy_after, &param_after), 0);
+  EXPECT_EQ(policy_after, policy_before);
+  cpu_set_t cpus_after;
+  ASSERT_EQ(pthread_getaffinity_np(helper.handle(), sizeof(cpus_after), &cpus_after), 0);
+  EXPECT_TRUE(CPU_EQUAL(&cpus_before, &cpus_after));
+}
+
+constexpr std::int64_t kMs = 1'000'000;
+
+TEST(BusyBudget, GivesNoVerdictBeforeAWholeWindow) {
+  BusyBudget budget(0.9, 100 * kMs);
+  budget.Ran(0, 99 * kMs);  // busy all the time, but for less than a window
+  EXPECT_FALSE(budget.Spent(99 * kMs));
+  budget.Ran(99 * kMs, 101 * kMs);
+  EXPECT_TRUE(budget.Spent(101 * kMs));
+}
+
+TEST(BusyBudget, ComparesTheRunningShareWithTheBudget) {
+  // a loop that runs 0.95 ms of every 1 ms period: 95% > 90%
+  BusyBudget busy(0.9, 100 * kMs);
+  bool spent = false;
+  for (std::int64_t k = 0; k < 300; ++k) {
+    busy.Ran(k * kMs, k * kMs + 950'000);
+    spent = busy.Spent(k * kMs + 950'000);
+  }
+  EXPECT_TRUE(spent);
+  // one that runs 0.85 ms of every period: within 90%, never spent once a window has passed
+  BusyBudget light(0.9, 100 * kMs);
+  bool ever_spent = false;
+  for (std::int64_t k = 0; k < 300; ++k) {
+    light.Ran(k * kMs, k * kMs + 850'000);
+    if (k >= 100) ever_spent |= light.Spent(k * kMs + 850'000);
+  }
+  EXPECT_FALSE(ever_spent);
+}
+
+TEST(BusyBudget, ForgetsWhatLiesTwoWindowsBack) {
+  BusyBudget budget(0.9, 100 * kMs);
+  budget.Ran(0, 150 * kMs);  // busy through the first window and half the second
+  EXPECT_TRUE(budget.Spent(150 * kMs));
+  // then idle for more than two windows: the old running time no longer counts
+  budget.Ran(400 * kMs, 401 * kMs);
+  EXPECT_FALSE(budget.Spent(401 * kMs));
+}
+
+TEST(BusyBudget, CountsARunAcrossAWindowsEndInBothWindows) {
+  BusyBudget budget(0.5, 100 * kMs);
+  budget.Ran(0, 1);                 // starts the first window at 0
+  budget.Ran(60 * kMs, 140 * kMs);  // 40 ms in the first window, 40 in the second
+  // 80 ms of 140: more than half
+  EXPECT_TRUE(budget.Spent(140 * kMs));
+  // 80 ms of 170: less than half
+  EXPECT_FALSE(budget.Spent(170 * kMs));
+}
+
+TEST(RateLoop, ARealtimeLoopThatRunsLateSleepsBeforeTheKernelStopsIt) {
+  if (RealtimeBusyShare() <= 0.0) GTEST_SKIP() << "this kernel does not throttle SCHED_FIFO";
+  LoopOptions options;
+  options.rate_hz = 1000.0;
+  options.duration_s = 2.5;  // the kernel's budget is per second: two periods of it and more
+  options.realtime_priority = true;
+  RateLoop loop(options);
+  // every step busy for 1.2 periods: without yielding, the loop never sleeps, and at SCHED_FIFO
+  // the kernel stops it for ~50 ms once it has run for 95% of a second
+  const LoopStats stats = loop.Run([](std::int64_t, double) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(1200);
+    while (std::chrono::steady_clock::now() < until) {
+    }
+    return true;
+  });
+  if (!stats.realtime_priority_active) GTEST_SKIP() << "SCHED_FIFO is not allowed here";
+  EXPECT_GT(stats.yielded_periods, 0);
+  EXPECT_LE(stats.yielded_periods, stats.skipped_periods);
+  EXPECT_EQ(stats.ticks + stats.skipped_periods, 2500);
+  // a step of 1.2 ms and a yielded period give gaps of at most ~3 ms; a throttled loop's is
+  // ~50 ms. 20 ms leaves room for this shared machine's interruptions of a few ms
+  EXPECT_LT(stats.period_error_max_s, 0.02);
+  bool said = false;
+  for (const std::string& warning : stats.warnings) {
+    said |= warning.find(std::to_string(stats.yielded_periods) + " periods were slept through") !=
+            std::string::npos;
+  }
+  EXPECT_TRUE(said);
+}
+
 TEST(RateLoop, AllocationCounterSeesAllocations) {
   if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
   // the check below is only meaningful if the counter works
