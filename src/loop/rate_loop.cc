@@ -177,10 +177,6 @@ class HelperScope {
   std::vector<Saved> saved_;
 };
 
-}  // namespace
-
-namespace {
-
 // after the run, never inside it: the loop only counts
 void AddRunWarnings(double rate_hz, double busy_share, LoopStats* stats) {
   if (stats->overruns > 0) {
@@ -364,17 +360,18 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
       ++stats.overruns;
       drop = late_ns / period_whole_ns;
     }
+    // never past the end of the run, so ticks + skipped_periods = the scheduled count
+    const std::int64_t room = max_slots - slot;
     if (guard_budget) {
       budget.Ran(awake_ns, end_ns);
       // a SCHED_FIFO loop that has run for nearly all its recent time sleeps through the next
       // deadline, which the kernel's throttle would otherwise take ~50 ms later
-      if (budget.Spent(end_ns)) {
+      if (budget.Spent(end_ns) && drop < room) {
         ++drop;
         ++stats.yielded_periods;
       }
     }
-    // never past the end of the run, so ticks + skipped_periods = the scheduled count
-    drop = std::min(drop, max_slots - slot);
+    drop = std::min(drop, room);
     slot += drop;
     stats.skipped_periods += drop;
   }
