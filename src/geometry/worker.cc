@@ -1,5 +1,10 @@
 #include "geometry/worker.h"
 
+#include <linux/futex.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <ctime>
 #include <string>
 #include <system_error>
 
@@ -7,12 +12,6 @@
 
 namespace rigidtouch::geometry {
 namespace {
-
-// polls spent spinning before sleeping on a counter (with PAUSE, some tens of microseconds): a
-// job posted within that comes without a wake-up; longer spins slowed the tick's own thread on
-// the 2-core machine (docs/performance.md), and a worker that wakes late still takes its share,
-// since the tick's thread does not wait for it to start (Finish, TwoEndedRange)
-constexpr int kSpins = 2000;
 
 // tells the core that this is a spin (x86's PAUSE): a core shared with the tick's thread (two
 // hardware threads of one core) then gives it more of its issue slots
@@ -22,18 +21,22 @@ inline void Relax() {
 #endif
 }
 
-// returns the counter's value once it differs from `old`
-std::uint32_t AwaitChange(const std::atomic<std::uint32_t>& counter, std::uint32_t old) {
-  for (int i = 0; i < kSpins; ++i) {
-    const std::uint32_t now = counter.load(std::memory_order_acquire);
-    if (now != old) return now;
-    Relax();
-  }
-  for (;;) {
-    counter.wait(old, std::memory_order_acquire);
-    const std::uint32_t now = counter.load(std::memory_order_acquire);
-    if (now != old) return now;
-  }
+// the longest a waiting thread sleeps before it looks again: the tick's thread waits for a job
+// the worker is running (a lost wake-up delays the tick by at most this), the worker for the
+// next job (the tick's thread takes back what the worker has not started, so a late worker only
+// misses work; a job that must run on the worker, Wait, is delayed by at most this)
+constexpr long kTickSleepLimitNs = 200'000;
+constexpr long kWorkerSleepLimitNs = 5'000'000;
+
+// sleeps while *word == old, for at most limit_ns (or until woken, or a signal)
+void FutexSleep(const std::atomic<std::uint32_t>& word, std::uint32_t old, long limit_ns) {
+  static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
+                std::atomic<std::uint32_t>::is_always_lock_free);
+  timespec limit{};
+  limit.tv_sec = limit_ns / 1'000'000'000;
+  limit.tv_nsec = limit_ns % 1'000'000'000;
+  syscall(SYS_futex, reinterpret_cast<const std::uint32_t*>(&word), FUTEX_WAIT_PRIVATE, old, &limit,
+          nullptr, 0);
 }
 
 // takes job n (moves `taken` from n - 1 to n); false if the other thread took it first
@@ -44,7 +47,41 @@ bool Take(std::atomic<std::uint32_t>& taken, std::uint32_t n) {
 
 }  // namespace
 
-Worker::Worker() {
+void WakeCounter::WakeSleeper() {
+  // seq_cst: the store above and this load, against the sleeper's flag and its load of the value
+  if (sleepers_.load(std::memory_order_seq_cst) != 0) {
+    syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&value_), FUTEX_WAKE_PRIVATE, 1, nullptr,
+            nullptr, 0);
+  }
+}
+
+void WakeCounter::Publish(std::uint32_t value) {
+  value_.store(value, std::memory_order_seq_cst);
+  WakeSleeper();
+}
+
+std::uint32_t WakeCounter::Increment() {
+  const std::uint32_t now = value_.fetch_add(1, std::memory_order_seq_cst) + 1;
+  WakeSleeper();
+  return now;
+}
+
+std::uint32_t WakeCounter::AwaitChange(std::uint32_t old, int spins, long sleep_limit_ns) const {
+  for (int i = 0; i < spins; ++i) {
+    const std::uint32_t now = value_.load(std::memory_order_acquire);
+    if (now != old) return now;
+    Relax();
+  }
+  for (;;) {
+    sleepers_.fetch_add(1, std::memory_order_seq_cst);
+    if (value_.load(std::memory_order_seq_cst) == old) FutexSleep(value_, old, sleep_limit_ns);
+    sleepers_.fetch_sub(1, std::memory_order_relaxed);
+    const std::uint32_t now = value_.load(std::memory_order_acquire);
+    if (now != old) return now;
+  }
+}
+
+Worker::Worker(int spins) : spins_(spins) {
   try {
     thread_ = std::thread([this] { Loop(); });
   } catch (const std::system_error& e) {
@@ -54,20 +91,18 @@ Worker::Worker() {
 
 Worker::~Worker() {
   quit_.store(true, std::memory_order_relaxed);
-  posted_.fetch_add(1, std::memory_order_release);
-  posted_.notify_one();
+  posted_.Increment();
   thread_.join();
 }
 
 void Worker::Post(Job job, void* context) {
   job_ = job;
   context_ = context;
-  posted_.fetch_add(1, std::memory_order_release);
-  posted_.notify_one();
+  posted_.Increment();
 }
 
 void Worker::Finish() {
-  const std::uint32_t n = posted_.load(std::memory_order_relaxed);
+  const std::uint32_t n = posted_.Load(std::memory_order_relaxed);
   if (Take(taken_, n)) {
     ++taken_back_;
     job_(context_);
@@ -77,21 +112,20 @@ void Worker::Finish() {
 }
 
 void Worker::Wait() {
-  const std::uint32_t n = posted_.load(std::memory_order_relaxed);
-  std::uint32_t now = finished_.load(std::memory_order_acquire);
-  while (now != n) now = AwaitChange(finished_, now);
+  const std::uint32_t n = posted_.Load(std::memory_order_relaxed);
+  std::uint32_t now = finished_.Load();
+  while (now != n) now = finished_.AwaitChange(now, spins_, kTickSleepLimitNs);
 }
 
 void Worker::Loop() {
   std::uint32_t seen = 0;
   for (;;) {
-    seen = AwaitChange(posted_, seen);
+    seen = posted_.AwaitChange(seen, spins_, kWorkerSleepLimitNs);
     if (quit_.load(std::memory_order_relaxed)) return;
     // a job taken back by Finish is not run here; the next one is posted only after that
     if (!Take(taken_, seen)) continue;
     job_(context_);
-    finished_.store(seen, std::memory_order_release);
-    finished_.notify_one();
+    finished_.Publish(seen);
   }
 }
 

@@ -57,12 +57,46 @@ struct Task {
   }
 };
 
+/// A counter that one thread raises and another waits on until it changes: the waiter spins
+/// for a number of polls, then sleeps on a futex, and never for longer than a bound, so that a
+/// wake-up that is lost costs at most that bound instead of leaving the waiter asleep for good
+/// (one was seen with C++20 atomic wait/notify: docs/decisions.md, "A lost wake-up"). The
+/// raising side wakes only when a waiter has said it sleeps (a seq_cst flag and a seq_cst store
+/// on both sides, so that one of them always sees the other). Linux futexes; nothing allocates.
+class WakeCounter {
+ public:
+  /// The value.
+  std::uint32_t Load(std::memory_order order = std::memory_order_acquire) const {
+    return value_.load(order);
+  }
+  /// Sets the value and wakes a thread sleeping on it. Every write before it is visible to the
+  /// thread that sees the value.
+  void Publish(std::uint32_t value);
+  /// Adds one and wakes a thread sleeping on it; returns the new value.
+  std::uint32_t Increment();
+  /// Sets the value without waking anyone: what a lost wake-up looks like (for tests).
+  void StoreWithoutWaking(std::uint32_t value) { value_.store(value); }
+  /// Returns the value once it differs from `old`: `spins` polls, then sleeps of at most
+  /// `sleep_limit_ns` each until it does.
+  std::uint32_t AwaitChange(std::uint32_t old, int spins, long sleep_limit_ns) const;
+
+ private:
+  void WakeSleeper();
+  std::atomic<std::uint32_t> value_{0};
+  mutable std::atomic<std::uint32_t> sleepers_{0};  // threads that may be asleep on value_
+};
+
 class Worker {
  public:
   using Job = void (*)(void* context);
 
-  /// Starts the thread. Throws Error if the system cannot start one.
-  Worker();
+  /// Polls a waiting thread spends spinning before it sleeps on a counter (with PAUSE: some tens
+  /// of microseconds): a job posted within that comes without a wake-up.
+  static constexpr int kDefaultSpins = 2000;
+
+  /// Starts the thread. Throws Error if the system cannot start one. `spins`: the polls both
+  /// threads spend before sleeping (0: sleep at once, as tests do to exercise the wake-ups).
+  explicit Worker(int spins = kDefaultSpins);
   /// Stops the thread (after the job it may be running) and joins it.
   ~Worker();
   Worker(const Worker&) = delete;
@@ -80,20 +114,21 @@ class Worker {
   /// Jobs that Finish ran on the calling thread, since the start.
   long jobs_taken_back() const { return taken_back_; }
   /// Jobs posted since the start (for the posting thread).
-  long jobs_posted() const { return posted_.load(std::memory_order_relaxed); }
+  long jobs_posted() const { return posted_.Load(std::memory_order_relaxed); }
   /// A range for the posting thread and the job to share (ShareRange).
   TwoEndedRange& range() { return range_; }
-  /// The worker thread's handle, for a real-time loop that gives it its own scheduling policy
-  /// and keeps it off its CPU (loop::LoopOptions::helper_threads).
+  /// The worker thread's handle, for a real-time loop that keeps it off its CPU
+  /// (loop::LoopOptions::helper_threads).
   std::thread::native_handle_type native_handle() { return thread_.native_handle(); }
 
  private:
   void Loop();
 
-  std::atomic<std::uint32_t> posted_{0};    // jobs posted
-  std::atomic<std::uint32_t> taken_{0};     // jobs taken, by the worker or back by Finish
-  std::atomic<std::uint32_t> finished_{0};  // the last job the worker ran to the end
+  WakeCounter posted_;                   // jobs posted
+  std::atomic<std::uint32_t> taken_{0};  // jobs taken, by the worker or back by Finish
+  WakeCounter finished_;                 // the last job the worker ran to the end
   std::atomic<bool> quit_{false};
+  const int spins_;
   Job job_ = nullptr;  // written before posted_ is raised, read by whoever takes the job
   void* context_ = nullptr;
   long taken_back_ = 0;  // the calling thread's own count

@@ -128,7 +128,7 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
                                const LoopOptions& options, const std::atomic<bool>* stop,
                                TraceQueue* traces, RecordQueue* records, TickObserver* observer) {
   HapticLoopResult r;
-  // the tick's worker runs with the loop's priority, off its CPU (LoopOptions::helper_threads)
+  // the tick's worker keeps off the loop's CPU when it is pinned (LoopOptions::helper_threads)
   LoopOptions with_worker = options;
   if (data.workspace != nullptr && data.workspace->worker != nullptr) {
     with_worker.helper_threads.push_back(data.workspace->worker->native_handle());

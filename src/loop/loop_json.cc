@@ -23,7 +23,6 @@ nlohmann::json ToJson(const LoopStats& stats) {
       {"memory_locked", stats.memory_locked},
       {"pinned_cpu", stats.pinned_cpu},
       {"helper_threads", stats.helper_threads},
-      {"helpers_realtime", stats.helpers_realtime},
       {"helpers_off_loop_cpu", stats.helpers_off_loop_cpu},
       {"stop_requested", stats.stop_requested},
       {"warnings", stats.warnings},

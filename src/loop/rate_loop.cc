@@ -114,8 +114,10 @@ class RealtimeScope {
   bool pinned_ = false;
 };
 
-// gives the helper threads (the tick's worker) the loop's policy and keeps them off its CPU for
-// the duration of a run; restores both on exit. Allocates once, before the first tick.
+// keeps the helper threads (the tick's worker) off the loop's pinned CPU for the duration of a
+// run; restores their CPUs on exit. Allocates once, before the first tick. Their scheduling
+// policy stays theirs (docs/decisions.md, "The real-time loop's worker and the kernel's
+// real-time throttle": a SCHED_FIFO worker was tried and not kept)
 class HelperScope {
  public:
   HelperScope(const LoopOptions& options, LoopStats* stats) {
@@ -124,19 +126,6 @@ class HelperScope {
     for (const std::thread::native_handle_type thread : options.helper_threads) {
       Saved& h = saved_.emplace_back();
       h.thread = thread;
-      if (options.realtime_priority && pthread_getschedparam(thread, &h.policy, &h.param) == 0) {
-        sched_param param{};
-        param.sched_priority = options.fifo_priority;
-        const int error = pthread_setschedparam(thread, SCHED_FIFO, &param);
-        if (error == 0) {
-          h.policy_changed = true;
-          ++stats->helpers_realtime;
-        } else {
-          stats->warnings.push_back(std::string("could not set SCHED_FIFO for the tick's worker "
-                                                "thread: ") +
-                                    std::strerror(error) + "; it runs at normal priority");
-        }
-      }
       if (options.cpu >= 0) {
         // the CPUs the helper may use now, less the loop's
         int error = pthread_getaffinity_np(thread, sizeof(h.cpus), &h.cpus);
@@ -159,7 +148,6 @@ class HelperScope {
   ~HelperScope() {
     for (Saved& h : saved_) {
       if (h.pinned) pthread_setaffinity_np(h.thread, sizeof(h.cpus), &h.cpus);
-      if (h.policy_changed) pthread_setschedparam(h.thread, h.policy, &h.param);
     }
   }
   HelperScope(const HelperScope&) = delete;
@@ -168,9 +156,6 @@ class HelperScope {
  private:
   struct Saved {
     std::thread::native_handle_type thread{};
-    int policy = SCHED_OTHER;
-    sched_param param{};
-    bool policy_changed = false;
     cpu_set_t cpus{};
     bool pinned = false;
   };

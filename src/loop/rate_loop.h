@@ -29,10 +29,8 @@ struct LoopOptions {
   // pin the calling thread to this CPU during Run (-1: not pinned), in [-1, CPU_SETSIZE); a CPU
   // the process may not use is a warning, not an error (the loop then runs unpinned)
   int cpu = -1;
-  // threads the step waits for (the tick's worker, Model::threads 2): during Run they get the
-  // loop's SCHED_FIFO priority when realtime_priority is set, and are kept off `cpu` when it is
-  // set, so that a tick never waits for a helper that an ordinary process has preempted; both
-  // are restored after the run
+  // threads the step waits for (the tick's worker, Model::threads 2): when `cpu` is set they are
+  // kept off it during Run, so that they never take the loop's CPU; restored after the run
   std::vector<std::thread::native_handle_type> helper_threads;
 };
 
@@ -96,7 +94,6 @@ struct LoopStats {
   bool memory_locked = false;               // mlockall succeeded for this run
   int pinned_cpu = -1;                      // the CPU the loop thread was pinned to, or -1
   int helper_threads = 0;                   // LoopOptions::helper_threads given
-  int helpers_realtime = 0;                 // of them, run at SCHED_FIFO for this run
   int helpers_off_loop_cpu = 0;             // of them, kept off the loop's pinned CPU
   bool stop_requested = false;              // the run ended on a stop request
   std::vector<std::string> warnings;        // e.g. "could not set SCHED_FIFO: ..."

@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <new>
@@ -27,10 +30,16 @@ struct Counter {
   long sum = 0;   // the job's running sum of the inputs
   int other = 0;  // jobs that ran on a thread other than the test's
   std::thread::id caller;
+  long busy_ns = 0;  // how long the job runs
 };
 
 void AddInput(void* context) {
   auto* c = static_cast<Counter*>(context);
+  if (c->busy_ns > 0) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::nanoseconds(c->busy_ns);
+    while (std::chrono::steady_clock::now() < until) {
+    }
+  }
   c->sum += c->input;
   if (std::this_thread::get_id() != c->caller) ++c->other;
 }
@@ -49,6 +58,74 @@ TEST(WorkerTest, RunsEachPostedJobOnceOnItsThread) {
   }
   EXPECT_EQ(c.sum, 2000L * 2001L / 2);
   EXPECT_EQ(c.other + worker.jobs_taken_back(), 2000);
+}
+
+// the hand-off's wake-ups, without the spin that usually hides them: a thread that has gone to
+// sleep on a counter is woken by the other's change to it. A hundred thousand hand-offs in which
+// the threads sleep; without the wake-ups each would wait for a sleep limit (0.2 to 5 ms) and
+// the test would not finish within its minute. The hand-offs run on a thread of their own, so
+// that the test can fail (and exit: a thread asleep for good cannot be joined) rather than hang
+TEST(WorkerTest, NoWakeUpIsLostWhenTheThreadsSleep) {
+  static constexpr int kHandOffs = 100000;
+  std::atomic<int> done{0};
+  std::thread stress([&done] {
+    Worker worker(/*spins=*/0);
+    Counter c;
+    c.caller = std::this_thread::get_id();
+    for (int i = 1; i <= kHandOffs; ++i) {
+      c.input = 1;
+      // jobs of 0 to 3 us: about as long as the library's own short spin in wait, so that the
+      // waiting thread often goes to sleep just as the job ends
+      c.busy_ns = (i * 7919L) % 3000;
+      worker.Post(&AddInput, &c);
+      // every other job must run on the worker: the posting thread sleeps until it has
+      if (i % 2 == 0) {
+        worker.Wait();
+      } else {
+        worker.Finish();
+      }
+      done.store(i, std::memory_order_relaxed);
+    }
+    EXPECT_EQ(c.sum, kHandOffs);
+  });
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (done.load() < kHandOffs && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  if (done.load() < kHandOffs) {
+    ADD_FAILURE() << "the hand-off stopped after " << done.load() << " of " << kHandOffs
+                  << ": a wake-up was lost";
+    std::fflush(nullptr);
+    std::_Exit(1);
+  }
+  stress.join();
+}
+
+// a waiter asleep on a counter returns once the counter has changed even when no wake-up came (a
+// lost one), after at most its sleep limit: the tick never waits for good on a wake-up the system
+// lost
+TEST(WorkerTest, ALostWakeUpCostsAtMostTheSleepLimit) {
+  WakeCounter counter;
+  std::atomic<bool> returned{false};
+  std::uint32_t seen = 0;
+  std::thread waiter([&] {
+    seen = counter.AwaitChange(0, /*spins=*/0, /*sleep_limit_ns=*/1'000'000);
+    returned.store(true);
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_FALSE(returned.load());  // nothing changed: still waiting
+  counter.StoreWithoutWaking(7);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!returned.load() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  if (!returned.load()) {
+    ADD_FAILURE() << "the waiter still sleeps 10 s after the change";
+    std::fflush(nullptr);
+    std::_Exit(1);
+  }
+  waiter.join();
+  EXPECT_EQ(seen, 7u);
 }
 
 // two threads taking from both ends of a range take every index once: the front's in rising
