@@ -1,7 +1,8 @@
-// Helpers shared by the tests: scene paths and temporary files.
+// Helpers shared by the tests: scene paths, temporary files, CPUs.
 #pragma once
 
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -9,6 +10,18 @@
 #include <string>
 
 namespace rigidtouch::test {
+
+/// The highest-numbered CPU this process may run on when it may run on two or more; -1 otherwise
+/// (a test that pins a loop to one CPU and its helpers to the others then has nothing to check).
+inline int LastCpuOfSeveral() {
+  cpu_set_t allowed;
+  if (sched_getaffinity(0, sizeof(allowed), &allowed) != 0 || CPU_COUNT(&allowed) < 2) return -1;
+  int last = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (CPU_ISSET(c, &allowed)) last = c;
+  }
+  return last;
+}
 
 /// Path of a scene shipped for the tests (tests/scenes/NAME).
 inline std::string TestScene(const std::string& name) {

@@ -24,12 +24,19 @@ constexpr std::int64_t kHistogramBinNs = 1'000;
 constexpr std::size_t kHistogramBins = 10'000;
 // stack prefaulted when memory is locked, so the first deep call does not page-fault
 constexpr std::size_t kPrefaultStackBytes = std::size_t{256} * 1024;
-// BusyBudget's window: the running share is judged over the last 100-200 ms
+// BusyBudget's window: the CPU-time share is judged over the last 100-200 ms
 constexpr std::int64_t kBusyWindowNs = 100'000'000;
 
 std::int64_t NowNs() noexcept {
   timespec now{};
   clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * kNsPerS + now.tv_nsec;
+}
+
+// the calling thread's CPU time, as the kernel charges it (what its real-time throttle counts)
+std::int64_t ThreadCpuNs() noexcept {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
   return static_cast<std::int64_t>(now.tv_sec) * kNsPerS + now.tv_nsec;
 }
 
@@ -188,28 +195,26 @@ BusyBudget::BusyBudget(double max_share, std::int64_t window_ns)
     : max_share_(max_share), window_ns_(window_ns) {}
 
 void BusyBudget::Roll(std::int64_t now_ns) {
-  if (start_ns_ < 0) {
-    start_ns_ = now_ns;
-    return;
-  }
   const std::int64_t elapsed = now_ns - start_ns_;
   if (elapsed < window_ns_) return;
   // a window ended: it becomes the previous one, unless more than one has passed (then the
   // previous window was idle)
-  previous_busy_ns_ = elapsed < 2 * window_ns_ ? busy_ns_ : 0;
+  previous_busy_ns_ = elapsed < 2 * window_ns_ ? std::min(busy_ns_, window_ns_) : 0;
   previous_length_ns_ = window_ns_;
   start_ns_ += (elapsed / window_ns_) * window_ns_;
   busy_ns_ = 0;
 }
 
-void BusyBudget::Ran(std::int64_t start_ns, std::int64_t end_ns) {
-  Roll(start_ns);
-  // a run that crosses the window's end is counted in the window it ends in
-  Roll(end_ns);
-  busy_ns_ += std::max<std::int64_t>(0, end_ns - std::max(start_ns, start_ns_));
-  previous_busy_ns_ = std::min(
-      previous_length_ns_,
-      previous_busy_ns_ + std::max<std::int64_t>(0, std::min(end_ns, start_ns_) - start_ns));
+void BusyBudget::Sample(std::int64_t now_ns, std::int64_t cpu_ns) {
+  if (start_ns_ < 0) {
+    start_ns_ = now_ns;
+    last_cpu_ns_ = cpu_ns;
+    return;
+  }
+  Roll(now_ns);
+  // the CPU time since the last sample, in the window it is seen in
+  busy_ns_ += std::max<std::int64_t>(0, cpu_ns - last_cpu_ns_);
+  last_cpu_ns_ = cpu_ns;
 }
 
 bool BusyBudget::Spent(std::int64_t now_ns) const {
@@ -296,6 +301,7 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
   const double busy_share = stats.realtime_priority_active ? RealtimeBusyShare() : 0.0;
   const bool guard_budget = busy_share > 0.0;
   BusyBudget budget(guard_budget ? busy_share : 1.0, kBusyWindowNs);
+  const std::int64_t sample_every = std::max<std::int64_t>(1, std::llround(options_.rate_hz / 1e3));
 
   const std::int64_t start_ns = NowNs();
   std::int64_t slot = 0;
@@ -319,8 +325,7 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
       stats.stop_requested = true;
       break;
     }
-    const std::int64_t awake_ns = NowNs();
-    std::int64_t wake_ns = awake_ns;
+    std::int64_t wake_ns = NowNs();
     while (wake_ns < deadline_ns) wake_ns = NowNs();  // the optional end-of-period spin
 
     max_latency_ns = std::max(max_latency_ns, wake_ns - deadline_ns);
@@ -348,7 +353,8 @@ LoopStats RateLoop::RunImpl(StepFunction step, void* context, const std::atomic<
     // never past the end of the run, so ticks + skipped_periods = the scheduled count
     const std::int64_t room = max_slots - slot;
     if (guard_budget) {
-      budget.Ran(awake_ns, end_ns);
+      // about once a millisecond: reading the thread's CPU time is a system call
+      if (stats.ticks % sample_every == 0) budget.Sample(end_ns, ThreadCpuNs());
       // a SCHED_FIFO loop that has run for nearly all its recent time sleeps through the next
       // deadline, which the kernel's throttle would otherwise take ~50 ms later
       if (budget.Spent(end_ns) && drop < room) {

@@ -37,29 +37,31 @@ struct LoopOptions {
 /// Throws Error naming the field, its value and the valid range when an option is invalid.
 void ValidateLoopOptions(const LoopOptions& options);
 
-/// The share of recent time a loop has spent running, against a budget: Linux stops SCHED_FIFO
+/// The share of recent time a loop's thread has run, against a budget: Linux stops SCHED_FIFO
 /// threads that use more than sched_rt_runtime_us of each sched_rt_period_us (95% of every
 /// second by default) until the period ends, a stall of about 50 ms. A real-time loop whose steps
-/// take (nearly) the whole period runs them back to back and meets that limit; RateLoop asks this
-/// budget after every step and, when it is spent, sleeps until the next deadline but one, so the
-/// device misses one period instead of fifty. Busy time is counted over the current window and
-/// the one before it; no verdict until a whole window has passed. Plain arithmetic, no
+/// take (nearly) the whole period meets that limit; RateLoop samples its thread's CPU time (what
+/// the kernel charges, sleeps and wake-ups included: at 10 kHz on a virtual machine those took a
+/// quarter of each period) and, when the budget is spent, sleeps until the next deadline but one,
+/// so the device misses one period instead of fifty. CPU time is counted over the current window
+/// and the one before it; no verdict until a whole window has passed. Plain arithmetic, no
 /// allocation.
 class BusyBudget {
  public:
   /// `max_share` in (0, 1]; `window_ns` > 0.
   BusyBudget(double max_share, std::int64_t window_ns);
-  /// The loop ran from start_ns to end_ns (times from one monotonic clock, non-decreasing).
-  void Ran(std::int64_t start_ns, std::int64_t end_ns);
-  /// Whether the running time over the counted windows, up to now_ns, exceeds the share.
+  /// At now_ns (monotonic, non-decreasing) the thread's CPU-time clock reads cpu_ns.
+  void Sample(std::int64_t now_ns, std::int64_t cpu_ns);
+  /// Whether the CPU time over the counted windows, up to now_ns, exceeds the share.
   bool Spent(std::int64_t now_ns) const;
 
  private:
   void Roll(std::int64_t now_ns);
   double max_share_;
   std::int64_t window_ns_;
-  std::int64_t start_ns_ = -1;  // the current window's start; -1 before the first Ran
-  std::int64_t busy_ns_ = 0;    // running time in the current window
+  std::int64_t start_ns_ = -1;  // the current window's start; -1 before the first sample
+  std::int64_t last_cpu_ns_ = 0;
+  std::int64_t busy_ns_ = 0;  // CPU time in the current window
   std::int64_t previous_busy_ns_ = 0;
   std::int64_t previous_length_ns_ = 0;  // 0 until a window has ended
 };

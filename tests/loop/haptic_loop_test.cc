@@ -3,7 +3,6 @@
 #include "loop/haptic_loop.h"
 
 #include <gtest/gtest.h>
-#include <sched.h>
 
 #include <algorithm>
 #include <chrono>
@@ -17,6 +16,7 @@
 #include "device/simulated_device.h"
 #include "loop/trace_queue.h"
 #include "rigidtouch/device.h"
+#include "test_util.h"
 
 namespace rigidtouch::loop {
 namespace {
@@ -256,13 +256,8 @@ TEST(HapticLoop, EveryCommandIsClippedToTheStricterOfModelAndDeviceLimits) {
 // with threads 2 the tick's worker is the loop's helper: kept off the loop's CPU when the loop is
 // pinned, so that the two never share a CPU
 TEST(HapticLoop, TheTicksWorkerKeepsOffThePinnedLoopsCpu) {
-  cpu_set_t allowed;
-  ASSERT_EQ(sched_getaffinity(0, sizeof(allowed), &allowed), 0);
-  if (CPU_COUNT(&allowed) < 2) GTEST_SKIP() << "needs two CPUs";
-  int target = -1;
-  for (int c = 0; c < CPU_SETSIZE; ++c) {
-    if (CPU_ISSET(c, &allowed)) target = c;
-  }
+  const int target = test::LastCpuOfSeveral();
+  if (target < 0) GTEST_SKIP() << "needs two CPUs";
   for (const int threads : {1, 2}) {
     LoadOptions o;
     o.device.coupling = Coupling::kDirect;
