@@ -21,13 +21,6 @@ inline void Relax() {
 #endif
 }
 
-// the longest a waiting thread sleeps before it looks again: the tick's thread waits for a job
-// the worker is running (a lost wake-up delays the tick by at most this), the worker for the
-// next job (the tick's thread takes back what the worker has not started, so a late worker only
-// misses work; a job that must run on the worker, Wait, is delayed by at most this)
-constexpr long kTickSleepLimitNs = 200'000;
-constexpr long kWorkerSleepLimitNs = 5'000'000;
-
 // sleeps while *word == old, for at most limit_ns (or until woken, or a signal)
 void FutexSleep(const std::atomic<std::uint32_t>& word, std::uint32_t old, long limit_ns) {
   static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
@@ -81,7 +74,10 @@ std::uint32_t WakeCounter::AwaitChange(std::uint32_t old, int spins, long sleep_
   }
 }
 
-Worker::Worker(int spins) : spins_(spins) {
+Worker::Worker(int spins, long tick_sleep_limit_ns, long worker_sleep_limit_ns)
+    : spins_(spins),
+      tick_sleep_limit_ns_(tick_sleep_limit_ns),
+      worker_sleep_limit_ns_(worker_sleep_limit_ns) {
   try {
     thread_ = std::thread([this] { Loop(); });
   } catch (const std::system_error& e) {
@@ -114,13 +110,13 @@ void Worker::Finish() {
 void Worker::Wait() {
   const std::uint32_t n = posted_.Load(std::memory_order_relaxed);
   std::uint32_t now = finished_.Load();
-  while (now != n) now = finished_.AwaitChange(now, spins_, kTickSleepLimitNs);
+  while (now != n) now = finished_.AwaitChange(now, spins_, tick_sleep_limit_ns_);
 }
 
 void Worker::Loop() {
   std::uint32_t seen = 0;
   for (;;) {
-    seen = posted_.AwaitChange(seen, spins_, kWorkerSleepLimitNs);
+    seen = posted_.AwaitChange(seen, spins_, worker_sleep_limit_ns_);
     if (quit_.load(std::memory_order_relaxed)) return;
     // a job taken back by Finish is not run here; the next one is posted only after that
     if (!Take(taken_, seen)) continue;

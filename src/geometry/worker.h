@@ -93,10 +93,18 @@ class Worker {
   /// Polls a waiting thread spends spinning before it sleeps on a counter (with PAUSE: some tens
   /// of microseconds): a job posted within that comes without a wake-up.
   static constexpr int kDefaultSpins = 2000;
+  /// The longest a waiting thread sleeps before it looks again: the tick's thread waiting for a
+  /// job the worker runs (a lost wake-up delays the tick by at most this), and the worker waiting
+  /// for the next job (the tick's thread takes back what the worker has not started, so a late
+  /// worker only misses work; a job that must run on the worker, Wait, waits at most this).
+  static constexpr long kTickSleepLimitNs = 200'000;
+  static constexpr long kWorkerSleepLimitNs = 5'000'000;
 
   /// Starts the thread. Throws Error if the system cannot start one. `spins`: the polls both
-  /// threads spend before sleeping (0: sleep at once, as tests do to exercise the wake-ups).
-  explicit Worker(int spins = kDefaultSpins);
+  /// threads spend before sleeping (0: sleep at once, as tests do to exercise the wake-ups);
+  /// the sleep limits as above (tests lengthen them, so that a missing wake-up shows).
+  explicit Worker(int spins = kDefaultSpins, long tick_sleep_limit_ns = kTickSleepLimitNs,
+                  long worker_sleep_limit_ns = kWorkerSleepLimitNs);
   /// Stops the thread (after the job it may be running) and joins it.
   ~Worker();
   Worker(const Worker&) = delete;
@@ -129,6 +137,8 @@ class Worker {
   WakeCounter finished_;                 // the last job the worker ran to the end
   std::atomic<bool> quit_{false};
   const int spins_;
+  const long tick_sleep_limit_ns_;
+  const long worker_sleep_limit_ns_;
   Job job_ = nullptr;  // written before posted_ is raised, read by whoever takes the job
   void* context_ = nullptr;
   long taken_back_ = 0;  // the calling thread's own count

@@ -61,15 +61,17 @@ TEST(WorkerTest, RunsEachPostedJobOnceOnItsThread) {
 }
 
 // the hand-off's wake-ups, without the spin that usually hides them: a thread that has gone to
-// sleep on a counter is woken by the other's change to it. A hundred thousand hand-offs in which
-// the threads sleep; without the wake-ups each would wait for a sleep limit (0.2 to 5 ms) and
-// the test would not finish within its minute. The hand-offs run on a thread of their own, so
-// that the test can fail (and exit: a thread asleep for good cannot be joined) rather than hang
+// sleep on a counter is woken by the other's change to it. Thirty thousand hand-offs in which the
+// threads sleep, with sleep limits of a second: without the wake-ups the test would take hours,
+// with them it takes a second or two (tens under the sanitizers). The hand-offs run on a thread
+// of their own, so that the test can fail after two minutes (and exit: a thread asleep for good
+// cannot be joined) rather than hang
 TEST(WorkerTest, NoWakeUpIsLostWhenTheThreadsSleep) {
-  static constexpr int kHandOffs = 100000;
+  static constexpr int kHandOffs = 30000;
   std::atomic<int> done{0};
   std::thread stress([&done] {
-    Worker worker(/*spins=*/0);
+    Worker worker(/*spins=*/0, /*tick_sleep_limit_ns=*/1'000'000'000,
+                  /*worker_sleep_limit_ns=*/1'000'000'000);
     Counter c;
     c.caller = std::this_thread::get_id();
     for (int i = 1; i <= kHandOffs; ++i) {
@@ -88,7 +90,7 @@ TEST(WorkerTest, NoWakeUpIsLostWhenTheThreadsSleep) {
     }
     EXPECT_EQ(c.sum, kHandOffs);
   });
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (done.load() < kHandOffs && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
