@@ -2,10 +2,10 @@
 // owns it), it waits for a job, runs it, and says it is done. The stages that share work with it
 // (collision, classification, contact forces, the group solves) take it as an argument. It lives
 // in geometry/, the folder every other stage may include. Posting and finishing never allocate,
-// lock or throw: the hand-off is three counters (C++20 atomic wait / notify after a spin), so the
-// haptic thread stays lock-free, and a job the worker has not taken when the tick's thread is
-// ready for it is run on the tick's thread, so a worker that the system has not scheduled never
-// holds the tick up (docs/decisions.md, "A second thread in the tick").
+// lock or throw: the hand-off is three counters (a spin, then a futex sleep of bounded length:
+// WakeCounter), so the haptic thread stays lock-free, and a job the worker has not taken when the
+// tick's thread is ready for it is run on the tick's thread, so a worker that the system has not
+// scheduled never holds the tick up (docs/decisions.md, "A second thread in the tick").
 #pragma once
 
 #include <atomic>
@@ -60,7 +60,8 @@ struct Task {
 /// A counter that one thread raises and another waits on until it changes: the waiter spins
 /// for a number of polls, then sleeps on a futex, and never for longer than a bound, so that a
 /// wake-up that is lost costs at most that bound instead of leaving the waiter asleep for good
-/// (one was seen with C++20 atomic wait/notify: docs/decisions.md, "A lost wake-up"). The
+/// (one was seen with C++20 atomic wait/notify: docs/decisions.md, "The real-time loop's worker
+/// and the kernel's real-time throttle"). The
 /// raising side wakes only when a waiter has said it sleeps (a seq_cst flag and a seq_cst store
 /// on both sides, so that one of them always sees the other). Linux futexes; nothing allocates.
 class WakeCounter {
