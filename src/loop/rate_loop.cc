@@ -27,17 +27,19 @@ constexpr std::size_t kPrefaultStackBytes = std::size_t{256} * 1024;
 // BusyBudget's window: the CPU-time share is judged over the last 100-200 ms
 constexpr std::int64_t kBusyWindowNs = 100'000'000;
 
-std::int64_t NowNs() noexcept {
+std::int64_t ClockNs(clockid_t clock) noexcept {
   timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
+  clock_gettime(clock, &now);
   return static_cast<std::int64_t>(now.tv_sec) * kNsPerS + now.tv_nsec;
+}
+
+std::int64_t NowNs() noexcept {
+  return ClockNs(CLOCK_MONOTONIC);
 }
 
 // the calling thread's CPU time, as the kernel charges it (what its real-time throttle counts)
 std::int64_t ThreadCpuNs() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * kNsPerS + now.tv_nsec;
+  return ClockNs(CLOCK_THREAD_CPUTIME_ID);
 }
 
 timespec ToTimespec(std::int64_t time_ns) noexcept {
@@ -129,44 +131,39 @@ class HelperScope {
  public:
   HelperScope(const LoopOptions& options, LoopStats* stats) {
     stats->helper_threads = static_cast<int>(options.helper_threads.size());
+    if (options.cpu < 0) return;  // the loop is not pinned: nothing to keep off
     saved_.reserve(options.helper_threads.size());
     for (const std::thread::native_handle_type thread : options.helper_threads) {
-      Saved& h = saved_.emplace_back();
-      h.thread = thread;
-      if (options.cpu >= 0) {
-        // the CPUs the helper may use now, less the loop's
-        int error = pthread_getaffinity_np(thread, sizeof(h.cpus), &h.cpus);
-        cpu_set_t others = h.cpus;
-        CPU_CLR(options.cpu, &others);
-        if (error == 0) {
-          error = CPU_COUNT(&others) == 0 ? EINVAL
-                                          : pthread_setaffinity_np(thread, sizeof(others), &others);
-        }
-        if (error == 0) {
-          h.pinned = true;
-          ++stats->helpers_off_loop_cpu;
-        } else {
-          stats->warnings.push_back("could not keep the tick's worker thread off CPU " +
-                                    std::to_string(options.cpu) + ": " + std::strerror(error));
-        }
+      Saved h{thread, {}};
+      // the CPUs the helper may use now, less the loop's
+      int error = pthread_getaffinity_np(thread, sizeof(h.cpus), &h.cpus);
+      cpu_set_t others = h.cpus;
+      CPU_CLR(options.cpu, &others);
+      if (error == 0) {
+        error = CPU_COUNT(&others) == 0 ? EINVAL
+                                        : pthread_setaffinity_np(thread, sizeof(others), &others);
+      }
+      if (error == 0) {
+        saved_.push_back(h);
+        ++stats->helpers_off_loop_cpu;
+      } else {
+        stats->warnings.push_back("could not keep the tick's worker thread off CPU " +
+                                  std::to_string(options.cpu) + ": " + std::strerror(error));
       }
     }
   }
   ~HelperScope() {
-    for (Saved& h : saved_) {
-      if (h.pinned) pthread_setaffinity_np(h.thread, sizeof(h.cpus), &h.cpus);
-    }
+    for (const Saved& h : saved_) pthread_setaffinity_np(h.thread, sizeof(h.cpus), &h.cpus);
   }
   HelperScope(const HelperScope&) = delete;
   HelperScope& operator=(const HelperScope&) = delete;
 
  private:
   struct Saved {
-    std::thread::native_handle_type thread{};
-    cpu_set_t cpus{};
-    bool pinned = false;
+    std::thread::native_handle_type thread;
+    cpu_set_t cpus;  // to restore
   };
-  std::vector<Saved> saved_;
+  std::vector<Saved> saved_;  // the helpers kept off the loop's CPU
 };
 
 // after the run, never inside it: the loop only counts
