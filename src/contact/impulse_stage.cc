@@ -11,14 +11,17 @@
 namespace rigidtouch::contact {
 namespace {
 
-// packs group g's bodies and rows; returns whether the tool takes part
-bool Pack(const Model& model, const Data& data, const Groups& G, int g, ImpulseScratch& s) {
+// fewer rows than this in the groups with an impulse due are not worth the hand-off to the worker
+constexpr int kMinRowsForTwoThreads = 64;
+
+// packs group g's bodies and rows into lane L; returns whether the tool takes part
+bool Pack(const Model& model, const Data& data, const Groups& G, int g, ImpulseLane& L) {
   const int nb = G.body_start[g + 1] - G.body_start[g];
   const int nc = G.contact_start[g + 1] - G.contact_start[g];
   for (int k = 0; k < nb; ++k) {
     const int i = G.bodies[G.body_start[g] + k];
     const BodyState& state = data.bodies[i];
-    SolverBody& sb = s.bodies[k];
+    SolverBody& sb = L.bodies[k];
     sb.inv_mass = 1.0 / model.bodies[i].mass_kg;
     sb.inv_inertia_W = dynamics::WorldInverseInertia(model.bodies[i], data.R_WB[i]);
     sb.v_W = state.v_W;
@@ -27,7 +30,7 @@ bool Pack(const Model& model, const Data& data, const Groups& G, int g, ImpulseS
   bool tool = false;
   for (int k = 0; k < nc; ++k) {
     const Contact& c = data.contacts[G.contacts[G.contact_start[g] + k]];
-    SolverRow& row = s.rows[k];
+    SolverRow& row = L.rows[k];
     row.body_a = c.body_a >= 0 ? G.slot[c.body_a] : -1;
     row.body_b = c.body_b >= 0 ? G.slot[c.body_b] : -1;
     row.n_W = c.n_W;
@@ -38,29 +41,29 @@ bool Pack(const Model& model, const Data& data, const Groups& G, int g, ImpulseS
 }
 
 // the impulse of Eq. 5 (N = 1) or Eq. 8 (e = 0) into p; false if the solver failed
-bool SolveImpulse(const Model& model, const ImpulseProblem& problem, int remaining,
-                  ImpulseScratch& s, std::span<double> p) {
+bool SolveImpulse(const Model& model, const ImpulseProblem& problem, int remaining, ImpulseLane& L,
+                  ReferenceSolver* reference, std::span<double> p) {
   const double e = model.render.renderer == RendererKind::kImpulse ? model.render.restitution : 0.0;
   if (model.render.reference_solver) {
     // exact Eq. 5 / Eq. 8 with the pseudo-inverse (may pull), for comparison runs
-    return s.reference != nullptr && s.reference->Solve(problem, e, remaining, p);
+    return reference != nullptr && reference->Solve(problem, e, remaining, p);
   }
   // Eq. 8's share 1 / (N - i + 1), or a material train's envelope share
   const double scale =
       (1.0 + e) * TrainShare(model.schedule, model.render, model.timestep_s, remaining);
-  return s.solver->Solve(problem, scale, p).error == ImpulseSolverError::kNone;
+  return L.solver->Solve(problem, scale, p).error == ImpulseSolverError::kNone;
 }
 
-// applies p to group g's bodies and records the event
+// applies p to group g's bodies and contacts and describes it in ev (recorded later, in order)
 void Apply(const Model& model, Data& data, const Groups& G, int g, int index, bool tool,
-           const ImpulseProblem& problem, std::span<const double> p, ImpulseScratch& s) {
+           const ImpulseProblem& problem, std::span<const double> p, ImpulseLane& L,
+           ImpulseEvent& ev) {
   const int nb = static_cast<int>(problem.bodies.size());
   const int nc = static_cast<int>(problem.rows.size());
-  const std::span<SolverBody> bodies(s.bodies.data(), nb);
+  const std::span<SolverBody> bodies(L.bodies.data(), nb);
   const double ke_before = KineticEnergy(bodies);
   ApplyImpulses(bodies, problem.rows, p);
   const double ke_after = KineticEnergy(bodies);
-  ImpulseEvent& ev = data.impulses[data.nimpulse++];
   ev = ImpulseEvent{};
   ev.step = data.step;
   ev.time_s = data.time_s;
@@ -80,7 +83,6 @@ void Apply(const Model& model, Data& data, const Groups& G, int g, int index, bo
     if (c.body_b == model.tool) ev.tool_impulse_W -= p[k] * c.n_W;
   }
   ev.impulse_norm_Ns = std::sqrt(norm2);
-  data.tool_impulse_W += ev.tool_impulse_W;
   for (int k = 0; k < nb; ++k) {
     BodyState& state = data.bodies[G.bodies[G.body_start[g] + k]];
     state.v_W = bodies[k].v_W;
@@ -88,34 +90,69 @@ void Apply(const Model& model, Data& data, const Groups& G, int g, int index, bo
   }
 }
 
-// group g's impulse, if one is due in its window (Eq. 6-7)
-void GroupImpulse(const Model& model, Data& data, const Groups& G, int g, WindowState& window,
-                  ImpulseScratch& s) {
-  int index = 0, remaining = 0;
-  if (!ImpulseDue(model.schedule, window, data.step, &index, &remaining)) return;
+// group d.group's due impulse with lane L: solved, applied to its bodies and contacts, and
+// described in d.event; d.solved false if the solver failed. Touches only the group's own bodies
+// and contacts, so the two threads may solve different groups at once.
+void SolveDue(const Model& model, Data& data, const Groups& G, ImpulseScratch::Due& d,
+              ImpulseLane& L, ReferenceSolver* reference) {
+  const int g = d.group;
   const int nb = G.body_start[g + 1] - G.body_start[g];
   const int nc = G.contact_start[g + 1] - G.contact_start[g];
-  if (nc == 0) return;
-  const bool tool = Pack(model, data, G, g, s);
-  const ImpulseProblem problem{std::span<const SolverBody>(s.bodies.data(), nb),
-                               std::span<const SolverRow>(s.rows.data(), nc)};
-  const std::span<double> p(s.impulses.data(), nc);
-  if (!SolveImpulse(model, problem, remaining, s, p)) {
-    data.Warn(Warning::kSolverFailed);
-    return;
+  const bool tool = Pack(model, data, G, g, L);
+  const ImpulseProblem problem{std::span<const SolverBody>(L.bodies.data(), nb),
+                               std::span<const SolverRow>(L.rows.data(), nc)};
+  const std::span<double> p(L.impulses.data(), nc);
+  d.solved = SolveImpulse(model, problem, d.remaining, L, reference, p);
+  if (d.solved) Apply(model, data, G, g, d.index, tool, problem, p, L, d.event);
+}
+
+// The worker's part of the shared groups: places in the due list taken from the back.
+void RunImpulseJob(void* context) {
+  const auto* job = static_cast<const ImpulseScratch::Job*>(context);
+  ImpulseScratch& s = *job->scratch;
+  for (int k = s.shared.TakeBack(); k >= 0; k = s.shared.TakeBack()) {
+    SolveDue(*job->model, *job->data, *job->groups, s.due[k], s.worker_lane, nullptr);
+    ++s.solved_on_worker;
   }
-  Apply(model, data, G, g, index, tool, problem, p, s);
-  window.impulses_done = index;
+}
+
+// lists the groups with an impulse due this tick (Eq. 6-7) in group order; returns their rows
+int ListDue(const Model& model, const Data& data, const Groups& G, ImpulseScratch& s) {
+  s.ndue = 0;
+  int rows = 0;
+  for (int g = 0; g < G.ngroup; ++g) {
+    const int nc = G.contact_start[g + 1] - G.contact_start[g];
+    ImpulseScratch::Due& d = s.due[s.ndue];
+    if (nc > 0 && ImpulseDue(model.schedule, data.window[G.bodies[G.body_start[g]]], data.step,
+                             &d.index, &d.remaining)) {
+      d.group = g;
+      d.solved = false;
+      ++s.ndue;
+      rows += nc;
+    }
+  }
+  return rows;
+}
+
+void SizeLane(const Model& model, ImpulseLane& L) {
+  const int nbody = static_cast<int>(model.bodies.size());
+  L.bodies.resize(nbody);
+  L.rows.resize(model.max_contacts);
+  L.impulses.resize(model.max_contacts);
+  L.solver = std::make_unique<ImpulseSolver>(model.max_contacts, nbody);
 }
 
 }  // namespace
 
 void ImpulseScratch::Reserve(const Model& model) {
   const int nbody = static_cast<int>(model.bodies.size());
-  bodies.resize(nbody);
-  rows.resize(model.max_contacts);
-  impulses.resize(model.max_contacts);
-  solver = std::make_unique<ImpulseSolver>(model.max_contacts, nbody);
+  SizeLane(model, lane);
+  worker_lane = ImpulseLane{};
+  if (model.threads == 2) SizeLane(model, worker_lane);
+  due.assign(nbody, Due{});
+  ndue = 0;
+  shared_steps = 0;
+  solved_on_worker = 0;
   reference.reset();
   if (model.render.reference_solver) {
     // its dense system is rows x rows: sized for every contact the scene can produce (12653 for
@@ -127,17 +164,45 @@ void ImpulseScratch::Reserve(const Model& model) {
   }
 }
 
-void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseScratch& scratch) {
+void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseScratch& scratch,
+                       geometry::Worker* worker) {
   // penalty and event-based transients apply no impulses (the event renderer's window only
   // marks the onset its transient starts from)
   if (model.render.renderer == RendererKind::kPenalty ||
       model.render.renderer == RendererKind::kEvent) {
     return;
   }
+  ImpulseScratch& s = scratch;
+  const int rows = ListDue(model, data, G, s);
+  // the reference solver is the tick's thread's alone
+  if (worker != nullptr && !model.render.reference_solver && s.ndue >= 2 &&
+      rows >= kMinRowsForTwoThreads) {
+    s.shared.Reset(0, s.ndue);
+    s.job = {&model, &data, &G, &s};
+    worker->Post(&RunImpulseJob, &s.job);
+    for (int k = s.shared.TakeFront(); k >= 0; k = s.shared.TakeFront()) {
+      SolveDue(model, data, G, s.due[k], s.lane, nullptr);
+    }
+    worker->Finish();
+    ++s.shared_steps;
+  } else {
+    for (int k = 0; k < s.ndue; ++k) SolveDue(model, data, G, s.due[k], s.lane, s.reference.get());
+  }
+  // recorded in group order, as one thread solving the groups in turn would
+  for (int k = 0; k < s.ndue; ++k) {
+    const ImpulseScratch::Due& d = s.due[k];
+    if (!d.solved) {
+      data.Warn(Warning::kSolverFailed);
+      continue;
+    }
+    data.impulses[data.nimpulse++] = d.event;
+    data.tool_impulse_W += d.event.tool_impulse_W;
+    data.window[G.bodies[G.body_start[d.group]]].impulses_done = d.index;
+  }
+  // a group's window is its first body's; every body of the group takes it on
   for (int g = 0; g < G.ngroup; ++g) {
-    WindowState w = data.window[G.bodies[G.body_start[g]]];
-    GroupImpulse(model, data, G, g, w, scratch);
-    for (int k = G.body_start[g]; k < G.body_start[g + 1]; ++k) data.window[G.bodies[k]] = w;
+    const WindowState w = data.window[G.bodies[G.body_start[g]]];
+    for (int k = G.body_start[g] + 1; k < G.body_start[g + 1]; ++k) data.window[G.bodies[k]] = w;
   }
 }
 

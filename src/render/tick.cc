@@ -52,7 +52,9 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
 
   // 6. impulses: Eq. 5 (single impulse) or Eq. 8 (train) where the window's schedule (Eq. 6-7)
   // says one is due, on the velocities after stage 5
-  if (!stale) contact::CollisionImpulses(model, data, ws.contact.groups, ws.impulse);
+  if (!stale) {
+    contact::CollisionImpulses(model, data, ws.contact.groups, ws.impulse, ws.worker.get());
+  }
 
   // 7. integrate positions with the new velocities
   dynamics::IntegratePositions(model, data);

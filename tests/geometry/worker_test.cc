@@ -283,6 +283,79 @@ TEST(WorkerTest, GroupsSolvedOnTwoThreadsKeepTheirFactors) {
   EXPECT_GT(v2.worker_solver.lagged.lagged_solves, 0);
 }
 
+// stage 6's record of one tick, compared bit for bit: the events in order, the tool's impulse,
+// every contact's impulse and every body's state; false with the first difference in *why
+bool SameImpulses(const Data& d1, const Data& d2, std::string* why) {
+  if (d1.nimpulse != d2.nimpulse) {
+    *why = "impulse count " + std::to_string(d1.nimpulse) + " != " + std::to_string(d2.nimpulse);
+    return false;
+  }
+  for (int k = 0; k < d1.nimpulse; ++k) {
+    const ImpulseEvent &a = d1.impulses[k], &b = d2.impulses[k];
+    if (a.group != b.group || a.contacts != b.contacts || a.index != b.index ||
+        a.total != b.total || a.tool != b.tool ||
+        std::memcmp(&a.kinetic_energy_before_J, &b.kinetic_energy_before_J, 8) != 0 ||
+        std::memcmp(&a.kinetic_energy_after_J, &b.kinetic_energy_after_J, 8) != 0 ||
+        std::memcmp(&a.impulse_norm_Ns, &b.impulse_norm_Ns, 8) != 0 ||
+        !SameBits(a.tool_impulse_W, b.tool_impulse_W)) {
+      *why = "event " + std::to_string(k);
+      return false;
+    }
+  }
+  if (!SameBits(d1.tool_impulse_W, d2.tool_impulse_W)) {
+    *why = "tool impulse";
+    return false;
+  }
+  for (int c = 0; c < d1.ncontact; ++c) {
+    if (std::memcmp(&d1.contacts[c].impulse_Ns, &d2.contacts[c].impulse_Ns, 8) != 0) {
+      *why = "contact " + std::to_string(c);
+      return false;
+    }
+  }
+  for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
+    const BodyState &a = d1.bodies[i], &b = d2.bodies[i];
+    if (!SameBits(a.x_W, b.x_W) || !SameBits(a.v_W, b.v_W) || !SameBits(a.w_W, b.w_W) ||
+        d1.window[i].onset_step != d2.window[i].onset_step ||
+        d1.window[i].impulses_done != d2.window[i].impulses_done) {
+      *why = "body " + std::to_string(i);
+      return false;
+    }
+  }
+  return true;
+}
+
+// a 6 x 6 x 8 pile landing (boxes 1 mm apart): its 36 columns' collision windows open within a
+// few ticks of each other, so in many ticks several groups have an impulse of their trains due,
+// and with two threads the worker solves some of them with its own solver. Every tick's impulses
+// (the events in group order, the tool's impulse, each contact's impulse) and the body states
+// and windows are those of one thread, bit for bit. On a loaded machine the system may not run
+// the worker in time for any shared group of the first 400 steps; the pile is then stepped on
+// (its windows keep opening as the columns settle and touch) until the worker has solved some.
+TEST(WorkerTest, ImpulsesSharedByTwoThreadsAreThoseOfOne) {
+  OneAndTwoThreads t(test::WriteTempFile("pile_impulses.xml", test::PileXml(6, 6, 8, 0.051, 0.45)));
+  const Model &m1 = t.m1, &m2 = t.m2;
+  Data &d1 = t.d1, &d2 = t.d2;
+  ASSERT_EQ(m1.render.renderer, RendererKind::kTrain);  // the default: trains of impulses
+  TickInput in;
+  in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
+  const contact::ImpulseScratch& shared = d2.workspace->impulse;
+  long impulses = 0;
+  int most_in_a_tick = 0;
+  for (int s = 0; s < 400 || (shared.solved_on_worker == 0 && s < 4000); ++s) {
+    Tick(m1, d1, in);
+    Tick(m2, d2, in);
+    std::string why;
+    ASSERT_TRUE(SameImpulses(d1, d2, &why)) << "step " << s << ": " << why;
+    impulses += d1.nimpulse;
+    most_in_a_tick = std::max(most_in_a_tick, d1.nimpulse);
+  }
+  EXPECT_GT(impulses, 500);       // the trains ran (measured: 1771 over 400 steps)
+  EXPECT_GE(most_in_a_tick, 10);  // many groups at once (measured: 37, the 36 columns and the tool)
+  EXPECT_GT(shared.shared_steps, 10);  // and they were offered to both threads
+  EXPECT_GT(shared.solved_on_worker, 0);
+  EXPECT_EQ(d1.workspace->impulse.shared_steps, 0);  // never with one thread
+}
+
 // an allocation guard that lives on the worker thread between two of its jobs
 alignas(test::LimitMalloc) unsigned char worker_guard[sizeof(test::LimitMalloc)];
 void StartWorkerGuard(void*) {
@@ -305,8 +378,8 @@ void OnWorker(Worker& worker, Worker::Job job, void* context) {
 }
 
 // with two threads neither the tick's thread nor the worker allocates while a 100-box pile
-// (its narrow phase and group solves shared with the worker) runs 2000 ticks; the worker's guard
-// sees an allocation made by a job, so that it would see one in the tick
+// (its narrow phase, group solves and impulses shared with the worker) runs 2000 ticks; the
+// worker's guard sees an allocation made by a job, so that it would see one in the tick
 TEST(WorkerTest, NeitherThreadAllocatesInTheTick) {
   if (!test::kMallocCounting) GTEST_SKIP() << "malloc is owned by the sanitizer";
   const std::string path =
@@ -326,6 +399,7 @@ TEST(WorkerTest, NeitherThreadAllocatesInTheTick) {
   for (int s = 0; s < 10; ++s) Tick(m, d, in);  // warm-up
   long on_worker = -1;
   const long shared_before = d.workspace->velocity.shared_steps;
+  const long impulses_shared_before = d.workspace->impulse.shared_steps;
   OnWorker(worker, &StartWorkerGuard, nullptr);
   {
     test::LimitMalloc guard;
@@ -336,6 +410,8 @@ TEST(WorkerTest, NeitherThreadAllocatesInTheTick) {
   EXPECT_EQ(on_worker, 0);
   EXPECT_GT(d.ncontact, 300);                                    // the pile was in contact
   EXPECT_GT(d.workspace->velocity.shared_steps, shared_before);  // and its groups were split
+  // as were its impulses while it landed
+  EXPECT_GT(d.workspace->impulse.shared_steps, impulses_shared_before);
 }
 
 }  // namespace
