@@ -110,8 +110,16 @@ void SolveDue(const Model& model, Data& data, const Groups& G, ImpulseScratch::D
 void RunImpulseJob(void* context) {
   const auto* job = static_cast<const ImpulseScratch::Job*>(context);
   ImpulseScratch& s = *job->scratch;
+  const Groups& G = *job->groups;
+  const int capacity = static_cast<int>(s.worker_lane.rows.size());
   for (int k = s.shared.TakeBack(); k >= 0; k = s.shared.TakeBack()) {
-    SolveDue(*job->model, *job->data, *job->groups, s.due[k], s.worker_lane, nullptr);
+    ImpulseScratch::Due& d = s.due[k];
+    if (G.contact_start[d.group + 1] - G.contact_start[d.group] > capacity) {
+      d.left = true;
+      ++s.left_by_worker;
+      continue;
+    }
+    SolveDue(*job->model, *job->data, G, d, s.worker_lane, nullptr);
     ++s.solved_on_worker;
   }
 }
@@ -127,6 +135,7 @@ int ListDue(const Model& model, const Data& data, const Groups& G, ImpulseScratc
                              &d.index, &d.remaining)) {
       d.group = g;
       d.solved = false;
+      d.left = false;
       ++s.ndue;
       rows += nc;
     }
@@ -134,25 +143,28 @@ int ListDue(const Model& model, const Data& data, const Groups& G, ImpulseScratc
   return rows;
 }
 
-void SizeLane(const Model& model, ImpulseLane& L) {
+void SizeLane(const Model& model, int rows, ImpulseLane& L) {
   const int nbody = static_cast<int>(model.bodies.size());
   L.bodies.resize(nbody);
-  L.rows.resize(model.max_contacts);
-  L.impulses.resize(model.max_contacts);
-  L.solver = std::make_unique<ImpulseSolver>(model.max_contacts, nbody);
+  L.rows.resize(rows);
+  L.impulses.resize(rows);
+  L.solver = std::make_unique<ImpulseSolver>(rows, nbody);
 }
 
 }  // namespace
 
-void ImpulseScratch::Reserve(const Model& model) {
+void ImpulseScratch::Reserve(const Model& model, int worker_rows) {
   const int nbody = static_cast<int>(model.bodies.size());
-  SizeLane(model, lane);
+  SizeLane(model, model.max_contacts, lane);
   worker_lane = ImpulseLane{};
-  if (model.threads == 2) SizeLane(model, worker_lane);
+  if (model.threads == 2) {
+    SizeLane(model, std::clamp(worker_rows, 0, model.max_contacts), worker_lane);
+  }
   due.assign(nbody, Due{});
   ndue = 0;
   shared_steps = 0;
   solved_on_worker = 0;
+  left_by_worker = 0;
   reference.reset();
   if (model.render.reference_solver) {
     // its dense system is rows x rows: sized for every contact the scene can produce (12653 for
@@ -184,6 +196,9 @@ void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseS
       SolveDue(model, data, G, s.due[k], s.lane, nullptr);
     }
     worker->Finish();
+    for (int k = 0; k < s.ndue; ++k) {
+      if (s.due[k].left) SolveDue(model, data, G, s.due[k], s.lane, nullptr);
+    }
     ++s.shared_steps;
   } else {
     for (int k = 0; k < s.ndue; ++k) SolveDue(model, data, G, s.due[k], s.lane, s.reference.get());

@@ -19,7 +19,7 @@
 
 namespace rigidtouch::contact {
 
-/// One thread's buffers of stage 6.
+/// One thread's buffers of stage 6, for groups of up to rows.size() rows.
 struct ImpulseLane {
   std::vector<SolverBody> bodies;  // (nbody) one group's bodies
   std::vector<SolverRow> rows;     // (max_contacts) one group's rows
@@ -35,6 +35,7 @@ struct ImpulseScratch {
     int index = 0;      // i, the impulse's 1-based place in the train
     int remaining = 0;  // N - i + 1
     bool solved = false;
+    bool left = false;   // too large for the worker's lane: left to the tick's thread
     ImpulseEvent event;  // when solved
   };
   /// What the worker's part of the shared groups needs.
@@ -45,7 +46,13 @@ struct ImpulseScratch {
     ImpulseScratch* scratch = nullptr;
   };
 
-  ImpulseLane lane;                            // the tick's thread
+  /// Rows of the worker's lane: its solver's buffers take about 0.4 kB a row, and a lane as
+  /// large as the tick's (every contact the scene can have) would add tens of megabytes to a
+  /// large scene for groups that are rarely that large. A larger group is solved by the tick's
+  /// thread.
+  static constexpr int kWorkerLaneRows = 4096;
+
+  ImpulseLane lane;                            // the tick's thread: every contact
   ImpulseLane worker_lane;                     // the worker's (Model::threads 2 only)
   std::unique_ptr<ReferenceSolver> reference;  // only when RenderParams::reference_solver
   std::vector<Due> due;                        // (nbody) the groups with an impulse due, in order
@@ -53,11 +60,12 @@ struct ImpulseScratch {
   geometry::TwoEndedRange shared;  // places in `due` the two threads take
   Job job;
   long shared_steps = 0;      // steps whose impulses were shared between the threads
-  long solved_on_worker = 0;  // groups the worker solved (both since Reserve)
+  long solved_on_worker = 0;  // groups the worker solved
+  long left_by_worker = 0;    // groups the worker left for being too large (all since Reserve)
 
   /// Sizes every buffer; the only allocating call. The reference solver is made only when the
-  /// model asks for it, the worker's lane only with two threads.
-  void Reserve(const Model& model);
+  /// model asks for it, the worker's lane only with two threads, for at most `worker_rows` rows.
+  void Reserve(const Model& model, int worker_rows = kWorkerLaneRows);
 };
 
 /// Stage 6 over every group: the impulse that is due, if any (Warning::kSolverFailed and none

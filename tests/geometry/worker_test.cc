@@ -356,6 +356,32 @@ TEST(WorkerTest, ImpulsesSharedByTwoThreadsAreThoseOfOne) {
   EXPECT_EQ(d1.workspace->impulse.shared_steps, 0);  // never with one thread
 }
 
+// the same landing with the worker's lane cut to 24 rows, smaller than a landed column's 32 (the
+// shipped lane has 4096): the groups it takes that are larger are left to the tick's thread, and
+// the results are still those of one thread, bit for bit (measured: 289 groups solved on the
+// worker, 1019 left)
+TEST(WorkerTest, ImpulseGroupsTooLargeForTheWorkersLaneAreSolvedByTheTicksThread) {
+  OneAndTwoThreads t(
+      test::WriteTempFile("pile_impulses_lane.xml", test::PileXml(6, 6, 8, 0.051, 0.45)));
+  const Model &m1 = t.m1, &m2 = t.m2;
+  Data &d1 = t.d1, &d2 = t.d2;
+  contact::ImpulseScratch& shared = d2.workspace->impulse;
+  constexpr int kRows = 24;
+  shared.Reserve(m2, kRows);
+  ASSERT_EQ(static_cast<int>(shared.worker_lane.rows.size()), kRows);
+  TickInput in;
+  in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);
+  for (int s = 0;
+       s < 400 || ((shared.solved_on_worker == 0 || shared.left_by_worker == 0) && s < 4000); ++s) {
+    Tick(m1, d1, in);
+    Tick(m2, d2, in);
+    std::string why;
+    ASSERT_TRUE(SameImpulses(d1, d2, &why)) << "step " << s << ": " << why;
+  }
+  EXPECT_GT(shared.left_by_worker, 0);    // the worker met groups too large for it
+  EXPECT_GT(shared.solved_on_worker, 0);  // and solved the others
+}
+
 // an allocation guard that lives on the worker thread between two of its jobs
 alignas(test::LimitMalloc) unsigned char worker_guard[sizeof(test::LimitMalloc)];
 void StartWorkerGuard(void*) {
