@@ -22,8 +22,8 @@ namespace rigidtouch::contact {
 /// One thread's buffers of stage 6, for groups of up to rows.size() rows.
 struct ImpulseLane {
   std::vector<SolverBody> bodies;  // (nbody) one group's bodies
-  std::vector<SolverRow> rows;     // (max_contacts) one group's rows
-  std::vector<double> impulses;    // (max_contacts) one group's normal impulses  [N s]
+  std::vector<SolverRow> rows;     // (the lane's rows) one group's rows
+  std::vector<double> impulses;    // (the lane's rows) one group's normal impulses  [N s]
   std::unique_ptr<ImpulseSolver> solver;
 };
 
