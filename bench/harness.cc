@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "loop/reference_job.h"
+
 namespace rigidtouch::bench {
 namespace {
 
@@ -17,13 +19,10 @@ std::string Millimetres(double metres) {
   return out.str();
 }
 
-// `iterations` dependent multiply-adds; the volatile seed keeps the compiler from folding it
-std::int64_t TimedKernel(long iterations) {
-  static volatile double seed = 1.0;
+// one run of the job's `units`, timed
+std::int64_t TimedJob(loop::ReferenceJob& job, long units, volatile double* sink) {
   const auto start = Clock::now();
-  double y = seed;
-  for (long k = 0; k < iterations; ++k) y = y * 1.0000001 + 1e-9;
-  seed = y;
+  *sink = job.Run(units);  // kept: the job's work cannot be left out
   const auto stop = Clock::now();
   return std::chrono::duration_cast<std::chrono::nanoseconds>(stop - start).count();
 }
@@ -31,18 +30,17 @@ std::int64_t TimedKernel(long iterations) {
 }  // namespace
 
 TimeSummary ConstantWorkProbe(double target_ns, int samples) {
-  // calibrate: the median of 201 runs of a trial length, scaled to the target (twice, so the
-  // clock's own cost and the loop's start-up are folded in)
-  long iterations = 1000;
-  for (int round = 0; round < 2; ++round) {
+  // sized to the target by the median of 201 runs at each of the calibration's two rounds (so
+  // the clock's own cost and the job's start-up are folded in)
+  loop::ReferenceJob job;
+  volatile double sink = 0.0;
+  const long units = loop::CalibrateUnits(target_ns, 1000, 10'000'000, [&job, &sink](long u) {
     std::vector<std::int64_t> trial(201);
-    for (std::int64_t& t : trial) t = TimedKernel(iterations);
-    const double median = Summarize(trial).median_ns;
-    iterations = std::max(
-        1L, std::lround(static_cast<double>(iterations) * target_ns / std::max(median, 1.0)));
-  }
+    for (std::int64_t& t : trial) t = TimedJob(job, u, &sink);
+    return Summarize(trial).median_ns;
+  });
   std::vector<std::int64_t> durations(static_cast<std::size_t>(std::max(samples, 1)));
-  for (std::int64_t& t : durations) t = TimedKernel(iterations);
+  for (std::int64_t& t : durations) t = TimedJob(job, units, &sink);
   return Summarize(durations);
 }
 

@@ -87,10 +87,11 @@ class SceneRun {
 /// `Error` when `block` < 1.
 void MeasureInterleaved(std::span<SceneRun* const> runs, int measurements, int block);
 
-/// Times a constant-work arithmetic kernel (a dependent floating-point chain, no memory traffic)
-/// calibrated to take about `target_ns`, `samples` times, exactly as steps are timed: what the
-/// machine alone (preemption, interrupts, a virtual machine's steal) does to a step of that
-/// length. Its p99.9 / median is the floor under any engine's at that step time.
+/// Times a constant-work job (loop::ReferenceJob: a dependent floating-point chain over a buffer
+/// in the first-level cache) calibrated to take about `target_ns`, `samples` times, exactly as
+/// steps are timed: what the machine alone (preemption, interrupts, a virtual machine's steal)
+/// does to a step of that length. Its p99.9 / median is the floor under any engine's at that step
+/// time.
 TimeSummary ConstantWorkProbe(double target_ns, int samples);
 
 /// Returns the height (world z) at which to place the centre of a sphere of radius `radius_m`

@@ -2,9 +2,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <iostream>
 
 #include "command.h"
+#include "loop/reference_job.h"
 #include "render/workspace.h"
 #include "scene_flags.h"
 
@@ -17,7 +19,15 @@ struct BenchFlags {
   long warmup = 2000;
   std::vector<double> tool_force{0.0, 0.0, -2.0};
   bool json = false;
+  bool reference = false;
 };
+
+// --reference: the last warm-up steps whose median sizes the fixed job, and the job's first guess
+// and largest size in units (a unit is some tens of nanoseconds; the cap is about a second)
+constexpr long kReferenceWarmup = 200;
+constexpr long kReferenceFirstUnits = 1000;
+constexpr long kReferenceMaxUnits = 10'000'000;
+constexpr int kCalibrationRuns = 21;
 
 double Percentile(const std::vector<double>& sorted, double q) {
   // nearest rank
@@ -25,14 +35,79 @@ double Percentile(const std::vector<double>& sorted, double q) {
   return sorted[std::min(sorted.size() - 1, k == 0 ? 0 : k - 1)];
 }
 
+std::int64_t ElapsedNs(std::chrono::steady_clock::time_point t0,
+                       std::chrono::steady_clock::time_point t1) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
+}
+
+// the median length of the job at `units`, over kCalibrationRuns runs
+double JobMedianNs(loop::ReferenceJob& job, long units, volatile double* sink) {
+  std::vector<double> ns(kCalibrationRuns);
+  for (double& t : ns) {
+    const auto t0 = std::chrono::steady_clock::now();
+    *sink = job.Run(units);
+    t = static_cast<double>(ElapsedNs(t0, std::chrono::steady_clock::now()));
+  }
+  std::sort(ns.begin(), ns.end());
+  return ns[ns.size() / 2];
+}
+
+// median, p99, p99.9 (nearest rank) and max of sorted durations
+nlohmann::json Summary(const std::vector<double>& sorted) {
+  return {{"median_ns", Percentile(sorted, 0.5)},
+          {"p99_ns", Percentile(sorted, 0.99)},
+          {"p999_ns", Percentile(sorted, 0.999)},
+          {"max_ns", sorted.back()}};
+}
+
+// the reference's JSON: the job's size, its summary, and the steps' percentiles over the job's
+nlohmann::json ReferenceJson(long units, const std::vector<double>& job_sorted,
+                             const nlohmann::json& steps) {
+  nlohmann::json r = Summary(job_sorted);
+  r["units"] = units;
+  for (const char* key : {"median_ns", "p99_ns", "p999_ns", "max_ns"}) {
+    r["step_over_job"][key] = steps[key].get<double>() / r[key].get<double>();
+  }
+  // each one's tail over its own median: comparable even where the two medians differ
+  for (const auto& [name, x] :
+       {std::pair<const char*, const nlohmann::json*>{"steps", &steps}, {"job", &r}}) {
+    const double median = (*x)["median_ns"].get<double>();
+    r["tail_over_median"][name] = {{"p99", (*x)["p99_ns"].get<double>() / median},
+                                   {"p999", (*x)["p999_ns"].get<double>() / median}};
+  }
+  return r;
+}
+
 void Run(const BenchFlags& f) {
   if (f.steps < 1) throw Error("--steps must be >= 1");
+  if (f.reference && f.warmup < kReferenceWarmup) {
+    throw Error("--reference needs --warmup >= " + std::to_string(kReferenceWarmup) + " (got " +
+                std::to_string(f.warmup) +
+                "): the fixed job is sized to the median of the last 200 warm-up steps");
+  }
   const Model model = LoadModel(f.scene.scene, ToLoadOptions(f.scene));
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
   input.tool_wrench.force_N = Vec3(f.tool_force[0], f.tool_force[1], f.tool_force[2]);
-  for (long s = 0; s < f.warmup; ++s) Tick(model, data, input);
+  // the last warm-up steps are timed when the reference job is sized from them
+  std::vector<double> warm_ns;
+  for (long s = 0; s < f.warmup; ++s) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Tick(model, data, input);
+    if (f.reference && s >= f.warmup - kReferenceWarmup) {
+      warm_ns.push_back(static_cast<double>(ElapsedNs(t0, std::chrono::steady_clock::now())));
+    }
+  }
+  loop::ReferenceJob job;
+  volatile double sink = 0.0;  // the job's last value: its work cannot be left out
+  long units = 0;
+  if (f.reference) {
+    std::sort(warm_ns.begin(), warm_ns.end());
+    units = loop::CalibrateUnits(Percentile(warm_ns, 0.5), kReferenceFirstUnits, kReferenceMaxUnits,
+                                 [&job, &sink](long u) { return JobMedianNs(job, u, &sink); });
+  }
+  std::vector<double> job_ns(f.reference ? static_cast<std::size_t>(f.steps) : 0);
   const dynamics::GroupSolveCounts before = data.workspace->velocity.Counts();
   std::vector<double> ns(static_cast<std::size_t>(f.steps));
   int max_contacts = 0;
@@ -43,6 +118,11 @@ void Run(const BenchFlags& f) {
     Tick(model, data, input);
     const auto t1 = std::chrono::steady_clock::now();
     ns[s] = std::chrono::duration<double, std::nano>(t1 - t0).count();
+    if (f.reference) {
+      // the job right after each step, so that both meet the machine in the same state
+      sink = job.Run(units);
+      job_ns[s] = static_cast<double>(ElapsedNs(t1, std::chrono::steady_clock::now()));
+    }
     max_contacts = std::max(max_contacts, data.ncontact);
     impulses += data.nimpulse;
     for (int c = 0; c < data.ncontact; ++c) deepest = std::max(deepest, data.contacts[c].depth_m);
@@ -51,29 +131,34 @@ void Run(const BenchFlags& f) {
   bool finite = true;
   for (const BodyState& b : data.bodies) finite = finite && b.x_W.allFinite();
   std::sort(ns.begin(), ns.end());
-  const nlohmann::json result = {
-      {"scene", model.source},
-      {"steps", f.steps},
-      {"warmup_steps", f.warmup},
-      {"median_ns", Percentile(ns, 0.5)},
-      {"p99_ns", Percentile(ns, 0.99)},
-      {"p999_ns", Percentile(ns, 0.999)},
-      {"max_ns", ns.back()},
-      {"contacts", data.ncontact},
-      {"max_contacts", max_contacts},
-      {"impulses", impulses},
-      {"deepest_penetration_m", deepest},
-      {"finite", finite},
-      {"threads", model.threads},
-      {"worker_jobs_taken_back",
-       data.workspace->worker ? data.workspace->worker->jobs_taken_back() : 0},
-      {"group_solves",
-       {{"factorisations", solves.factorisations},
-        {"lagged", solves.lagged_solves},
-        {"lagged_failures", solves.lagged_failures},
-        {"refinements", solves.refinement_steps},
-        {"unkept_factors", solves.unkept}}},
-      {"warnings", WarningsJson(data)}};
+  const nlohmann::json steps = Summary(ns);
+  nlohmann::json result = {{"scene", model.source},
+                           {"steps", f.steps},
+                           {"warmup_steps", f.warmup},
+                           {"median_ns", steps["median_ns"]},
+                           {"p99_ns", steps["p99_ns"]},
+                           {"p999_ns", steps["p999_ns"]},
+                           {"max_ns", steps["max_ns"]},
+                           {"contacts", data.ncontact},
+                           {"max_contacts", max_contacts},
+                           {"impulses", impulses},
+                           {"deepest_penetration_m", deepest},
+                           {"finite", finite},
+                           {"threads", model.threads},
+                           {"worker_jobs_taken_back",
+                            data.workspace->worker ? data.workspace->worker->jobs_taken_back() : 0},
+                           {"group_solves",
+                            {{"factorisations", solves.factorisations},
+                             {"lagged", solves.lagged_solves},
+                             {"lagged_failures", solves.lagged_failures},
+                             {"refinements", solves.refinement_steps},
+                             {"unkept_factors", solves.unkept}}},
+                           {"warnings", WarningsJson(data)}};
+  if (f.reference) {
+    std::sort(job_ns.begin(), job_ns.end());
+    result["reference"] = ReferenceJson(units, job_ns, steps);
+    result["reference"]["checksum"] = static_cast<double>(sink);
+  }
   if (f.json) {
     std::cout << result.dump() << "\n";
     return;
@@ -81,6 +166,19 @@ void Run(const BenchFlags& f) {
   std::cout << model.source << ": median " << result["median_ns"] << " ns, p99 " << result["p99_ns"]
             << ", p99.9 " << result["p999_ns"] << ", max " << result["max_ns"] << " ns per step; "
             << data.ncontact << " contacts\n";
+  if (f.reference) {
+    const nlohmann::json& r = result["reference"];
+    const nlohmann::json& q = r["step_over_job"];
+    std::cout << "fixed job of " << units << " units after each step: median " << r["median_ns"]
+              << " ns, p99 " << r["p99_ns"] << ", p99.9 " << r["p999_ns"] << ", max " << r["max_ns"]
+              << " ns\n"
+              << std::fixed << std::setprecision(2) << "step over job: median "
+              << q["median_ns"].get<double>() << ", p99 " << q["p99_ns"].get<double>() << ", p99.9 "
+              << q["p999_ns"].get<double>() << ", max " << q["max_ns"].get<double>()
+              << "; p99.9 over median: steps "
+              << r["tail_over_median"]["steps"]["p999"].get<double>() << ", job "
+              << r["tail_over_median"]["job"]["p999"].get<double>() << "\n";
+  }
 }
 
 void Register(CLI::App& root) {
@@ -92,6 +190,10 @@ void Register(CLI::App& root) {
   app->add_option("--warmup", f->warmup, "warm-up steps")->capture_default_str();
   app->add_option("--tool-force", f->tool_force, "constant tool force FX FY FZ [N]")->expected(3);
   app->add_flag("--json", f->json, "print one JSON object");
+  app->add_flag("--reference", f->reference,
+                "after each step, time a fixed job sized to the median of the last 200 warm-up "
+                "steps: the tail the machine adds to work that never varies "
+                "(docs/performance.md)");
   // an error about a parameter the user wrote says where it was written
   app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
 }
