@@ -30,7 +30,6 @@ struct Contact {
   int pair_points = 1;       // points the geom pair has this tick (shares the stiffness)
   Vec3 p_A = Vec3::Zero();   // contact point in a's principal frame (for matching)
   Vec3 p_B = Vec3::Zero();   // contact point in b's frame (world frame when b is static)
-  ContactPhase phase = ContactPhase::kResting;  // this tick's, for reports and viewers
   bool is_new = false;           // penetrating now, not matched to a penetrating contact before
   bool sticking = false;         // friction anchor holds
   Vec3 anchor_A = Vec3::Zero();  // friction stick anchor on a (a's frame) and b (b's frame)
@@ -38,7 +37,10 @@ struct Contact {
   double normal_force_N = 0.0;           // penalty force this tick
   Vec3 friction_force_W = Vec3::Zero();  // on a
   double impulse_Ns = 0.0;               // normal impulse this tick
+  // this tick's group and phase, for reports and viewers (next to the forces: the stage that
+  // writes those writes these)
   int group = -1;
+  ContactPhase phase = ContactPhase::kResting;
 };
 
 /// The contiguous run of one geom pair's points in a contact list (for matching across ticks).

@@ -120,8 +120,11 @@ void GroupContactForces(const Model& model, Data& data, const ContactScratch& sc
   // a geom pair's points are consecutive in data.contacts and in the same group, so its patch
   // (first point) is known from the previous point instead of searched for again
   int patch = -1;
+  const ContactPhase phase = scratch.group_phase[g];
   for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
     const int ci = G.contacts[k];
+    data.contacts[ci].group = g;  // for reports and viewers, as stage 3 decided
+    data.contacts[ci].phase = phase;
     if (!scratch.laws[ci].implicit || too_large) {
       ExplicitContact(data, scratch.laws[ci], ci, forces);
       continue;

@@ -19,6 +19,9 @@ struct ContactScratch {
   std::vector<PenaltyLaw> laws;           // (max_contacts) each contact's law this tick
   std::vector<Vec3> anchor_displacement;  // (max_contacts) stick-anchor stretch (implicit ones)
   std::vector<double> normal_velocity;    // (max_contacts) approach speed of new contacts  [m/s]
+  // (nbody) each group's phase this tick, which stage 4 gives the group's contacts as it writes
+  // their forces (so that the windows of stage 3 write no contact)
+  std::vector<ContactPhase> group_phase;
 
   /// Sizes every buffer; the only allocating call.
   void Reserve(int nbody, int max_contacts);
@@ -26,7 +29,8 @@ struct ContactScratch {
 
 /// Stage 3 over data.contacts: builds the groups, gives every contact its law (one per geom pair)
 /// and, when new, its normal velocity, decides stick or slip per patch, and updates each group's
-/// window (data.window) and its contacts' group and phase. With a worker (threads 2) and enough
+/// window (data.window) and its phase (scratch.group_phase; stage 4, ContactForces, writes it and
+/// the group's index into the group's contacts). With a worker (threads 2) and enough
 /// contacts, the two threads share the laws, approach speeds and stick-or-slip decisions (each
 /// geom pair's on one thread, while this thread builds the groups) and then the windows (each
 /// group's on one thread): the same results, bit for bit. `alongside` runs on this thread with the
