@@ -270,16 +270,9 @@ void Sweep(const Model& model, std::span<const GeomPose> poses, const Broadphase
   }
 }
 
-struct SweepJob {
-  const Model* model;
-  std::span<const GeomPose> poses;
-  Broadphase* bp;
-  PairSink* sink;
-};
-
 // the blocks of places one thread sweeps: from the front (t = 0, into `out` in order) or the
-// back (t = 1, each block's place in `out` recorded); returns how many it took (from the front:
-// blocks 0 to that count - 1)
+// back (t = 1, each block's place in `out` recorded, and counted in bp.back_blocks_done once
+// recorded); returns how many it took (from the front: blocks 0 to that count - 1)
 int SweepBlocks(const Model& model, std::span<const GeomPose> poses, Broadphase& bp, PairSink& out,
                 int t) {
   const int n = static_cast<int>(bp.order.size());
@@ -296,38 +289,61 @@ int SweepBlocks(const Model& model, std::span<const GeomPose> poses, Broadphase&
       Sweep(model, poses, bp, begin, end, bp.upper_hits.data(), out);
       bp.block_begin[block] = first;
       bp.block_count[block] = out.count + out.dropped - first;
+      bp.back_blocks_done.Increment();
     }
   }
 }
 
+struct SweepJob {
+  const Model* model;
+  std::span<const GeomPose> poses;
+  Broadphase* bp;
+};
+
 void RunSweepJob(void* context) {
   const auto* job = static_cast<const SweepJob*>(context);
-  SweepBlocks(*job->model, job->poses, *job->bp, *job->sink, 1);
+  SweepBack(*job->model, job->poses, *job->bp);
 }
 
-// the sweep of all places, the list and the dropped count of one sweep from the first place to
-// the last. With a worker, the threads take blocks of places from both ends: the front's pairs go
-// to bp.pairs in order, the back's to bp.upper_pairs block by block (the last block first), and
-// are then appended in block order. If the back's buffer ran out (it holds the last blocks, not
-// the first), the back's blocks are swept again here, in order.
-void SweepAll(const Model& model, std::span<const GeomPose> poses, Broadphase& bp, Worker* worker) {
+}  // namespace
+
+bool BeginSharedSweep(Broadphase& bp, bool with_worker) {
+  const int n = static_cast<int>(bp.order.size());
+  bp.shared = with_worker && n >= kMinBoxesForTwoThreads;
+  bp.place_blocks.Reset(0, bp.shared ? (n + kPlaceBlock - 1) / kPlaceBlock : 0);
+  bp.back_done_before = bp.back_blocks_done.Load(std::memory_order_relaxed);
+  return bp.shared;
+}
+
+void SweepBack(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
+  PairSink upper{bp.upper_pairs.data(), static_cast<int>(bp.upper_pairs.size())};
+  SweepBlocks(model, poses, bp, upper, 1);
+}
+
+// the sweep from the front until the threads meet; the worker's blocks (from the back) waited
+// for and their pairs appended in block order. If the back's buffer ran out (it holds the last
+// blocks, not the first), the back's blocks are swept again here, in order.
+void EndSharedSweep(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
   const int n = static_cast<int>(bp.order.size());
   const int capacity = static_cast<int>(bp.pairs.size());
   PairSink lower{bp.pairs.data(), capacity};
-  if (worker == nullptr || n < kMinBoxesForTwoThreads) {
+  if (!bp.shared) {
     Sweep(model, poses, bp, 0, n, bp.hits.data(), lower);
     bp.npair = lower.count;
     bp.dropped = lower.dropped;
     return;
   }
   const int nblock = (n + kPlaceBlock - 1) / kPlaceBlock;
-  PairSink upper{bp.upper_pairs.data(), capacity};
-  SweepJob job{&model, poses, &bp, &upper};
-  bp.place_blocks.Reset(0, nblock);
-  worker->Post(&RunSweepJob, &job);
   const int front = SweepBlocks(model, poses, bp, lower, 0);
-  worker->Finish();
-  if (upper.dropped > 0) {
+  // every block is taken now; those the worker took are done when it has counted them
+  const auto target = bp.back_done_before + static_cast<std::uint32_t>(nblock - front);
+  for (std::uint32_t now = bp.back_blocks_done.Load(); now != target;) {
+    now = bp.back_blocks_done.AwaitChange(now, Worker::kDefaultSpins, Worker::kTickSleepLimitNs);
+  }
+  bool overflowed = false;
+  for (int b = front; b < nblock; ++b)
+    overflowed |= bp.block_begin[b] + bp.block_count[b] > capacity;
+  if (overflowed) {
     ++bp.resweeps;
     Sweep(model, poses, bp, front * kPlaceBlock, n, bp.hits.data(), lower);
   } else {
@@ -343,10 +359,19 @@ void SweepAll(const Model& model, std::span<const GeomPose> poses, Broadphase& b
   bp.dropped = lower.dropped;
 }
 
-}  // namespace
-
 void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp,
                Worker* worker) {
+  PreparePairs(model, poses, bp);
+  // with a worker, the threads take blocks of places from both ends: the front's pairs go to
+  // bp.pairs in order, the back's to bp.upper_pairs block by block (the last block first)
+  const bool shared = BeginSharedSweep(bp, worker != nullptr);
+  SweepJob job{&model, poses, &bp};
+  if (shared) worker->Post(&RunSweepJob, &job);
+  EndSharedSweep(model, poses, bp);
+  if (shared) worker->Finish();
+}
+
+void PreparePairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp) {
   bp.npair = 0;
   bp.dropped = 0;
   const int n = static_cast<int>(bp.order.size());
@@ -424,7 +449,6 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
     hi_q[j] = q1;
   }
   FloatBoundsOf(bp);
-  SweepAll(model, poses, bp, worker);
 }
 
 }  // namespace rigidtouch::geometry

@@ -6,6 +6,7 @@
 // infinite and are paired with every geom that may collide with them.
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <utility>
 #include <vector>
@@ -50,6 +51,9 @@ struct Broadphase {
   // where each of the worker's blocks begins in upper_pairs and how many pairs it has
   TwoEndedRange place_blocks;
   std::vector<int> block_begin, block_count;  // (places / block + 1)
+  bool shared = false;                        // this tick's sweep is shared (BeginSharedSweep)
+  WakeCounter back_blocks_done;  // the worker's blocks swept since the start, each once recorded
+  std::uint32_t back_done_before = 0;  // its value when this tick's sweep began
   long resweeps = 0;  // ticks whose worker's blocks did not fit upper_pairs and were swept again
   int npair = 0;
   int dropped = 0;  // candidates beyond capacity this tick
@@ -73,5 +77,18 @@ inline constexpr int kMinBoxesForTwoThreads = 256;
 /// from both ends: the same pairs in the same order.
 void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp,
                Worker* worker = nullptr);
+
+/// FindPairs in parts, for a caller whose worker is already running a job of the caller's (the
+/// collision stage's first job): on this thread PreparePairs (this tick's boxes, sweep axis and
+/// order) and BeginSharedSweep (true: a worker and enough boxes to share), then, once the worker
+/// may start,
+/// EndSharedSweep, which sweeps from the front, waits for the blocks the worker took and appends
+/// their pairs in order. The worker calls SweepBack after BeginSharedSweep has returned (the
+/// caller tells it when); a worker that calls it late, or never, finds no blocks left. The same
+/// pairs in the same order as FindPairs.
+void PreparePairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp);
+bool BeginSharedSweep(Broadphase& bp, bool with_worker);
+void SweepBack(const Model& model, std::span<const GeomPose> poses, Broadphase& bp);
+void EndSharedSweep(const Model& model, std::span<const GeomPose> poses, Broadphase& bp);
 
 }  // namespace rigidtouch::geometry

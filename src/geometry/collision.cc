@@ -418,9 +418,25 @@ void NarrowBlocks(const Model& model, CollisionScratch& s, int t) {
   }
 }
 
-void RunNarrowJob(void* context) {
+// returns once the tick's thread has raised s.progress by `steps` from `before`
+void AwaitProgress(const CollisionScratch& s, std::uint32_t before, std::uint32_t steps) {
+  for (std::uint32_t now = s.progress.Load(); now - before < steps;) {
+    now = s.progress.AwaitChange(now, Worker::kDefaultSpins, Worker::kTickSleepLimitNs);
+  }
+}
+
+// the worker's first job of the tick: last tick's contacts indexed while the tick's thread
+// prepares the sweep (neither reads what the other writes), then the sweep's blocks from the back
+// once it may be shared, then the narrow phase's blocks from the back once the pairs are found.
+// Run by the tick's thread instead (Finish), both have happened and every block is taken.
+void RunRememberAndNarrowJob(void* context) {
   const auto* job = static_cast<const CollisionScratch::NarrowJob*>(context);
-  NarrowBlocks(*job->model, *job->scratch, 1);
+  CollisionScratch& s = *job->scratch;
+  RememberPrevious(*job->data, s);
+  AwaitProgress(s, job->progress_before, 1);
+  SweepBack(*job->model, s.poses, s.broadphase);
+  AwaitProgress(s, job->progress_before, 2);
+  NarrowBlocks(*job->model, s, 1);
 }
 
 // writes and matches the points of pairs [begin, end) at the places WritePlaces gave them
@@ -475,23 +491,35 @@ bool WritePlaces(const Data& data, CollisionScratch& s, int* total) {
 // fewer pairs than this are not worth the hand-off to the worker
 constexpr int kMinPairsForTwoThreads = 32;
 
-// the narrow phase on two threads (blocks of the pair list taken from both ends), then the
-// contacts written and matched in pair order: on both threads again when every pair's count is
-// known and fits, each pair at the place one thread would give it and the new contacts numbered
-// afterwards in contact order; otherwise on the tick's thread. Either way the same contacts, bit
-// for bit, as CollidePair's and MatchAndNumber's
-void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
+// the worker's first job posted (RunRememberAndNarrowJob); finds the pairs and then shares the
+// narrow phase with the worker (blocks of the pair list taken from both ends) if there are enough
+// pairs; returns when the worker's job is done (last tick's contacts indexed)
+bool FindPairsAndNarrow(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
+  const std::uint32_t before = s.progress.Load();
+  s.job = {&model, &s, &data, before};
+  worker.Post(&RunRememberAndNarrowJob, &s.job);
+  UpdatePoses(model, data, s);
+  PreparePairs(model, s.poses, s.broadphase);
+  BeginSharedSweep(s.broadphase, true);
+  s.progress.Publish(before + 1);
+  EndSharedSweep(model, s.poses, s.broadphase);
+  const int npair = s.broadphase.npair;
+  const bool share = npair >= kMinPairsForTwoThreads;
+  s.thread_used = {0, 0};
+  s.pair_blocks.Reset(0, share ? (npair + kPairBlock - 1) / kPairBlock : 0);
+  s.progress.Publish(before + 2);
+  if (share) NarrowBlocks(model, s, 0);
+  worker.Finish();
+  return share;
+}
+
+// after the narrow phase on two threads, the contacts written and matched in pair order: on both
+// threads again when every pair's count is known and fits, each pair at the place one thread
+// would give it and the new contacts numbered afterwards in contact order; otherwise on the
+// tick's thread. Either way the same contacts, bit for bit, as CollidePair's and MatchAndNumber's
+void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
   const int npair = s.broadphase.npair;
   const int nblock = (npair + kPairBlock - 1) / kPairBlock;
-  s.thread_used = {0, 0};
-  s.pair_blocks.Reset(0, nblock);
-  s.job = {&model, &s, &data};
-  worker.Post(&RunNarrowJob, &s.job);
-  // while the worker starts, last tick's contacts are indexed (the narrow phase does not read
-  // them)
-  RememberPrevious(data, s);
-  NarrowBlocks(model, s, 0);
-  worker.Finish();
   int total = 0;
   if (WritePlaces(data, s, &total)) {
     s.pair_blocks.Reset(0, nblock);
@@ -526,14 +554,19 @@ void CollideOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Wo
 }  // namespace
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s, Worker* worker) {
-  UpdatePoses(model, data, s);
-  FindPairs(model, s.poses, s.broadphase, worker);
-  if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
-  if (worker != nullptr && s.broadphase.npair >= kMinPairsForTwoThreads) {
-    CollideOnTwoThreads(model, data, s, *worker);
-    return;
+  if (worker != nullptr) {
+    const bool shared = FindPairsAndNarrow(model, data, s, *worker);
+    if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
+    if (shared) {
+      WriteOnTwoThreads(model, data, s, *worker);
+      return;
+    }
+  } else {
+    UpdatePoses(model, data, s);
+    FindPairs(model, s.poses, s.broadphase);
+    if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
+    RememberPrevious(data, s);
   }
-  RememberPrevious(data, s);
   for (int k = 0; k < s.broadphase.npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const int begin = data.ncontact;

@@ -9,6 +9,7 @@
 #include <mujoco/mujoco.h>
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "geometry/broadphase.h"
@@ -78,8 +79,14 @@ struct CollisionScratch {
     const Model* model = nullptr;
     CollisionScratch* scratch = nullptr;
     Data* data = nullptr;  // written by the write job, each pair's contacts by one thread
+    // the value of `progress` before this tick's collision stage began
+    std::uint32_t progress_before = 0;
   };
   NarrowJob job;
+  // raised by the tick's thread once this tick's sweep may be shared (by 1) and once the pairs
+  // are found (by 2): the worker, which indexes last tick's contacts first, then takes blocks of
+  // the sweep and then of the narrow phase
+  WakeCounter progress;
 
   /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
   void Reserve(const Model& model);
