@@ -1,6 +1,7 @@
 #include "contact/contact_forces.h"
 
 #include "contact/friction.h"
+#include "contact/groups.h"
 #include "contact/relative_motion.h"
 
 namespace rigidtouch::contact {
@@ -144,17 +145,38 @@ constexpr int kMinContactsForTwoThreads = 128;
 
 }  // namespace
 
-void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
-                   dynamics::VelocityScratch& forces, geometry::Worker* worker) {
+void ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
+                       dynamics::VelocityScratch& forces, geometry::Worker* worker,
+                       geometry::Task alongside) {
+  const int n = data.ncontact;
+  const bool two = worker != nullptr && n >= kMinContactsForTwoThreads;
+  // by groups when there is no worker, or when last tick had groups enough to share (the choice
+  // changes only the speed: one group is better classified by blocks of contacts on two threads)
+  const bool by_groups = !two || data.ngroup >= 2;
+  if (!by_groups) {
+    ClassifyByPairs(model, data, scratch, worker, alongside);
+  } else if (two && alongside.run != nullptr) {
+    // the caller's work on the worker while this thread builds the groups
+    worker->Post(alongside.run, alongside.context);
+    BuildGroups(data, scratch.groups);
+    worker->Finish();
+  } else {
+    BuildGroups(data, scratch.groups);
+    alongside();
+  }
   const Groups& G = scratch.groups;
   for (int g = 0; g < G.ngroup; ++g) {
     if (G.body_start[g + 1] - G.body_start[g] > model.max_group_bodies) {
       data.Warn(Warning::kGroupTooLarge);
     }
   }
-  const bool share = G.ngroup >= 2 && data.ncontact >= kMinContactsForTwoThreads;
-  geometry::ShareRange(share ? worker : nullptr, G.ngroup,
-                       [&model, &data, &scratch, &forces](int g) {
+  geometry::ShareRange(two && G.ngroup >= 2 ? worker : nullptr, G.ngroup,
+                       [&model, &data, &scratch, &forces, by_groups](int g) {
+                         if (by_groups) {
+                           ClassifyGroup(model, data, scratch, g);
+                         } else {
+                           UpdateGroupWindow(model, data, scratch, g);
+                         }
                          GroupContactForces(model, data, scratch, forces, g);
                        });
 }

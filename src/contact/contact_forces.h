@@ -1,4 +1,5 @@
-// Penalty stage (tick stage 4): the forces of every contact's law at this tick's state. Tool
+// Penalty stage (tick stage 4, run with stage 3 group by group: ClassifyAndForces): the forces of
+// every contact's law at this tick's state. Tool
 // contacts (and scene contacts of a group too large for the implicit solve) are explicit: their
 // penalty and friction forces enter the bodies' force sums. Scene contacts are linearised for the
 // backward-Euler solve of stage 5, with their friction cones.
@@ -25,13 +26,20 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
 bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scratch, int ci,
                       int patch, dynamics::ImplicitContact& ic);
 
-/// Stage 4 over data.contacts: the explicit contacts' forces, and each group's implicit contacts
-/// in forces.implicit (group g's at [implicit_start[g], implicit_end[g]), implicit_start[g] its
-/// first contact's place in the groups' contact list). A group with more than
-/// Model::max_group_bodies bodies counts Warning::kGroupTooLarge: its contacts are explicit. With
-/// a worker (threads 2), two or more groups and enough contacts, the two threads share the groups
-/// (no contact touches two): the same results, bit for bit.
-void ContactForces(const Model& model, Data& data, const ContactScratch& scratch,
-                   dynamics::VelocityScratch& forces, geometry::Worker* worker = nullptr);
+/// Stages 3 and 4 over data.contacts, group by group: the groups, each contact's law, approach
+/// speed and stick or slip, each group's window and phase (stage 3, phases.h); then the explicit
+/// contacts' forces, and each group's implicit contacts in forces.implicit (group g's at
+/// [implicit_start[g], implicit_end[g]), implicit_start[g] its first contact's place in the
+/// groups' contact list), each contact's group and phase written with its forces. A group with
+/// more than Model::max_group_bodies bodies counts Warning::kGroupTooLarge: its contacts are
+/// explicit. `alongside` runs while the groups are built: work of the caller's that reads and
+/// writes nothing these stages do (on the worker, when it takes it). One thread does each group
+/// whole, classification and forces, so its contacts are read once, in one place. With a worker
+/// (threads 2), two or more groups and enough contacts, the two threads share the groups (no
+/// contact touches two); with one group, the classification is shared by blocks of contacts
+/// instead (ClassifyByPairs). The same results, bit for bit.
+void ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
+                       dynamics::VelocityScratch& forces, geometry::Worker* worker = nullptr,
+                       geometry::Task alongside = {});
 
 }  // namespace rigidtouch::contact

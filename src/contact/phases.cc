@@ -58,33 +58,40 @@ int PairStartFrom(const Data& data, int ci) {
   return std::min(ci, data.ncontact);
 }
 
-// the geom pairs whose points start in [begin, end): each contact's law (one per pair) and, when
-// new, its approach speed; stick or slip per pair. Writes only those pairs' contacts and entries.
+// the points [first, last) of one geom pair: each one's law (one per pair) and, when new, its
+// approach speed; stick or slip for the pair. Writes only those contacts and entries.
+void ClassifyPair(const Model& model, Data& data, ContactScratch& scratch, int first, int last) {
+  const PenaltyLaw law = LawFor(model, data.contacts[first]);
+  for (int ci = first; ci < last; ++ci) {
+    const Contact& c = data.contacts[ci];
+    // the approach speed only matters for a new contact (a collision onset, GroupWindow)
+    scratch.normal_velocity[ci] = 0.0;
+    if (c.is_new) {
+      Vec3 r_a, r_b;
+      Offsets(data, c, &r_a, &r_b);
+      scratch.normal_velocity[ci] = RelativeVelocity(data, c, r_a, r_b).dot(c.n_W);
+    }
+    scratch.laws[ci] = law;
+  }
+  DecidePatchFriction(data, scratch.laws, scratch.anchor_displacement, first, last);
+}
+
+// the geom pairs whose points start in [begin, end) (ClassifyPair)
 void ClassifyPairs(const Model& model, Data& data, ContactScratch& scratch, int begin, int end) {
   for (int first = PairStartFrom(data, begin); first < end;) {
     int last = first + 1;
     while (last < data.ncontact && SamePair(data.contacts[first], data.contacts[last])) ++last;
-    const PenaltyLaw law = LawFor(model, data.contacts[first]);
-    for (int ci = first; ci < last; ++ci) {
-      const Contact& c = data.contacts[ci];
-      // the approach speed only matters for a new contact (a collision onset, GroupWindow)
-      scratch.normal_velocity[ci] = 0.0;
-      if (c.is_new) {
-        Vec3 r_a, r_b;
-        Offsets(data, c, &r_a, &r_b);
-        scratch.normal_velocity[ci] = RelativeVelocity(data, c, r_a, r_b).dot(c.n_W);
-      }
-      scratch.laws[ci] = law;
-    }
-    DecidePatchFriction(data, scratch.laws, scratch.anchor_displacement, first, last);
+    ClassifyPair(model, data, scratch, first, last);
     first = last;
   }
 }
 
-// group g's window (data.window of its bodies) and phase. Its contacts get the phase in stage 4,
-// which writes each of them anyway: here, where a group's contacts lie all over the list, between
-// the other thread's groups' ones, writing them cost three times as much on two threads as on one
-void UpdateWindow(const Model& model, Data& data, ContactScratch& scratch, int g) {
+}  // namespace
+
+// Its contacts get the phase in stage 4, which writes each of them anyway: here, where a group's
+// contacts lie all over the list, between the other thread's groups' ones, writing them cost
+// three times as much on two threads as on one
+void UpdateGroupWindow(const Model& model, Data& data, ContactScratch& scratch, int g) {
   const Groups& G = scratch.groups;
   const WindowState w = GroupWindow(model, data, scratch, g);
   for (int k = G.body_start[g]; k < G.body_start[g + 1]; ++k) data.window[G.bodies[k]] = w;
@@ -92,10 +99,26 @@ void UpdateWindow(const Model& model, Data& data, ContactScratch& scratch, int g
       InWindow(model, w, data.step) ? ContactPhase::kColliding : ContactPhase::kResting;
 }
 
-}  // namespace
+void ClassifyGroup(const Model& model, Data& data, ContactScratch& scratch, int g) {
+  const Groups& G = scratch.groups;
+  // a geom pair's points are consecutive in data.contacts and all in one group, so in the group's
+  // list too
+  const int end = G.contact_start[g + 1];
+  for (int k = G.contact_start[g]; k < end;) {
+    const int first = G.contacts[k];
+    int n = 1;
+    while (k + n < end && G.contacts[k + n] == first + n &&
+           SamePair(data.contacts[first], data.contacts[first + n])) {
+      ++n;
+    }
+    ClassifyPair(model, data, scratch, first, first + n);
+    k += n;
+  }
+  UpdateGroupWindow(model, data, scratch, g);
+}
 
-void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
-                      geometry::Worker* worker, geometry::Task alongside) {
+void ClassifyByPairs(const Model& model, Data& data, ContactScratch& scratch,
+                     geometry::Worker* worker, geometry::Task alongside) {
   // the pairs are independent: blocks of contacts, each taking the pairs that start in it. The
   // groups, whose building only reads the contacts' bodies and which no pair's work reads, are
   // built first on this thread while the worker starts on the pairs
@@ -111,10 +134,6 @@ void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
         BuildGroups(data, scratch.groups);
         alongside();
       });
-  // the windows, group by group (each group's bodies and contacts are its own)
-  const Groups& G = scratch.groups;
-  geometry::ShareRange(n >= kMinContactsForTwoThreads && G.ngroup >= 2 ? worker : nullptr, G.ngroup,
-                       [&model, &data, &scratch](int g) { UpdateWindow(model, data, scratch, g); });
 }
 
 }  // namespace rigidtouch::contact

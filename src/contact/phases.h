@@ -27,16 +27,24 @@ struct ContactScratch {
   void Reserve(int nbody, int max_contacts);
 };
 
-/// Stage 3 over data.contacts: builds the groups, gives every contact its law (one per geom pair)
-/// and, when new, its normal velocity, decides stick or slip per patch, and updates each group's
-/// window (data.window) and its phase (scratch.group_phase; stage 4, ContactForces, writes it and
-/// the group's index into the group's contacts). With a worker (threads 2) and enough
-/// contacts, the two threads share the laws, approach speeds and stick-or-slip decisions (each
-/// geom pair's on one thread, while this thread builds the groups) and then the windows (each
-/// group's on one thread): the same results, bit for bit. `alongside` runs on this thread with the
-/// building of the groups: work of the caller's that reads and writes nothing this stage does.
-void ClassifyContacts(const Model& model, Data& data, ContactScratch& scratch,
-                      geometry::Worker* worker = nullptr, geometry::Task alongside = {});
+/// Stage 3, in one of two ways that give the same results bit for bit (the driver is stage 4's
+/// ClassifyAndForces, contact_forces.h): builds the groups, gives every contact its law (one per
+/// geom pair) and, when new, its normal velocity, decides stick or slip per patch, and updates
+/// each group's window (data.window) and its phase (scratch.group_phase; stage 4 writes it and
+/// the group's index into the group's contacts).
+///
+/// By pairs: ClassifyByPairs builds the groups on this thread (and runs `alongside` there: work
+/// of the caller's that reads and writes nothing this stage does) while the contacts' laws,
+/// approach speeds and stick-or-slip decisions are made in blocks of the contact list, shared
+/// with a worker (threads 2) when there are enough contacts (each geom pair's on one thread);
+/// then UpdateGroupWindow for every group.
+void ClassifyByPairs(const Model& model, Data& data, ContactScratch& scratch,
+                     geometry::Worker* worker = nullptr, geometry::Task alongside = {});
+/// Group g's window and phase, once its contacts are classified.
+void UpdateGroupWindow(const Model& model, Data& data, ContactScratch& scratch, int g);
+/// By groups, once BuildGroups has run: group g's geom pairs classified, then its window and
+/// phase. Reads and writes only group g's contacts, bodies and entries.
+void ClassifyGroup(const Model& model, Data& data, ContactScratch& scratch, int g);
 
 /// The collision window of group g: restarted by a new contact that approaches faster than
 /// ContactParams::onset_speed_mps (a collision onset), otherwise the most recent window among

@@ -38,14 +38,12 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   }
 
   // 3. groups and windows: contact groups, laws, stick or slip, collision windows and phases;
-  // with them, on this thread while the worker starts on the contacts, stage 4's gravity,
-  // gyroscopic and user forces (they read only the bodies, which stage 3 does not write)
+  // 4. penalty: explicit contacts (tool contacts, Eq. 1's penalty term), scene contacts
+  // linearised for the implicit solve. Both group by group, each group's whole on one thread;
+  // stage 4's gravity, gyroscopic and user forces alongside the building of the groups (they
+  // read only the bodies, which stage 3 does not write)
   dynamics::FreeMotionForces free{model, data, coupling.user, ws.velocity};
-  contact::ClassifyContacts(model, data, ws.contact, ws.worker.get(), free.AsTask());
-
-  // 4. penalty: (the free-motion forces, with stage 3) explicit contacts (tool contacts, Eq. 1's
-  // penalty term), scene contacts linearised for the implicit solve
-  contact::ContactForces(model, data, ws.contact, ws.velocity, ws.worker.get());
+  contact::ClassifyAndForces(model, data, ws.contact, ws.velocity, ws.worker.get(), free.AsTask());
 
   // 5. dynamics: the new velocities, implicit per group (backward Euler), free elsewhere
   dynamics::UpdateVelocities(model, data, ws.contact.groups, ws.velocity, ws.worker.get());
