@@ -88,9 +88,9 @@ void ClassifyPairs(const Model& model, Data& data, ContactScratch& scratch, int 
 
 }  // namespace
 
-// Its contacts get the phase in stage 4, which writes each of them anyway: here, where a group's
-// contacts lie all over the list, between the other thread's groups' ones, writing them cost
-// three times as much on two threads as on one
+// The group's contacts get the phase in stage 4, which writes each of them anyway: here, where a
+// group's contacts lie all over the list, between the other thread's groups' ones, writing them
+// cost three times as much on two threads as on one
 void UpdateGroupWindow(const Model& model, Data& data, ContactScratch& scratch, int g) {
   const Groups& G = scratch.groups;
   const WindowState w = GroupWindow(model, data, scratch, g);

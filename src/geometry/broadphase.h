@@ -81,11 +81,10 @@ void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& 
 /// FindPairs in parts, for a caller whose worker is already running a job of the caller's (the
 /// collision stage's first job): on this thread PreparePairs (this tick's boxes, sweep axis and
 /// order) and BeginSharedSweep (true: a worker and enough boxes to share), then, once the worker
-/// may start,
-/// EndSharedSweep, which sweeps from the front, waits for the blocks the worker took and appends
-/// their pairs in order. The worker calls SweepBack after BeginSharedSweep has returned (the
-/// caller tells it when); a worker that calls it late, or never, finds no blocks left. The same
-/// pairs in the same order as FindPairs.
+/// may start, EndSharedSweep, which sweeps from the front, waits for the blocks the worker took
+/// and appends their pairs in order. The worker calls SweepBack after BeginSharedSweep has returned
+/// (the caller tells it when); a worker that calls it late, or never, finds no blocks left. The
+/// same pairs in the same order as FindPairs.
 void PreparePairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp);
 bool BeginSharedSweep(Broadphase& bp, bool with_worker);
 void SweepBack(const Model& model, std::span<const GeomPose> poses, Broadphase& bp);
