@@ -19,28 +19,16 @@ std::string Millimetres(double metres) {
   return out.str();
 }
 
-// one run of the job's `units`, timed
-std::int64_t TimedJob(loop::ReferenceJob& job, long units, volatile double* sink) {
-  const auto start = Clock::now();
-  *sink = job.Run(units);  // kept: the job's work cannot be left out
-  const auto stop = Clock::now();
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(stop - start).count();
-}
-
 }  // namespace
 
 TimeSummary ConstantWorkProbe(double target_ns, int samples) {
   // sized to the target by the median of 201 runs at each of the calibration's two rounds (so
   // the clock's own cost and the job's start-up are folded in)
   loop::ReferenceJob job;
-  volatile double sink = 0.0;
-  const long units = loop::CalibrateUnits(target_ns, 1000, 10'000'000, [&job, &sink](long u) {
-    std::vector<std::int64_t> trial(201);
-    for (std::int64_t& t : trial) t = TimedJob(job, u, &sink);
-    return Summarize(trial).median_ns;
-  });
+  const long units = loop::CalibrateUnits(target_ns, 1000, 10'000'000,
+                                          [&job](long u) { return job.MedianNs(u, 201); });
   std::vector<std::int64_t> durations(static_cast<std::size_t>(std::max(samples, 1)));
-  for (std::int64_t& t : durations) t = TimedJob(job, units, &sink);
+  for (std::int64_t& t : durations) t = job.TimedRunNs(units);
   return Summarize(durations);
 }
 

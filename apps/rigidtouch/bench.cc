@@ -35,23 +35,6 @@ double Percentile(const std::vector<double>& sorted, double q) {
   return sorted[std::min(sorted.size() - 1, k == 0 ? 0 : k - 1)];
 }
 
-std::int64_t ElapsedNs(std::chrono::steady_clock::time_point t0,
-                       std::chrono::steady_clock::time_point t1) {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count();
-}
-
-// the median length of the job at `units`, over kCalibrationRuns runs
-double JobMedianNs(loop::ReferenceJob& job, long units, volatile double* sink) {
-  std::vector<double> ns(kCalibrationRuns);
-  for (double& t : ns) {
-    const auto t0 = std::chrono::steady_clock::now();
-    *sink = job.Run(units);
-    t = static_cast<double>(ElapsedNs(t0, std::chrono::steady_clock::now()));
-  }
-  std::sort(ns.begin(), ns.end());
-  return ns[ns.size() / 2];
-}
-
 // median, p99, p99.9 (nearest rank) and max of sorted durations
 nlohmann::json Summary(const std::vector<double>& sorted) {
   return {{"median_ns", Percentile(sorted, 0.5)},
@@ -96,16 +79,16 @@ void Run(const BenchFlags& f) {
     const auto t0 = std::chrono::steady_clock::now();
     Tick(model, data, input);
     if (f.reference && s >= f.warmup - kReferenceWarmup) {
-      warm_ns.push_back(static_cast<double>(ElapsedNs(t0, std::chrono::steady_clock::now())));
+      warm_ns.push_back(
+          std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count());
     }
   }
   loop::ReferenceJob job;
-  volatile double sink = 0.0;  // the job's last value: its work cannot be left out
   long units = 0;
   if (f.reference) {
     std::sort(warm_ns.begin(), warm_ns.end());
     units = loop::CalibrateUnits(Percentile(warm_ns, 0.5), kReferenceFirstUnits, kReferenceMaxUnits,
-                                 [&job, &sink](long u) { return JobMedianNs(job, u, &sink); });
+                                 [&job](long u) { return job.MedianNs(u, kCalibrationRuns); });
   }
   std::vector<double> job_ns(f.reference ? static_cast<std::size_t>(f.steps) : 0);
   const dynamics::GroupSolveCounts before = data.workspace->velocity.Counts();
@@ -118,11 +101,8 @@ void Run(const BenchFlags& f) {
     Tick(model, data, input);
     const auto t1 = std::chrono::steady_clock::now();
     ns[s] = std::chrono::duration<double, std::nano>(t1 - t0).count();
-    if (f.reference) {
-      // the job right after each step, so that both meet the machine in the same state
-      sink = job.Run(units);
-      job_ns[s] = static_cast<double>(ElapsedNs(t1, std::chrono::steady_clock::now()));
-    }
+    // the job right after each step, so that both meet the machine in the same state
+    if (f.reference) job_ns[s] = static_cast<double>(job.TimedRunNs(units));
     max_contacts = std::max(max_contacts, data.ncontact);
     impulses += data.nimpulse;
     for (int c = 0; c < data.ncontact; ++c) deepest = std::max(deepest, data.contacts[c].depth_m);
@@ -157,7 +137,7 @@ void Run(const BenchFlags& f) {
   if (f.reference) {
     std::sort(job_ns.begin(), job_ns.end());
     result["reference"] = ReferenceJson(units, job_ns, steps);
-    result["reference"]["checksum"] = static_cast<double>(sink);
+    result["reference"]["checksum"] = job.chain();
   }
   if (f.json) {
     std::cout << result.dump() << "\n";

@@ -1,7 +1,9 @@
 #include "loop/reference_job.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <vector>
 
 namespace rigidtouch::loop {
 
@@ -27,6 +29,21 @@ double ReferenceJob::Run(long units) {
   chain_ = chain;
   next_ = next;
   return chain;
+}
+
+std::int64_t ReferenceJob::TimedRunNs(long units) {
+  const auto start = std::chrono::steady_clock::now();
+  Run(units);
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() -
+                                                              start)
+      .count();
+}
+
+double ReferenceJob::MedianNs(long units, int runs) {
+  std::vector<std::int64_t> ns(static_cast<std::size_t>(std::max(runs, 1)));
+  for (std::int64_t& t : ns) t = TimedRunNs(units);
+  std::sort(ns.begin(), ns.end());
+  return static_cast<double>(ns[ns.size() / 2]);
 }
 
 long CalibrateUnits(double target_ns, long first_units, long max_units,

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <functional>
 
 namespace rigidtouch::loop {
@@ -23,6 +24,12 @@ class ReferenceJob {
   /// Runs `units` units (none for units <= 0); returns the chain's value, which depends on every
   /// unit run since construction (so that the work cannot be left out).
   double Run(long units);
+  /// Run(units), timed: how long it took [ns], by the steady clock.
+  std::int64_t TimedRunNs(long units);
+  /// The median of `runs` (at least one) TimedRunNs(units).
+  double MedianNs(long units, int runs);
+  /// The chain's value after every unit run since construction.
+  double chain() const { return chain_; }
 
  private:
   static std::array<double, kBufferValues> MakeValues();

@@ -18,6 +18,12 @@ TEST(ReferenceJobTest, TheSameUnitsDoTheSameWorkAndEveryUnitCounts) {
   const double one = c.Run(1), two = d.Run(2);
   EXPECT_NE(one, two) << "a second unit changes the chain";
   EXPECT_EQ(c.Run(1), two) << "two units in two runs are two units in one";
+  // timed, the same work: the chain as after Run (no time is asserted)
+  ReferenceJob e, f;
+  e.TimedRunNs(3);
+  f.MedianNs(1, 3);
+  EXPECT_EQ(e.chain(), ReferenceJob().Run(3));
+  EXPECT_EQ(f.chain(), ReferenceJob().Run(3)) << "three timed runs of one unit";
 }
 
 // a job of known cost per unit, as a clock would report it
