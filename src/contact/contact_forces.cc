@@ -1,5 +1,7 @@
 #include "contact/contact_forces.h"
 
+#include <algorithm>
+
 #include "contact/friction.h"
 #include "contact/groups.h"
 #include "contact/relative_motion.h"
@@ -34,7 +36,9 @@ void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::Veloci
     const Vec3 ut = u - un * c.n_W;
     ft = -law.kt_N_per_m * s - law.bt_Ns_per_m * ut;
     c.sticking = ft.norm() <= law.mu_static * fn;
-    if (!c.sticking) {
+    if (c.sticking) {
+      PlaceAnchors(data, c, s);
+    } else {
       ft *= law.mu_kinetic * fn / ft.norm();
       SlideAnchor(data, c, s, ft, law.kt_N_per_m);
     }
@@ -87,11 +91,17 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
   // anchor springs; a sticking patch whose forces at the new velocities leave the friction cone
   // slips too (SolveGroupVelocities, EnforceFrictionCones), so sliding starts Coulomb-bounded
   const Vec3 s = scratch.anchor_displacement[ci];
+  ic.c_t_stick_Ns_per_m = h * law.kt_N_per_m + law.bt_Ns_per_m;
+  ic.reversal_limit_mps = law.kt_N_per_m > 0.0
+                              ? law.mu_kinetic * std::max(0.0, ic.phi_n_N) / (law.kt_N_per_m * h)
+                              : 0.0;
+  ic.slip_power_W = 0.0;
   if (c.sticking) {
     // the anchor spring (s lies in the tangent plane) with implicit tangential damping
     ic.stick = true;
     ic.phi_t_W = -law.kt_N_per_m * s;
-    ic.c_t_Ns_per_m = h * law.kt_N_per_m + law.bt_Ns_per_m;
+    ic.c_t_Ns_per_m = ic.c_t_stick_Ns_per_m;
+    PlaceAnchors(data, c, s);
   } else {
     // kinetic friction opposes the stretch of the anchor, which trails the sliding contact; it
     // enters the solve as the contact's tangential force, so it goes with the contact if that

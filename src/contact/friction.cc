@@ -3,10 +3,7 @@
 namespace rigidtouch::contact {
 
 void SlideAnchor(const Data& data, Contact& c, const Vec3& s, const Vec3& f_t, double kt) {
-  if (kt <= 0.0) return;
-  const Vec3 s_target = -f_t / kt;
-  const Vec3 pb = dynamics::WorldPoint(data, c.body_b, c.anchor_B) + (s - s_target);
-  c.anchor_B = dynamics::LocalPoint(data, c.body_b, pb);
+  PlaceAnchors(data, c, kt > 0.0 ? Vec3(-f_t / kt) : s);
 }
 
 void DecidePatchFriction(Data& data, std::span<const PenaltyLaw> laws,

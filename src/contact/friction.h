@@ -20,8 +20,20 @@ namespace rigidtouch::contact {
   return d - d.dot(c.n_W) * c.n_W;
 }
 
-/// Moves b's anchor so that the anchor spring alone, of stiffness kt, would exert `f_t` on a (the
-/// slip limit); `s` is the anchor's stretch before the move.
+/// Places the anchors at the contact point with the tangential stretch `s`: a's at the contact
+/// point, b's at `s` behind it. Called every tick a loaded contact's friction is computed, so the
+/// anchors move with the bodies for one tick only and the stretch grows by the slip of the
+/// material points at the contact (Cundall and Strack 1979). Anchors kept on the bodies for
+/// longer would leave the contact on a body that rolls or spins: the spring, whose force acts at
+/// the contact point, would then resist rolling and do work its energy does not account for.
+/// (Inline: it is called for every loaded contact every tick.)
+[[gnu::always_inline]] inline void PlaceAnchors(const Data& data, Contact& c, const Vec3& s) {
+  c.anchor_A = c.p_A;  // the contact point in a's frame
+  c.anchor_B = dynamics::LocalPoint(data, c.body_b, c.p_W - s);
+}
+
+/// Places the anchors (PlaceAnchors) so that the anchor spring alone, of stiffness kt, would
+/// exert `f_t` on a (the slip limit); without a spring (kt <= 0) the stretch `s` is kept.
 void SlideAnchor(const Data& data, Contact& c, const Vec3& s, const Vec3& f_t, double kt);
 
 /// Decides stick or slip for the geom pair whose points are data.contacts[begin, end), from the

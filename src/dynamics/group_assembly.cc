@@ -338,6 +338,7 @@ bool PatchForces(GroupAssembly& g, const BlockCholesky& factor, const Data& data
     } else {
       // slipping: the kinetic friction, independent of the new velocity
       c.friction_force_W = c.phi_t_W;
+      c.slip_power_W = c.phi_t_W.x() * ux + c.phi_t_W.y() * uy + c.phi_t_W.z() * uz;
       fx += c.phi_t_W.x();
       fy += c.phi_t_W.y();
       fz += c.phi_t_W.z();
@@ -414,6 +415,37 @@ int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) 
       const double scale = last_chance ? 0.0 : (1.0 - below) * bound / ft;
       for (int k = begin; k < end; ++k) contacts[k].phi_t_W *= scale;
       changed |= kFrictionScaled;
+    }
+    begin = end;
+  }
+  return changed;
+}
+
+bool StickReversedSlips(std::span<ImplicitContact> contacts) {
+  const int nc = static_cast<int>(contacts.size());
+  bool changed = false;
+  for (int begin = 0; begin < nc;) {
+    const ImplicitContact& first = contacts[begin];
+    int end = begin + 1;
+    while (first.patch >= 0 && end < nc && contacts[end].patch == first.patch) ++end;
+    if (!first.stick) {
+      // the kinetic friction's power on the reversed slip against the same force at the limit
+      double power = 0.0, limit = 0.0;
+      for (int k = begin; k < end; ++k) {
+        const ImplicitContact& c = contacts[k];
+        if (!c.active) continue;
+        power += c.slip_power_W;
+        limit += c.phi_t_W.norm() * c.reversal_limit_mps;
+      }
+      if (power > limit) {
+        for (int k = begin; k < end; ++k) {
+          ImplicitContact& c = contacts[k];
+          c.stick = true;
+          c.c_t_Ns_per_m = c.c_t_stick_Ns_per_m;
+          c.slip_power_W = 0.0;
+        }
+        changed = true;
+      }
     }
     begin = end;
   }

@@ -88,4 +88,16 @@ enum FrictionChange : int {
 /// solved again.
 int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance);
 
+/// A slipping patch whose kinetic friction (constant over the step) reversed its slip by more
+/// than the anchor can take up (the sum of its active contacts' slip_power_W above the sum of
+/// |phi_t| reversal_limit_mps) sticks: its contacts take back their anchor springs' tangential
+/// rows (c_t_stick_Ns_per_m; phi_t stays the kinetic friction, the anchors' stretch at the slip
+/// limit). Backward Euler's Coulomb friction has no slip that reverses within a step: where
+/// friction would stop the slip, the contact sticks, and EnforceFrictionCones lets it slip again
+/// if sticking needs more than the cone. Without this, a sliding contact whose friction changes
+/// its slip velocity by more than that velocity in one step (a rolling ball: its tangential
+/// effective mass is 2/7 of its mass) reverses its slip and its friction every step. Returns
+/// whether a patch was made to stick (the group must be solved again).
+bool StickReversedSlips(std::span<ImplicitContact> contacts);
+
 }  // namespace rigidtouch::dynamics

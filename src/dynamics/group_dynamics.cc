@@ -43,7 +43,10 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
   // a kept factor's answer stands only if every friction patch keeps within its cone
   bool lagged = reuse && SolveWithKeptFactor(model, data, bodies, slot, contacts, force_W, torque_W,
                                              s.lagged, kept, g, s.factor);
-  if (lagged && EnforceFrictionCones(contacts, false) != kFrictionKept) lagged = false;
+  if (lagged &&
+      (EnforceFrictionCones(contacts, false) != kFrictionKept || StickReversedSlips(contacts))) {
+    lagged = false;
+  }
   if (!lagged) {
     if (reuse) DropKeptFactor(kept, bodies[0]);
     bool dropped = false;
@@ -75,6 +78,9 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
       // for the solve with the kinetic friction
       const int cone = EnforceFrictionCones(contacts, pass + 2 == kMaxPasses);
       if (cone & kFrictionSlipped) continue;
+      // a slip that one step of kinetic friction reversed sticks (not in the last two passes, so
+      // that the cone is checked once more after it)
+      if (pass + 3 < kMaxPasses && StickReversedSlips(contacts)) continue;
       if (!pulled) {
         if (cone != kFrictionKept) {
           // a slipping patch's friction, a force independent of the new velocities, changed

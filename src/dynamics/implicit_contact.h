@@ -29,6 +29,12 @@ struct ImplicitContact {
   // the anchor spring while sticking, the kinetic friction while slipping
   Vec3 phi_t_W = Vec3::Zero();
   double c_t_Ns_per_m = 0.0;
+  // c_t of the anchor spring-damper (h kt + bt), kept for a slipping patch that comes to stick
+  double c_t_stick_Ns_per_m = 0.0;
+  // a slip that one step of kinetic friction reversed faster than this, mu_k phi_n / (kt h),
+  // sticks: in one step such a reversal stretches the anchor beyond the slip limit mu_k phi_n / kt,
+  // which the next step's decision on the anchor cannot catch (infinite: never)
+  double reversal_limit_mps = std::numeric_limits<double>::infinity();
   // the friction patch's cone; infinite: no cone (the tangential rows are never limited)
   double mu_static = std::numeric_limits<double>::infinity();
   double mu_kinetic = std::numeric_limits<double>::infinity();
@@ -39,6 +45,9 @@ struct ImplicitContact {
   // if it still pulls after the last pass) and the tangential force on a
   double normal_force_N = 0.0;
   Vec3 friction_force_W = Vec3::Zero();
+  // a slipping contact's kinetic friction times its new relative velocity  [W]: negative while
+  // the friction opposes the slip; positive when one step of it reversed the slip (0: sticking)
+  double slip_power_W = 0.0;
 };
 
 }  // namespace rigidtouch::dynamics
