@@ -43,7 +43,8 @@ double SphereEnergy(const BodyState& s, double m, double r) {
   return 0.5 * m * s.v_W.squaredNorm() + 0.5 * (0.4 * m * r * r) * s.w_W.squaredNorm();
 }
 
-// The ball's friction and the sum of its contacts' offsets from its centre (one contact)
+// a body's contacts this tick: how many, the friction on the body, and the (last) contact
+// point's offset from the body's centre
 struct BallContact {
   int n = 0;
   Vec3 friction_W = Vec3::Zero();
