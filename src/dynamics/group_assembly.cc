@@ -366,6 +366,20 @@ bool PatchForces(GroupAssembly& g, const BlockCholesky& factor, const Data& data
   return pulled;
 }
 
+namespace {
+
+// the end of the friction patch that starts at contacts[begin] (its consecutive contacts with the
+// same ImplicitContact::patch; a contact of patch -1 is a patch of its own)
+int PatchEnd(std::span<const ImplicitContact> contacts, int begin) {
+  const int nc = static_cast<int>(contacts.size());
+  const int patch = contacts[begin].patch;
+  int end = begin + 1;
+  while (patch >= 0 && end < nc && contacts[end].patch == patch) ++end;
+  return end;
+}
+
+}  // namespace
+
 int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) {
   // a slipping patch is scaled only when its friction exceeds the bound by more than rounding,
   // and then below the bound by as much as it was over (at most 1e-3 of it): its kinetic
@@ -377,8 +391,7 @@ int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) 
   int changed = kFrictionKept;
   for (int begin = 0; begin < nc;) {
     const ImplicitContact& first = contacts[begin];
-    int end = begin + 1;
-    while (first.patch >= 0 && end < nc && contacts[end].patch == first.patch) ++end;
+    const int end = PatchEnd(contacts, begin);
     double fn = 0.0, ft = 0.0;  // the active contacts' normal force, tangential forces' norms
     double phi_n = 0.0;         // and their penalty forces, the patch's force scale
     for (int k = begin; k < end; ++k) {
@@ -426,8 +439,7 @@ bool StickReversedSlips(std::span<ImplicitContact> contacts) {
   bool changed = false;
   for (int begin = 0; begin < nc;) {
     const ImplicitContact& first = contacts[begin];
-    int end = begin + 1;
-    while (first.patch >= 0 && end < nc && contacts[end].patch == first.patch) ++end;
+    const int end = PatchEnd(contacts, begin);
     if (!first.stick) {
       // the kinetic friction's power on the reversed slip against the same force at the limit
       double power = 0.0, limit = 0.0;
@@ -442,7 +454,6 @@ bool StickReversedSlips(std::span<ImplicitContact> contacts) {
           ImplicitContact& c = contacts[k];
           c.stick = true;
           c.c_t_Ns_per_m = c.c_t_stick_Ns_per_m;
-          c.slip_power_W = 0.0;
         }
         changed = true;
       }
