@@ -72,7 +72,8 @@ bool ImpulseSolver::MprgpProportion() {
   return true;
 }
 
-bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats) {
+bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats,
+                               int max_iterations) {
   const int c = num_rows_;
   const double* s = row_scale_.data();
   // |A_hat_ij| <= 1 (unit diagonal, positive semi-definite), so Gershgorin bounds ||A_hat|| by
@@ -95,7 +96,6 @@ bool ImpulseSolver::SolveMprgp(std::span<const double> p_warm, ImpulseSolverStat
   double inv_step_bar = 1.0 / step_bar;
   const double* sqrt_diag = sqrt_diag_.data();  // 1 / s: scaled gradient to velocity
   const double tol_mps = options_.tolerance * v_ref_mps_;
-  const int max_iterations = options_.max_iterations > 0 ? options_.max_iterations : 20 * c + 200;
 
   // x = S^-1 p, g = A_hat x + S b
   for (int j = 0; j < c; ++j) {

@@ -25,6 +25,10 @@ bool ImpulseSolver::Polish(ImpulseSolverStats& stats) {
   // after the dense active set the dense polish costs about as much again, so it goes first;
   // after MPRGP the O(c)-per-iteration conjugate gradients usually suffice and are cheaper
   if (!stats.matrix_free) return dense_fits ? PolishDense(f, stats) : PolishCg(stats);
+  // a group MPRGP could not settle in its budget is too ill-conditioned for conjugate gradients
+  // too: after the interior point they found the minimum norm in 2 of 1544 solves of a kicked
+  // 100-box pile, and took half the time
+  if (stats.interior_point) return dense_fits && PolishDense(f, stats);
   return PolishCg(stats) || (dense_fits && PolishDense(f, stats));
 }
 

@@ -51,6 +51,11 @@ ImpulseSolver::ImpulseSolver(int max_rows, int max_bodies, const ImpulseSolverOp
                 " and dense_polish_max_rows = " + std::to_string(options.dense_polish_max_rows) +
                 " must be >= 0");
   }
+  if (options.interior_max_bodies < 0 || options.interior_after_iterations < 0) {
+    throw Error("ImpulseSolverOptions::interior_max_bodies = " +
+                std::to_string(options.interior_max_bodies) + " and interior_after_iterations = " +
+                std::to_string(options.interior_after_iterations) + " must be >= 0");
+  }
   if (options.max_iterations < 0) {
     throw Error("ImpulseSolverOptions::max_iterations = " + std::to_string(options.max_iterations) +
                 " must be >= 0 (0 = automatic)");
@@ -89,6 +94,19 @@ ImpulseSolver::ImpulseSolver(int max_rows, int max_bodies, const ImpulseSolverOp
   row_scale_.setZero(max_rows);
   sqrt_diag_.setZero(max_rows);
   in_set_.setZero(max_rows);
+  const int interior_bodies = std::min(max_bodies, options.interior_max_bodies);
+  interior_.factor.Reserve(interior_bodies, max_rows, 32 * interior_bodies);
+  interior_.mass_kg.assign(static_cast<std::size_t>(max_bodies), 0.0);
+  interior_.inertia_W.assign(static_cast<std::size_t>(max_bodies), Mat3::Zero());
+  for (auto* v :
+       {&interior_.v0, &interior_.v, &interior_.rd, &interior_.dv, &interior_.body_step}) {
+    v->assign(static_cast<std::size_t>(max_bodies), Vec6::Zero());
+  }
+  interior_.edges.assign(static_cast<std::size_t>(max_rows), 0);
+  for (auto* v : {&interior_.s, &interior_.z, &interior_.ds, &interior_.dz, &interior_.rp,
+                  &interior_.rc, &interior_.z_best}) {
+    v->setZero(max_rows);
+  }
   a_dense_.setZero(max_dense_, max_dense_);
   l_dense_.setZero(max_dense_, max_dense_);
   h_dense_.setZero(max_dense_, max_dense_);
@@ -152,14 +170,8 @@ ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double sc
   } else {
     stats.matrix_free = c > dense_path_rows_;
     const std::span<const double> start = p_warm.first(warm ? c : 0);
-    stats.converged = stats.matrix_free ? SolveMprgp(start, stats) : SolveDense(start, stats);
-    if (!stats.converged && stats.matrix_free && c <= max_dense_) {
-      // MPRGP can stall on highly degenerate groups; the finite dense method settles them
-      p_.head(c).setZero();
-      stats.matrix_free = false;
-      stats.iterations = 0;
-      stats.converged = SolveDense(start, stats);
-    }
+    stats.converged =
+        stats.matrix_free ? SolveLarge(problem, start, stats) : SolveDense(start, stats);
     if (!stats.converged) {
       stats.error = ImpulseSolverError::kNotConverged;
       return stats;
@@ -200,6 +212,33 @@ ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double sc
   p_last_.head(c) = p_.head(c);
   last_num_rows_ = c;
   return stats;
+}
+
+bool ImpulseSolver::SolveLarge(const ImpulseProblem& problem, std::span<const double> start,
+                               ImpulseSolverStats& stats) {
+  const int c = num_rows_;
+  const int limit = options_.max_iterations > 0 ? options_.max_iterations : 20 * c + 200;
+  // a group too large for the dense fallback goes to the interior-point method once MPRGP has
+  // had interior_after_iterations without converging (when the factor can hold its bodies)
+  const bool interior = c > max_dense_ && options_.interior_max_bodies > 0 &&
+                        num_bodies_ <= interior_.factor.max_nodes;
+  const int budget = interior ? std::min(limit, options_.interior_after_iterations) : limit;
+  if (SolveMprgp(start, stats, budget)) return true;
+  if (c <= max_dense_) {
+    // MPRGP can stall on highly degenerate groups; the finite dense method settles them
+    p_.head(c).setZero();
+    stats.matrix_free = false;
+    stats.iterations = 0;
+    return SolveDense(start, stats);
+  }
+  if (!interior) return false;
+  stats.interior_point = true;
+  if (SolveInterior(problem, stats)) return true;
+  // no interior answer (a body of infinite inertia, or a factor too full): MPRGP to its limit
+  stats.interior_point = false;
+  if (budget >= limit) return false;
+  p_.head(c).setZero();
+  return SolveMprgp(start, stats, limit);
 }
 
 ImpulseSolverError ImpulseSolver::Pack(const ImpulseProblem& problem) {

@@ -57,6 +57,15 @@
 //    18 us; 73 rows: 24 us against 160 us), and a dense factorisation of a 400-row group costs
 //    ~2e7 flops per solve. Projected Gauss-Seidel converges linearly with a rate that degrades
 //    with stack height and mass ratio, too slowly for the accuracy the minimum-norm polish needs.
+//    Large degenerate groups: a group too large for the dense buffers that MPRGP has not settled
+//    after options.interior_after_iterations (100) iterations goes to a primal-dual
+//    interior-point method on the velocity problem whose dual is the plastic QP
+//    (impulse_interior.cc): each of its 10-20 iterations factors M + Jc^T (Z / S) Jc over the
+//    group's bodies (a block-sparse 6 x 6 Cholesky), so its cost does not grow with the condition
+//    of A. Its answer z > 0 is cleaned of the traces it leaves on open rows (z_j A_jj <= w_j).
+//    Why: nearly redundant rows make A's condition 1e9 to 1e11 on its range in a kicked box pile,
+//    where MPRGP took up to 3176 iterations (28 ms at 439 rows) or failed at its limit (65 ms),
+//    and the interior-point method 12-21 iterations (0.4-2.0 ms at 140-439 rows).
 // 3. Minimum-norm polish. Let F = {j : w_j <= options.polish_threshold * v_ref} after step 2. w is
 //    the same for every plastic impulse, so F contains the support of p', and p' is the
 //    minimum-norm solution of {A_FF p = -b_F, p >= 0} (rows outside F carry no impulse).
@@ -91,6 +100,7 @@
 #include <vector>
 
 #include "contact/impulse.h"
+#include "dynamics/block_cholesky.h"
 
 namespace rigidtouch::contact {
 
@@ -124,6 +134,8 @@ struct ImpulseSolverStats {
   bool min_norm = false;          ///< The minimum-norm polish was accepted (see the file comment).
   int iterations = 0;             ///< Free-set changes (dense path) or MPRGP iterations.
   int polish_iterations = 0;      ///< Conjugate-gradient plus dense active-set polish iterations.
+  bool interior_point = false;    ///< The answer came from the body-space interior-point method.
+  int interior_iterations = 0;    ///< Its iterations (one factorisation each).
   int inert_rows = 0;             ///< Rows with no effective mass; they get p = 0.
   int unresolved_rows = 0;        ///< Inert rows that approach; no impulse can stop them.
   double max_approach_mps = 0.0;  ///< Largest approach speed -w_j left after p* (0 if none).
@@ -148,6 +160,14 @@ struct ImpulseSolverOptions {
   double failure_tolerance = 1e-6;
   /// Iteration limit of the active-set methods; 0 means 4 c + 50 (dense) or 20 c + 200 (MPRGP).
   int max_iterations = 0;
+  /// Groups of up to this many bodies (and more rows than the dense buffers hold) go to the
+  /// body-space interior-point method when MPRGP has not converged in interior_after_iterations;
+  /// 0: never. Its factor takes about 5 min(this, max_bodies)^2 bytes.
+  int interior_max_bodies = 1024;
+  /// MPRGP iterations before such a group goes to the interior-point method (0: at once). On
+  /// groups of a kicked 100-box pile (140-439 rows) one interior-point solve cost as much as
+  /// 100-240 MPRGP iterations; MPRGP settled some within 34-72 and the others took 191-3176.
+  int interior_after_iterations = 100;
 };
 
 /// Production solver of the non-negative plastic impulse; see the file comment for the method.
@@ -156,8 +176,8 @@ class ImpulseSolver {
  public:
   /// Sizes every buffer for groups of up to `max_rows` rows and `max_bodies` bodies. Throws
   /// rigidtouch::Error if max_rows or max_bodies is negative, or an option is out of range
-  /// (dense_max_rows or dense_polish_max_rows < 0, a tolerance outside (0, 1),
-  /// max_iterations < 0).
+  /// (dense_max_rows, dense_polish_max_rows, max_iterations, interior_max_bodies or
+  /// interior_after_iterations < 0, a tolerance outside (0, 1)).
   ImpulseSolver(int max_rows, int max_bodies, const ImpulseSolverOptions& options = {});
 
   /// Computes p_out = scale * p* (N s, one per row) for the group `problem`; scale must be in
@@ -197,8 +217,19 @@ class ImpulseSolver {
   double CouplingOf(int i, int j) const;  // A_ij from the packed rows
   bool SolveDense(std::span<const double> p_warm, ImpulseSolverStats& stats);
   void RefineDense();
-  bool SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats);
-  void MprgpGradient();  // g = S A S x + S b
+  // step 2 for groups of more than dense_path_rows_ rows: MPRGP, then the dense method or the
+  // interior-point method
+  bool SolveLarge(const ImpulseProblem& problem, std::span<const double> start,
+                  ImpulseSolverStats& stats);
+  bool SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats, int max_iterations);
+  bool SolveInterior(const ImpulseProblem& problem, ImpulseSolverStats& stats);
+  bool InteriorStructure(const ImpulseProblem& problem);  // masses, edges, analysis
+  bool InteriorFactor();                                  // M + J^T (Z / S) J = L L^T
+  bool InteriorDirection();                               // the Newton step for interior_.rc
+  void InteriorResidual(double& approach_mps, double& split_mps);  // of p = z, as speeds
+  void InteriorCleanUp(double max_trace_mps);                      // no impulse on open rows
+  double RowVelocity(int j, const std::vector<Vec6>& v) const;     // J_j v
+  void MprgpGradient();                                            // g = S A S x + S b
   void MprgpExpand(double feasible_step, double min_step_bar, double& step_bar,
                    double& inv_step_bar);
   bool MprgpProportion();  // false if a released direction has no curvature
@@ -239,6 +270,19 @@ class ImpulseSolver {
   Eigen::VectorXd sqrt_diag_;             // sqrt(A_jj)
   Eigen::VectorXi in_set_;                // 1 for rows of the polish's free set F
   int last_num_rows_ = 0;
+
+  // body-space interior point (impulse_interior.cc): per body (max_bodies, factor up to
+  // interior_max_bodies) and per row (max_rows)
+  static constexpr int kMaxInteriorIterations = 60;
+  struct InteriorScratch {
+    dynamics::BlockCholesky factor;
+    std::vector<double> mass_kg;
+    std::vector<Mat3> inertia_W;
+    std::vector<Vec6> v0, v, rd, dv, body_step;
+    std::vector<std::uint64_t> edges;
+    Eigen::VectorXd s, z, ds, dz, rp, rc, z_best;
+  };
+  InteriorScratch interior_;
 
   // dense path (max_dense)
   Eigen::MatrixXd a_dense_;   // A (unregularised)

@@ -396,6 +396,52 @@ TEST(ImpulseSolver, StalledMprgpFallsBackToTheDenseMethod) {
   EXPECT_GT(fallbacks, 0);
 }
 
+TEST(ImpulseSolver, InteriorPointIsSafeOnRandomGroups) {
+  // every random group straight to the interior-point method (no dense active set, no MPRGP
+  // iteration): the same checks as for the other paths, on its own answer (no polish runs after
+  // it without the dense buffers) ...
+  ImpulseSolverOptions options = PathOptions(true);
+  options.interior_after_iterations = 0;
+  int min_norm = 0;
+  CheckRandomGroups(options, min_norm);
+  // ... and with the dense polish (the only one after the interior point) the minimum norm in
+  // all but a few
+  options.dense_polish_max_rows = 32;
+  CheckRandomGroups(options, min_norm);
+  EXPECT_GE(min_norm, 995);
+}
+
+TEST(ImpulseSolver, InteriorPointStopsAStackHitFromAbove) {
+  // closed form: a 0.5 kg tool moving down at 1 m/s onto a column of 5 boxes at rest on the floor.
+  // The plastic impulse stops everything: every body ends at rest, the tool's row carries
+  // m_t |v| = 0.5 N s, and each of the 4 corner rows under each box a quarter of it (the floor
+  // and the boxes carry the tool's momentum down; by symmetry the corners share it equally).
+  const ImpulseExample stack = StackWithTool(5, 0.05, 1.0, 0.5, -1.0);
+  const auto c = stack.rows.size();
+  ImpulseSolverOptions options = PathOptions(true);
+  options.interior_after_iterations = 0;
+  ImpulseSolver solver(static_cast<int>(c), static_cast<int>(stack.bodies.size()), options);
+  std::vector<double> p(c);
+  const ImpulseSolverStats stats = solver.Solve(stack.problem(), 1.0, p);
+  ASSERT_EQ(stats.error, ImpulseSolverError::kNone) << ToString(stats.error);
+  EXPECT_TRUE(stats.interior_point);
+  EXPECT_EQ(stats.iterations, 0);  // no MPRGP iteration
+  EXPECT_GT(stats.interior_iterations, 0);
+  EXPECT_LE(stats.interior_iterations, 40);
+  ImpulseExample after = stack;
+  ApplyAndMeasure(after, p);
+  // tolerance 1e-9 of the tool's speed, and 1e-9 of the tool's momentum for the impulses
+  for (const SolverBody& body : after.bodies) {
+    EXPECT_LE(body.v_W.norm(), 1e-9);
+    EXPECT_LE(body.w_W.norm() * 0.05, 1e-9);
+  }
+  for (std::size_t j = 0; j < c; ++j) {
+    const bool tool_row = stack.rows[j].body_a == static_cast<int>(stack.bodies.size()) - 1 ||
+                          stack.rows[j].body_b == static_cast<int>(stack.bodies.size()) - 1;
+    EXPECT_NEAR(p[j], tool_row ? 0.5 : 0.125, 1e-9 * 0.5) << "row " << j;
+  }
+}
+
 TEST_P(SolverPath, WarmStartGivesTheSameAnswer) {
   std::mt19937_64 rng(31);
   const bool matrix_free = GetParam();
@@ -511,10 +557,12 @@ TEST(ImpulseSolver, ReturnsTheSafeImpulseOnBadInput) {
   bad.rows[2].body_b = bad.rows[2].body_a;
   expect_error(solver, bad, 1.0, p, ImpulseSolverError::kBadBodyIndex);
 
-  // an iteration limit too small to finish: not converged, safe output, for both paths
+  // an iteration limit too small to finish: not converged, safe output, for both paths (without
+  // the interior-point method, which would take over from MPRGP)
   for (const bool matrix_free : {false, true}) {
     ImpulseSolverOptions options = PathOptions(matrix_free);
     options.max_iterations = 1;
+    options.interior_max_bodies = 0;
     ImpulseSolver limited(static_cast<int>(c), 3, options);
     expect_error(limited, example, 1.0, p, ImpulseSolverError::kNotConverged);
   }
@@ -534,6 +582,9 @@ TEST(ImpulseSolver, ConstructorRejectsBadOptions) {
   options.regularization = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(ImpulseSolver(1, 1, options), Error);
   options = {};
+  options.interior_after_iterations = -1;
+  EXPECT_THROW(ImpulseSolver(1, 1, options), Error);
+  options = {};
   options.dense_max_rows = -2;
   try {
     ImpulseSolver solver(1, 1, options);
@@ -551,8 +602,12 @@ TEST(ImpulseSolver, SolveDoesNotAllocate) {
   for (int k = 0; k < 50; ++k) groups.push_back(RandomGroup(rng));
   ImpulseExample pile_after = pile;
   double energy_J = 0.0;
-  for (const bool matrix_free : {false, true}) {
-    ImpulseSolver solver(401, 101, PathOptions(matrix_free));
+  // the dense path, the matrix-free path, and the interior-point method at once
+  for (const int path : {0, 1, 2}) {
+    const bool matrix_free = path > 0;
+    ImpulseSolverOptions options = PathOptions(matrix_free);
+    if (path == 2) options.interior_after_iterations = 0;
+    ImpulseSolver solver(401, 101, options);
     std::vector<double> p(401);
     {
       // the allocation counter must see allocations at all (or the test proves nothing)
@@ -572,7 +627,11 @@ TEST(ImpulseSolver, SolveDoesNotAllocate) {
           solver.Solve(group.problem(), 0.5, std::span(p).first(c), solver.plastic_impulse())
               .error != ImpulseSolverError::kNone;
     }
-    if (matrix_free) {
+    if (path == 2) {
+      const ImpulseSolverStats stats = solver.Solve(pile.problem(), 1.0, p);
+      failures += stats.error != ImpulseSolverError::kNone || !stats.interior_point;
+    }
+    if (path == 1) {
       failures += solver.Solve(pile.problem(), 1.0, p).error != ImpulseSolverError::kNone;
       // the loop-side helpers too
       energy_J += KineticEnergy(pile_after.bodies);
@@ -580,7 +639,7 @@ TEST(ImpulseSolver, SolveDoesNotAllocate) {
       energy_J -= KineticEnergy(pile_after.bodies);
       energy_J += NormalVelocity(pile_after.problem(), 0);
     }
-    EXPECT_EQ(guard.allocations(), 0) << (matrix_free ? "matrix-free" : "dense");
+    EXPECT_EQ(guard.allocations(), 0) << "path " << path;
     EXPECT_EQ(failures, 0);
   }
   EXPECT_TRUE(std::isfinite(energy_J));
