@@ -55,6 +55,10 @@ struct PairRun {
 struct WindowState {
   std::int64_t onset_step = -1;  // step of the last collision onset; -1: never
   int impulses_done = 0;         // impulses applied since onset
+  // the group's last impulse came from the interior-point method of the impulse solver: its
+  // next ones go there at once while the group keeps colliding (an onset less than 0.1 s after
+  // the last one keeps this; a later onset clears it)
+  bool interior = false;
 };
 
 /// One applied collision impulse (kept for the ticks it happened in; see Data::impulses).

@@ -128,7 +128,8 @@ std::span<const double> ImpulseSolver::plastic_impulse() const {
 }
 
 ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double scale,
-                                        std::span<double> p_out, std::span<const double> p_warm) {
+                                        std::span<double> p_out, std::span<const double> p_warm,
+                                        const ImpulseSolveHint& hint) {
   ImpulseSolverStats stats;
   std::fill(p_out.begin(), p_out.end(), 0.0);  // the safe answer until a solve succeeds
   if (p_out.size() != problem.rows.size()) {
@@ -170,8 +171,8 @@ ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double sc
   } else {
     stats.matrix_free = c > dense_path_rows_;
     const std::span<const double> start = p_warm.first(warm ? c : 0);
-    stats.converged =
-        stats.matrix_free ? SolveLarge(problem, start, stats) : SolveDense(start, stats);
+    stats.converged = stats.matrix_free ? SolveLarge(problem, start, hint.interior, stats)
+                                        : SolveDense(start, stats);
     if (!stats.converged) {
       stats.error = ImpulseSolverError::kNotConverged;
       return stats;
@@ -215,14 +216,17 @@ ImpulseSolverStats ImpulseSolver::Solve(const ImpulseProblem& problem, double sc
 }
 
 bool ImpulseSolver::SolveLarge(const ImpulseProblem& problem, std::span<const double> start,
-                               ImpulseSolverStats& stats) {
+                               bool to_interior, ImpulseSolverStats& stats) {
   const int c = num_rows_;
   const int limit = options_.max_iterations > 0 ? options_.max_iterations : 20 * c + 200;
   // a group too large for the dense fallback goes to the interior-point method once MPRGP has
-  // had interior_after_iterations without converging (when the factor can hold its bodies)
+  // had interior_after_iterations without converging (when the factor can hold its bodies),
+  // or at once when the caller says the group's last solve went there (MPRGP then only checks
+  // whether p = start already solves it)
   const bool interior = c > max_dense_ && options_.interior_max_bodies > 0 &&
                         num_bodies_ <= interior_.factor.max_nodes;
-  const int budget = interior ? std::min(limit, options_.interior_after_iterations) : limit;
+  const int after = to_interior ? 0 : options_.interior_after_iterations;
+  const int budget = interior ? std::min(limit, after) : limit;
   if (SolveMprgp(start, stats, budget)) return true;
   if (c <= max_dense_) {
     // MPRGP can stall on highly degenerate groups; the finite dense method settles them

@@ -66,7 +66,8 @@
 //    on open rows (those with z_j A_jj <= w_j).
 //    Why: nearly redundant rows make A's condition 1e9 to 1e11 on its range in a kicked box pile,
 //    where MPRGP took up to 3176 iterations (28 ms at 439 rows) or failed at its limit (65 ms),
-//    and the interior-point method 12-21 iterations (0.4-2.0 ms at 140-439 rows).
+//    and the interior-point method 12-21 iterations (0.4-2.0 ms at 140-439 rows). A caller that
+//    knows the group's last solve went there (ImpulseSolveHint) sends it there at once.
 // 3. Minimum-norm polish. Let F = {j : w_j <= options.polish_threshold * v_ref} after step 2. w is
 //    the same for every plastic impulse, so F contains the support of p', and p' is the
 //    minimum-norm solution of {A_FF p = -b_F, p >= 0} (rows outside F carry no impulse).
@@ -171,6 +172,15 @@ struct ImpulseSolverOptions {
   int interior_after_iterations = 100;
 };
 
+/// What the caller knows of a group from its earlier solves.
+struct ImpulseSolveHint {
+  /// The group's last solve needed the interior-point method: if it is still too large for the
+  /// dense path and the interior-point method can take it, it goes there without MPRGP's
+  /// budget (options.interior_after_iterations). On a kicked 100-box pile 98% of the solves of
+  /// more than 100 rows needed it, and the budget cost 0.5-0.6 ms of each.
+  bool interior = false;
+};
+
 /// Production solver of the non-negative plastic impulse; see the file comment for the method.
 /// One instance per thread; Solve reuses the buffers sized by the constructor.
 class ImpulseSolver {
@@ -184,10 +194,11 @@ class ImpulseSolver {
   /// Computes p_out = scale * p* (N s, one per row) for the group `problem`; scale must be in
   /// [0, 2], normally (1 + e) / (N - i + 1). `p_warm`, if it has one entry per row, is a guess of
   /// p* (e.g. plastic_impulse() of the previous impulse of the same rows) that starts the
-  /// active-set method; otherwise it starts from p = 0. Never allocates or throws; on error
-  /// p_out is 0 and stats.error says why.
+  /// active-set method; otherwise it starts from p = 0. `hint` may skip MPRGP for a group known
+  /// to be hard (ImpulseSolveHint). Never allocates or throws; on error p_out is 0 and
+  /// stats.error says why.
   ImpulseSolverStats Solve(const ImpulseProblem& problem, double scale, std::span<double> p_out,
-                           std::span<const double> p_warm = {});
+                           std::span<const double> p_warm = {}, const ImpulseSolveHint& hint = {});
 
   /// The unscaled plastic impulse p* of the last successful Solve (one entry per row).
   std::span<const double> plastic_impulse() const;
@@ -219,8 +230,8 @@ class ImpulseSolver {
   bool SolveDense(std::span<const double> p_warm, ImpulseSolverStats& stats);
   void RefineDense();
   // step 2 for groups of more than dense_path_rows_ rows: MPRGP, then the dense method or the
-  // interior-point method
-  bool SolveLarge(const ImpulseProblem& problem, std::span<const double> start,
+  // interior-point method (at once when `to_interior` and the group is one it takes)
+  bool SolveLarge(const ImpulseProblem& problem, std::span<const double> start, bool to_interior,
                   ImpulseSolverStats& stats);
   bool SolveMprgp(std::span<const double> p_warm, ImpulseSolverStats& stats, int max_iterations);
   bool SolveInterior(const ImpulseProblem& problem, ImpulseSolverStats& stats);

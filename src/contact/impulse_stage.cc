@@ -40,18 +40,25 @@ bool Pack(const Model& model, const Data& data, const Groups& G, int g, ImpulseL
   return tool;
 }
 
-// the impulse of Eq. 5 (N = 1) or Eq. 8 (e = 0) into p; false if the solver failed
+// the impulse of Eq. 5 (N = 1) or Eq. 8 (e = 0) into p; false if the solver failed. `interior`:
+// on entry whether the group's last solve used the interior-point method (the solver's hint), on
+// return whether this one did
 bool SolveImpulse(const Model& model, const ImpulseProblem& problem, int remaining, ImpulseLane& L,
-                  ReferenceSolver* reference, std::span<double> p) {
+                  ReferenceSolver* reference, std::span<double> p, bool& interior) {
   const double e = model.render.renderer == RendererKind::kImpulse ? model.render.restitution : 0.0;
   if (model.render.reference_solver) {
     // exact Eq. 5 / Eq. 8 with the pseudo-inverse (may pull), for comparison runs
+    interior = false;
     return reference != nullptr && reference->Solve(problem, e, remaining, p);
   }
   // Eq. 8's share 1 / (N - i + 1), or a material train's envelope share
   const double scale =
       (1.0 + e) * TrainShare(model.schedule, model.render, model.timestep_s, remaining);
-  return L.solver->Solve(problem, scale, p).error == ImpulseSolverError::kNone;
+  const ImpulseSolverStats stats =
+      L.solver->Solve(problem, scale, p, {}, ImpulseSolveHint{.interior = interior});
+  const bool solved = stats.error == ImpulseSolverError::kNone;
+  interior = solved && stats.interior_point;
+  return solved;
 }
 
 // applies p to group g's bodies and contacts and describes it in ev (recorded later, in order)
@@ -102,7 +109,8 @@ void SolveDue(const Model& model, Data& data, const Groups& G, ImpulseScratch::D
   const ImpulseProblem problem{std::span<const SolverBody>(L.bodies.data(), nb),
                                std::span<const SolverRow>(L.rows.data(), nc)};
   const std::span<double> p(L.impulses.data(), nc);
-  d.solved = SolveImpulse(model, problem, d.remaining, L, reference, p);
+  d.interior = data.window[G.bodies[G.body_start[g]]].interior;
+  d.solved = SolveImpulse(model, problem, d.remaining, L, reference, p, d.interior);
   if (d.solved) Apply(model, data, G, g, d.index, tool, problem, p, L, d.event);
 }
 
@@ -206,6 +214,7 @@ void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseS
   // recorded in group order, as one thread solving the groups in turn would
   for (int k = 0; k < s.ndue; ++k) {
     const ImpulseScratch::Due& d = s.due[k];
+    data.window[G.bodies[G.body_start[d.group]]].interior = d.interior;
     if (!d.solved) {
       data.Warn(Warning::kSolverFailed);
       continue;

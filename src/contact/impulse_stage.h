@@ -35,8 +35,9 @@ struct ImpulseScratch {
     int index = 0;      // i, the impulse's 1-based place in the train
     int remaining = 0;  // N - i + 1
     bool solved = false;
-    bool left = false;   // too large for the worker's lane: left to the tick's thread
-    ImpulseEvent event;  // when solved
+    bool left = false;      // too large for the worker's lane: left to the tick's thread
+    bool interior = false;  // the solve used the interior-point method (WindowState::interior)
+    ImpulseEvent event;     // when solved
   };
   /// What the worker's part of the shared groups needs.
   struct Job {

@@ -15,6 +15,15 @@ void ContactScratch::Reserve(int nbody, int max_contacts) {
   group_phase.assign(nbody, ContactPhase::kResting);
 }
 
+namespace {
+
+// how long after a group's last onset a new onset keeps the group's solver hint
+// (WindowState::interior): the longest collision window the method allows (human reaction time;
+// the train's default t_c), for every renderer
+constexpr double kSolverHintLifetime_s = 0.1;
+
+}  // namespace
+
 WindowState GroupWindow(const Model& model, const Data& data, const ContactScratch& scratch,
                         int g) {
   const Groups& G = scratch.groups;
@@ -27,6 +36,10 @@ WindowState GroupWindow(const Model& model, const Data& data, const ContactScrat
   for (int k = G.contact_start[g]; k < G.contact_start[g + 1]; ++k) {
     const int ci = G.contacts[k];
     if (data.contacts[ci].is_new && scratch.normal_velocity[ci] < -model.contact.onset_speed_mps) {
+      // a group that collides again within kSolverHintLifetime_s of its last onset keeps its
+      // solver hint
+      const double since_s = static_cast<double>(data.step - w.onset_step) * model.timestep_s;
+      if (w.onset_step < 0 || since_s >= kSolverHintLifetime_s) w.interior = false;
       w.onset_step = data.step;
       w.impulses_done = 0;
       break;

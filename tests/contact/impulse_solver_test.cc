@@ -411,6 +411,23 @@ TEST(ImpulseSolver, InteriorPointIsSafeOnRandomGroups) {
   EXPECT_GE(min_norm, 995);
 }
 
+// the closed form of StackWithTool(5, 0.05, 1.0, 0.5, -1.0) below: every body at rest after p,
+// the tool's row 0.5 N s and each corner row 0.125 N s. Tolerance 1e-9 of the tool's speed, and
+// 1e-9 of the tool's momentum for the impulses
+void ExpectStackHitStopped(const ImpulseExample& stack, const std::vector<double>& p) {
+  ImpulseExample after = stack;
+  ApplyAndMeasure(after, p);
+  for (const SolverBody& body : after.bodies) {
+    EXPECT_LE(body.v_W.norm(), 1e-9);
+    EXPECT_LE(body.w_W.norm() * 0.05, 1e-9);
+  }
+  const int tool = static_cast<int>(stack.bodies.size()) - 1;
+  for (std::size_t j = 0; j < stack.rows.size(); ++j) {
+    const bool tool_row = stack.rows[j].body_a == tool || stack.rows[j].body_b == tool;
+    EXPECT_NEAR(p[j], tool_row ? 0.5 : 0.125, 1e-9 * 0.5) << "row " << j;
+  }
+}
+
 TEST(ImpulseSolver, InteriorPointStopsAStackHitFromAbove) {
   // closed form: a 0.5 kg tool moving down at 1 m/s onto a column of 5 boxes at rest on the floor.
   // The plastic impulse stops everything: every body ends at rest, the tool's row carries
@@ -428,18 +445,46 @@ TEST(ImpulseSolver, InteriorPointStopsAStackHitFromAbove) {
   EXPECT_EQ(stats.iterations, 0);  // no MPRGP iteration
   EXPECT_GT(stats.interior_iterations, 0);
   EXPECT_LE(stats.interior_iterations, 40);
-  ImpulseExample after = stack;
-  ApplyAndMeasure(after, p);
-  // tolerance 1e-9 of the tool's speed, and 1e-9 of the tool's momentum for the impulses
-  for (const SolverBody& body : after.bodies) {
-    EXPECT_LE(body.v_W.norm(), 1e-9);
-    EXPECT_LE(body.w_W.norm() * 0.05, 1e-9);
-  }
-  for (std::size_t j = 0; j < c; ++j) {
-    const bool tool_row = stack.rows[j].body_a == static_cast<int>(stack.bodies.size()) - 1 ||
-                          stack.rows[j].body_b == static_cast<int>(stack.bodies.size()) - 1;
-    EXPECT_NEAR(p[j], tool_row ? 0.5 : 0.125, 1e-9 * 0.5) << "row " << j;
-  }
+  ExpectStackHitStopped(stack, p);
+}
+
+TEST(ImpulseSolver, HintSendsALargeGroupToTheInteriorPointAtOnce) {
+  // the same closed form as above, with the default budget: MPRGP settles this column by itself,
+  // so only the hint sends it to the interior-point method, and the answer is the same
+  const ImpulseExample stack = StackWithTool(5, 0.05, 1.0, 0.5, -1.0);
+  const auto c = stack.rows.size();
+  const int nb = static_cast<int>(stack.bodies.size());
+  const ImpulseSolverOptions options = PathOptions(true);  // no dense path: MPRGP from 1 row
+  ImpulseSolver solver(static_cast<int>(c), nb, options);
+  std::vector<double> p(c);
+  const ImpulseSolverStats plain = solver.Solve(stack.problem(), 1.0, p);
+  ASSERT_EQ(plain.error, ImpulseSolverError::kNone) << ToString(plain.error);
+  ASSERT_FALSE(plain.interior_point);
+  ASSERT_GT(plain.iterations, 0);
+  const ImpulseSolverStats hinted =
+      solver.Solve(stack.problem(), 1.0, p, {}, ImpulseSolveHint{.interior = true});
+  ASSERT_EQ(hinted.error, ImpulseSolverError::kNone) << ToString(hinted.error);
+  EXPECT_TRUE(hinted.interior_point);
+  EXPECT_EQ(hinted.iterations, 0);  // no MPRGP iteration
+  EXPECT_GT(hinted.interior_iterations, 0);
+  ExpectStackHitStopped(stack, p);
+
+  // where the interior-point method cannot take the group the hint changes nothing: more bodies
+  // than it is sized for, or few enough rows for the dense method
+  ImpulseSolverOptions small_factor = options;
+  small_factor.interior_max_bodies = nb - 1;
+  ImpulseSolver no_room(static_cast<int>(c), nb, small_factor);
+  const ImpulseSolverStats too_many =
+      no_room.Solve(stack.problem(), 1.0, p, {}, ImpulseSolveHint{.interior = true});
+  ASSERT_EQ(too_many.error, ImpulseSolverError::kNone) << ToString(too_many.error);
+  EXPECT_FALSE(too_many.interior_point);
+  EXPECT_EQ(too_many.iterations, plain.iterations);
+  ImpulseSolver dense(static_cast<int>(c), nb, PathOptions(false));
+  const ImpulseSolverStats small =
+      dense.Solve(stack.problem(), 1.0, p, {}, ImpulseSolveHint{.interior = true});
+  ASSERT_EQ(small.error, ImpulseSolverError::kNone) << ToString(small.error);
+  EXPECT_FALSE(small.interior_point);
+  EXPECT_FALSE(small.matrix_free);
 }
 
 TEST_P(SolverPath, WarmStartGivesTheSameAnswer) {

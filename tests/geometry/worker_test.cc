@@ -9,10 +9,12 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -317,7 +319,8 @@ bool SameImpulses(const Data& d1, const Data& d2, std::string* why) {
     const BodyState &a = d1.bodies[i], &b = d2.bodies[i];
     if (!SameBits(a.x_W, b.x_W) || !SameBits(a.v_W, b.v_W) || !SameBits(a.w_W, b.w_W) ||
         d1.window[i].onset_step != d2.window[i].onset_step ||
-        d1.window[i].impulses_done != d2.window[i].impulses_done) {
+        d1.window[i].impulses_done != d2.window[i].impulses_done ||
+        d1.window[i].interior != d2.window[i].interior) {
       *why = "body " + std::to_string(i);
       return false;
     }
@@ -381,6 +384,43 @@ TEST(WorkerTest, ImpulseGroupsTooLargeForTheWorkersLaneAreSolvedByTheTicksThread
   }
   EXPECT_GT(shared.left_by_worker, 0);    // the worker met groups too large for it
   EXPECT_GT(shared.solved_on_worker, 0);  // and solved the others
+}
+
+// the 100-box pile kicked (every body given a seeded random velocity, as in KickedPileTest): its
+// groups of 300-600 rows go to the interior-point method, and their next impulses go there at
+// once (the window's hint, read by whichever thread solves the group). The results are those of
+// one thread, bit for bit
+TEST(WorkerTest, KickedPileWithTheInteriorPointHintIsTheSameOnTwoThreads) {
+  OneAndTwoThreads t(std::string(RIGIDTOUCH_SCENES) + "/pile.xml");
+  const Model &m1 = t.m1, &m2 = t.m2;
+  Data &d1 = t.d1, &d2 = t.d2;
+  TickInput in;
+  for (int s = 0; s < 500; ++s) {  // settle
+    Tick(m1, d1, in);
+    Tick(m2, d2, in);
+  }
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> v(0.0, 0.3 / std::sqrt(3.0)), w(0.0, 10.0 / std::sqrt(3.0));
+  for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
+    const Vec3 dv(v(rng), v(rng), v(rng)), dw(w(rng), w(rng), w(rng));
+    d1.bodies[i].v_W += dv;
+    d2.bodies[i].v_W += dv;
+    d1.bodies[i].w_W += dw;
+    d2.bodies[i].w_W += dw;
+  }
+  const contact::ImpulseScratch& shared = d2.workspace->impulse;
+  int hinted_ticks = 0;
+  for (int s = 0; s < 300 || (shared.solved_on_worker == 0 && s < 1500); ++s) {
+    bool hint = false;
+    for (const WindowState& window : d1.window) hint = hint || window.interior;
+    Tick(m1, d1, in);
+    Tick(m2, d2, in);
+    std::string why;
+    ASSERT_TRUE(SameImpulses(d1, d2, &why)) << "step " << s << ": " << why;
+    if (hint && d1.nimpulse > 0) ++hinted_ticks;
+  }
+  EXPECT_GT(hinted_ticks, 10);  // the hint was in use (measured: 175 of 300 ticks)
+  EXPECT_GT(shared.solved_on_worker, 0);
 }
 
 // an allocation guard that lives on the worker thread between two of its jobs

@@ -236,5 +236,50 @@ TEST(TickTest, ContactPhaseFollowsTheCollisionWindow) {
   EXPECT_TRUE(rested);
 }
 
+// the impulse solver's hint (WindowState::interior) lives while the group keeps colliding: an
+// onset less than 0.1 s after the last one keeps it, a later one clears it. The event renderer
+// marks onsets but solves no impulse, so only the window's rule changes the hint here
+TEST(TickTest, SolverHintLastsWhileTheGroupKeepsColliding) {
+  LoadOptions o;
+  o.contact.stiffness_N_per_m = 0.0;  // nothing but the hand's velocity moves the tool
+  o.contact.damping_Ns_per_m = 0.0;
+  o.render.renderer = RendererKind::kEvent;
+  o.render.material = {"test", 20.0, 60.0, 100.0};
+  Model m = LoadModel(TestScene("sphere_plane.xml"), o);
+  m.gravity_W.setZero();
+  const auto window = std::lround(0.1 / m.timestep_s);
+  ASSERT_EQ(window, 100);
+  Data d = MakeData(m);
+  const Vec3 down(0.0, 0.0, -0.3);
+  d.bodies[m.tool].v_W = down;
+  d.window[m.tool].interior = true;
+  auto tick_until_onset = [&]() {
+    for (int s = 0; s < 1000; ++s) {
+      Tick(m, d, {});
+      if (d.window[m.tool].onset_step == d.step - 1) return true;
+    }
+    return false;
+  };
+  // the first onset of all: nothing to keep
+  ASSERT_TRUE(tick_until_onset());
+  EXPECT_FALSE(d.window[m.tool].interior);
+  const double z_contact_m = d.bodies[m.tool].x_W.z();
+  // lifted 3 mm and moving down at 0.3 m/s: the next onset comes about 10 steps later
+  d.window[m.tool].interior = true;
+  std::int64_t last_onset = d.window[m.tool].onset_step;
+  d.bodies[m.tool].x_W.z() = z_contact_m + 0.003;
+  d.bodies[m.tool].v_W = down;
+  ASSERT_TRUE(tick_until_onset());
+  ASSERT_LT(d.window[m.tool].onset_step - last_onset, window);
+  EXPECT_TRUE(d.window[m.tool].interior);
+  // lifted 45 mm: the next onset comes about 150 steps later, after 0.1 s
+  last_onset = d.window[m.tool].onset_step;
+  d.bodies[m.tool].x_W.z() = z_contact_m + 0.045;
+  d.bodies[m.tool].v_W = down;
+  ASSERT_TRUE(tick_until_onset());
+  ASSERT_GE(d.window[m.tool].onset_step - last_onset, window);
+  EXPECT_FALSE(d.window[m.tool].interior);
+}
+
 }  // namespace
 }  // namespace rigidtouch
