@@ -38,14 +38,6 @@ double MaxStep(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, const Eigen:
 
 }  // namespace
 
-double ImpulseSolver::RowVelocity(int j, const std::vector<Vec6>& v) const {
-  const PackedRow& row = rows_[j];
-  double w = 0.0;
-  if (row.body_a >= 0) w += row.jac_a.dot(v[row.body_a]);
-  if (row.body_b >= 0) w += row.jac_b.dot(v[row.body_b]);
-  return w;
-}
-
 bool ImpulseSolver::InteriorStructure(const ImpulseProblem& problem) {
   const int nb = num_bodies_;
   const int c = num_rows_;

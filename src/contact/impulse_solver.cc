@@ -320,10 +320,7 @@ void ImpulseSolver::MultiplyA(const double* x, double* y, const double* row_scal
     if (row.body_b >= 0) dv[row.body_b] += xj * row.minv_jt_b;
   }
   for (int j = 0; j < num_rows_; ++j) {
-    const PackedRow& row = rows_[j];
-    double yj = 0.0;
-    if (row.body_a >= 0) yj += row.jac_a.dot(dv[row.body_a]);
-    if (row.body_b >= 0) yj += row.jac_b.dot(dv[row.body_b]);
+    const double yj = RowVelocity(j, dv);
     y[j] = row_scale != nullptr ? row_scale[j] * yj : yj;
   }
 }

@@ -240,8 +240,14 @@ class ImpulseSolver {
   bool InteriorDirection();                               // the Newton step for interior_.rc
   void InteriorResidual(double& approach_mps, double& split_mps);  // of p = z, as speeds
   void InteriorCleanUp(double max_trace_mps);                      // no impulse on open rows
-  double RowVelocity(int j, const std::vector<Vec6>& v) const;     // J_j v
-  void MprgpGradient();                                            // g = S A S x + S b
+  double RowVelocity(int j, const std::vector<Vec6>& v) const {    // J_j v
+    const PackedRow& row = rows_[j];
+    double w = 0.0;
+    if (row.body_a >= 0) w += row.jac_a.dot(v[row.body_a]);
+    if (row.body_b >= 0) w += row.jac_b.dot(v[row.body_b]);
+    return w;
+  }
+  void MprgpGradient();  // g = S A S x + S b
   void MprgpExpand(double feasible_step, double min_step_bar, double& step_bar,
                    double& inv_step_bar);
   bool MprgpProportion();  // false if a released direction has no curvature
