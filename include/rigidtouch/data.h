@@ -45,9 +45,11 @@ struct Contact {
   ContactPhase phase = ContactPhase::kResting;
 };
 
-/// The contiguous run of one geom pair's points in a contact list (for matching across ticks).
+/// The contiguous run of one geom pair's points in a contact list (for grouping the bodies, and
+/// for matching across ticks).
 struct PairRun {
   int geom_a = -1, geom_b = -1;
+  int body_a = -1, body_b = -1;  // the points' bodies (Contact::body_a, body_b)
   int begin = 0, count = 0;
 };
 
@@ -149,6 +151,10 @@ struct Data {
   // CONTACT dependent, per tick
   std::vector<Contact> contacts;  // (max_contacts); the first ncontact are valid
   int ncontact = 0;
+  // (max_contacts) the runs of contacts[0 .. ncontact), one per geom pair, in list order: a compact
+  // index of the list (a Contact spans several cache lines), written with it by collision detection
+  std::vector<PairRun> runs;
+  int nruns = 0;
   std::vector<Contact> previous;  // last tick's contacts, for identity matching
   int nprevious = 0;
   std::vector<PairRun> previous_runs;  // (max_contacts) their geom pairs, sorted by pair

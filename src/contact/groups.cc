@@ -18,7 +18,40 @@ void Unite(int* parent, int a, int b) {
   b = Find(parent, b);
   if (a == b) return;
   if (a < b) std::swap(a, b);
-  parent[a] = b;  // the lowest index is the root: deterministic group order
+  parent[a] = b;  // the lowest index is the root, whatever the order of the unions
+}
+
+// whether data.runs is the index of the contact list: consecutive runs that cover it exactly
+bool RunsCoverList(const Data& data) {
+  int next = 0;
+  for (int r = 0; r < data.nruns; ++r) {
+    const PairRun& run = data.runs[r];
+    if (run.begin != next || run.count < 1) return false;
+    next += run.count;
+  }
+  return next == data.ncontact;
+}
+
+// calls f(body_a, body_b, begin, count) for each run of contacts of one pair of bodies, in list
+// order: from data.runs when it indexes the list (as collision detection writes it), else from
+// the contacts themselves (a list written by hand), consecutive contacts of the same bodies
+template <typename F>
+void ForEachRun(const Data& data, bool indexed, F&& f) {
+  if (indexed) {
+    for (int r = 0; r < data.nruns; ++r) {
+      const PairRun& run = data.runs[r];
+      f(run.body_a, run.body_b, run.begin, run.count);
+    }
+    return;
+  }
+  const Contact* contacts = data.contacts.data();
+  for (int begin = 0; begin < data.ncontact;) {
+    const int a = contacts[begin].body_a, b = contacts[begin].body_b;
+    int end = begin + 1;
+    while (end < data.ncontact && contacts[end].body_a == a && contacts[end].body_b == b) ++end;
+    f(a, b, begin, end - begin);
+    begin = end;
+  }
 }
 
 }  // namespace
@@ -37,7 +70,7 @@ void Groups::Reserve(int nbody, int max_contacts) {
 void BuildGroups(Data& data, Groups& g) {
   const int nbody = static_cast<int>(data.bodies.size());
   const int ncontact = data.ncontact;
-  const Contact* contacts = data.contacts.data();
+  const bool indexed = RunsCoverList(data);
   int* parent = g.parent.data();
   int* count = g.count.data();
   int* body_group = data.body_group.data();
@@ -47,39 +80,37 @@ void BuildGroups(Data& data, Groups& g) {
   }
   // the points of one geom pair are contiguous and share their bodies: one union per run. Each
   // root is the lowest index of its component whatever the order of the unions.
-  int last_a = -2, last_b = -2;
-  for (int c = 0; c < ncontact; ++c) {
-    const int a = contacts[c].body_a, b = contacts[c].body_b;
-    if (a == last_a && b == last_b) continue;
-    last_a = a;
-    last_b = b;
+  ForEachRun(data, indexed, [parent, count](int a, int b, int, int) {
     if (a >= 0) count[a] = 1;
     if (b >= 0) count[b] = 1;
     if (a >= 0 && b >= 0) Unite(parent, a, b);
-  }
-  // number the groups by their root (the lowest body index), in body order: a body's root comes
-  // no later than the body, so its group is known by then. A body's slot is the number of bodies
-  // of its group before it, counted in body_start[k + 1] (zeroed as group k is made: the arrays'
-  // capacity is nbody + 1, their used part ngroup + 1)
+  });
+  // number the groups in the order of their first contacts in the list (its root's entry of
+  // body_group holds a group's number until every body has its own). Two threads take the list's
+  // pairs and the groups from the same ends, so that the contacts a thread writes in stage 2 are
+  // mostly those it reads in stages 3 to 5 (docs/decisions.md, "Groups in the order of the contact
+  // list"). A body's slot is the number of bodies of its group before it, counted in
+  // body_start[k + 1] (zeroed as group k is made: the arrays' capacity is nbody + 1, their used
+  // part ngroup + 1)
   int* body_start = g.body_start.data();
   int* contact_start = g.contact_start.data();
   int* slot = g.slot.data();
   int ngroup = 0;
+  for (int i = 0; i < nbody; ++i) body_group[i] = -1;
+  ForEachRun(data, indexed, [&](int a, int b, int, int) {
+    const int root = Find(parent, a >= 0 ? a : b);  // a contact has a dynamic body
+    if (body_group[root] >= 0) return;
+    body_group[root] = ngroup;
+    body_start[ngroup + 1] = 0;
+    contact_start[ngroup + 1] = 0;
+    ++ngroup;
+  });
   for (int i = 0; i < nbody; ++i) {
     if (count[i] == 0) {
-      body_group[i] = -1;
       slot[i] = -1;
       continue;
     }
-    const int root = Find(parent, i);
-    int k;
-    if (root == i) {
-      k = ngroup++;
-      body_start[k + 1] = 0;
-      contact_start[k + 1] = 0;
-    } else {
-      k = body_group[root];
-    }
+    const int k = body_group[Find(parent, i)];
     body_group[i] = k;
     slot[i] = body_start[k + 1]++;
   }
@@ -105,15 +136,20 @@ void BuildGroups(Data& data, Groups& g) {
   // contacts per group (counting sort keeps contact order inside a group); each contact's group
   // is its dynamic body's (contacts are only read here: the tick's second thread may be working
   // on other fields of them, ClassifyContacts)
-  const auto group_of = [contacts, body_group](int c) {
-    return body_group[contacts[c].body_a >= 0 ? contacts[c].body_a : contacts[c].body_b];
-  };
-  for (int c = 0; c < ncontact; ++c) ++contact_start[group_of(c) + 1];
+  const auto group_of = [body_group](int a, int b) { return body_group[a >= 0 ? a : b]; };
+  ForEachRun(data, indexed, [contact_start, &group_of](int a, int b, int, int n) {
+    contact_start[group_of(a, b) + 1] += n;
+  });
   for (int k = 0; k < ngroup; ++k) {
     contact_start[k + 1] += contact_start[k];
     count[k] = contact_start[k];
   }
-  for (int c = 0; c < ncontact; ++c) g.contacts[count[group_of(c)]++] = c;
+  int* out = g.contacts.data();
+  ForEachRun(data, indexed, [out, count, &group_of](int a, int b, int begin, int n) {
+    int& next = count[group_of(a, b)];
+    for (int i = 0; i < n; ++i) out[next + i] = begin + i;
+    next += n;
+  });
 }
 
 }  // namespace rigidtouch::contact

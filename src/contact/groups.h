@@ -26,8 +26,11 @@ struct Groups {
 };
 
 /// Builds the groups of data.contacts[0 .. ncontact) and writes data.body_group; reads the
-/// contacts' bodies only (ClassifyContacts writes each contact's group). Bodies in no contact get
-/// group -1. Order is deterministic (by lowest body).
+/// contacts' bodies only (ClassifyContacts writes each contact's group), from the list's runs
+/// (data.runs, which collision detection writes with the list) when they cover it exactly, and
+/// from the contacts themselves otherwise (a list written by hand). Bodies in no contact get group
+/// -1. Groups are numbered in the order of their first contacts in the list; a group's bodies and
+/// contacts are in index order.
 void BuildGroups(Data& data, Groups& groups);
 
 }  // namespace rigidtouch::contact

@@ -22,6 +22,7 @@ void RememberPrevious(Data& data, CollisionScratch& s) {
   std::swap(data.contacts, data.previous);
   data.nprevious = data.ncontact;
   data.ncontact = 0;
+  data.nruns = 0;
   const Contact* prev = data.previous.data();
   const int nprev = data.nprevious;
   // calls f(geom_a, geom_b, begin, count) for each run of one geom pair, in list order
@@ -48,11 +49,11 @@ void RememberPrevious(Data& data, CollisionScratch& s) {
     fill[g] = start[g];
   }
   PairRun* runs = data.previous_runs.data();
-  for_each_run([&start, &fill, runs](int ga, int gb, int begin, int count) {
+  for_each_run([&start, &fill, runs, prev](int ga, int gb, int begin, int count) {
     // insertion into geom ga's bucket, sorted by the second geom
     int j = fill[ga]++;
     for (; j > start[ga] && runs[j - 1].geom_b > gb; --j) runs[j] = runs[j - 1];
-    runs[j] = PairRun{ga, gb, begin, count};
+    runs[j] = PairRun{ga, gb, prev[begin].body_a, prev[begin].body_b, begin, count};
   });
   data.nprevious_runs = nruns;
 }
@@ -125,9 +126,12 @@ void AssignNewIds(Data& data, int begin, int end) {
   }
 }
 
-// MatchPair and AssignNewIds on one thread
+// MatchPair and AssignNewIds on one thread, and the pair's run appended to data.runs
 void MatchAndNumber(Data& data, const CollisionScratch& s, int begin, int end) {
   if (MatchPair(data, s, begin, end)) AssignNewIds(data, begin, end);
+  const Contact& first = data.contacts[begin];
+  data.runs[data.nruns++] =
+      PairRun{first.geom_a, first.geom_b, first.body_a, first.body_b, begin, end - begin};
 }
 
 // what the narrow phase makes of a geom of this kind at this pose
@@ -200,6 +204,7 @@ void CollisionScratch::Reset(const Model& model) {
 void CollisionScratch::ReserveTwoThreads(const Model& model) {
   pair_points.assign(broadphase.pairs.size(), PairPoints{});
   pair_first.assign(broadphase.pairs.size(), 0);
+  pair_run.assign(broadphase.pairs.size(), 0);
   pair_new.assign(broadphase.pairs.size(), 0);
   for (auto& points : thread_points) points.assign(model.max_contacts + kMaxPairContacts, {});
 }
@@ -382,7 +387,9 @@ void CollidePair(const Model& model, Data& data, CollisionScratch& s, int g1, in
 void NarrowRange(const Model& model, CollisionScratch& s, int begin, int end, int t) {
   ContactPoint* points = s.thread_points[t].data();
   const int capacity = static_cast<int>(s.thread_points[t].size());
-  int& used = s.thread_used[t];
+  // counted here and stored once: the two threads' counters share a cache line, and a store per
+  // pair moved it between the cores at every pair
+  int used = s.thread_used[t];
   for (int k = begin; k < end; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const GeomModel& a = model.geoms[g1];
@@ -403,6 +410,7 @@ void NarrowRange(const Model& model, CollisionScratch& s, int begin, int end, in
       used += out.count;
     }
   }
+  s.thread_used[t] = used;
 }
 
 // pairs per block the two threads take from the pair list
@@ -453,6 +461,7 @@ void WriteRange(const Model& model, Data& data, CollisionScratch& s, int begin, 
       WriteContact(data.contacts[first + i], w, p[i].p_W, p[i].n_W, p[i].depth_m);
     }
     s.pair_new[k] = MatchPair(data, s, first, first + found.count) ? 1 : 0;
+    data.runs[s.pair_run[k]] = PairRun{w.ga, w.gb, w.body_a, w.body_b, first, found.count};
   }
 }
 
@@ -471,20 +480,23 @@ void RunWriteJob(void* context) {
   WriteBlocks(*job->model, *job->data, *job->scratch, 1);
 }
 
-// the first contact of each pair in the contact list, as one thread writing in pair order would
-// place it, and the contacts' count in *total; false if some pair is left to the tick's thread
-// (its count is not known yet) or the points do not all fit (the one-thread path then counts the
-// warning and drops the same points)
-bool WritePlaces(const Data& data, CollisionScratch& s, int* total) {
+// the first contact and the run of each pair in the contact list, as one thread writing in pair
+// order would place them, and the contacts' and runs' counts in *total and *nruns; false if some
+// pair is left to the tick's thread (its count is not known yet) or the points do not all fit (the
+// one-thread path then counts the warning and drops the same points)
+bool WritePlaces(const Data& data, CollisionScratch& s, int* total, int* nruns) {
   const int npair = s.broadphase.npair;
-  int next = data.ncontact;
+  int next = data.ncontact, run = data.nruns;
   for (int k = 0; k < npair; ++k) {
     const int count = s.pair_points[k].count;
     if (count < 0) return false;
     s.pair_first[k] = next;
+    s.pair_run[k] = run;
     next += count;
+    run += count > 0 ? 1 : 0;
   }
   *total = next;
+  *nruns = run;
   return next <= static_cast<int>(data.contacts.size());
 }
 
@@ -520,8 +532,8 @@ bool FindPairsAndNarrow(const Model& model, Data& data, CollisionScratch& s, Wor
 void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
   const int npair = s.broadphase.npair;
   const int nblock = (npair + kPairBlock - 1) / kPairBlock;
-  int total = 0;
-  if (WritePlaces(data, s, &total)) {
+  int total = 0, nruns = 0;
+  if (WritePlaces(data, s, &total, &nruns)) {
     s.pair_blocks.Reset(0, nblock);
     worker.Post(&RunWriteJob, &s.job);
     WriteBlocks(model, data, s, 0);
@@ -532,6 +544,7 @@ void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Work
       }
     }
     data.ncontact = total;
+    data.nruns = nruns;
     ++s.written_on_two_threads;
     return;
   }

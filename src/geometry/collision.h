@@ -71,8 +71,10 @@ struct CollisionScratch {
   std::array<int, 2> thread_used{};                        // points in each buffer this tick
   TwoEndedRange pair_blocks;                               // blocks of kPairBlock pairs
   // when the two threads also write the contacts (every pair's count known, and all fit): each
-  // pair's first contact in the list, and whether it has a new one (numbered afterwards)
+  // pair's first contact and its run in the list (data.runs; a pair without points has none), and
+  // whether it has a new one (numbered afterwards)
   std::vector<int> pair_first;          // (pair capacity)
+  std::vector<int> pair_run;            // (pair capacity)
   std::vector<unsigned char> pair_new;  // (pair capacity)
   long written_on_two_threads = 0;      // ticks whose contacts both threads wrote, since made
   struct NarrowJob {

@@ -44,6 +44,7 @@ Data MakeData(const Model& model) {
   data.R_WB.resize(nbody);
   data.contacts.resize(ncap);
   data.previous.resize(ncap);
+  data.runs.resize(ncap);
   data.previous_runs.resize(ncap);
   data.body_group.assign(nbody, -1);
   data.window.resize(nbody);
@@ -66,6 +67,7 @@ void ResetState(const Model& model, Data& data) {
   std::copy(model.initial.begin(), model.initial.end(), data.bodies.begin());
   dynamics::ComputeKinematics(data);
   data.ncontact = 0;
+  data.nruns = 0;
   data.nprevious = 0;
   data.nprevious_runs = 0;
   data.next_contact_id = 0;

@@ -186,6 +186,29 @@ bool SameKeptFactors(const Data& d1, const Data& d2) {
   return true;
 }
 
+// data.runs indexes the contact list: consecutive runs that cover it, each the points of one geom
+// pair (one run per pair) with that pair's geoms and bodies
+void ExpectRunsIndexTheList(const Data& d, int step) {
+  int next = 0;
+  for (int r = 0; r < d.nruns; ++r) {
+    const PairRun& run = d.runs[r];
+    ASSERT_EQ(run.begin, next) << "step " << step << " run " << r;
+    ASSERT_GE(run.count, 1) << "step " << step << " run " << r;
+    for (int c = run.begin; c < run.begin + run.count; ++c) {
+      const Contact& con = d.contacts[c];
+      ASSERT_TRUE(con.geom_a == run.geom_a && con.geom_b == run.geom_b &&
+                  con.body_a == run.body_a && con.body_b == run.body_b)
+          << "step " << step << " run " << r << " contact " << c;
+    }
+    if (r > 0) {
+      ASSERT_FALSE(d.runs[r - 1].geom_a == run.geom_a && d.runs[r - 1].geom_b == run.geom_b)
+          << "step " << step << " run " << r;
+    }
+    next += run.count;
+  }
+  ASSERT_EQ(next, d.ncontact) << "step " << step;
+}
+
 // one scene file loaded and made with one and with two threads
 struct OneAndTwoThreads {
   static Model Load(const std::string& path, int threads) {
@@ -202,7 +225,7 @@ struct OneAndTwoThreads {
 // a 288-box pile (more than the 256 boxes from which the worker shares the broad phase, and the
 // 32 pairs from which it shares the narrow phase) settling under the tool pushed down: every
 // tick's contact list with two threads is the one-thread list, bit for bit (points, normals,
-// depths, ids, matching, forces), and so are the body states
+// depths, ids, matching, forces, and its index of runs), and so are the body states
 TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
   OneAndTwoThreads t(test::WriteTempFile("pile_threads.xml", test::PileXml(6, 6, 8, 0.051, 0.45)));
   const Model &m1 = t.m1, &m2 = t.m2;
@@ -233,6 +256,9 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
           << "step " << s << " contact " << k;
     }
     ASSERT_EQ(d1.next_contact_id, d2.next_contact_id) << "step " << s;
+    // the list's index of runs, which the groups are built from, on either path
+    ExpectRunsIndexTheList(d1, s);
+    ExpectRunsIndexTheList(d2, s);
   }
   // the contacts were written and matched on the two threads in the steps with enough pairs
   EXPECT_GT(d2.workspace->collision.written_on_two_threads, 100);
