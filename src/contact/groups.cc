@@ -1,5 +1,7 @@
 #include "contact/groups.h"
 
+#include "geometry/collision.h"
+
 #include <utility>
 
 namespace rigidtouch::contact {
@@ -19,17 +21,6 @@ void Unite(int* parent, int a, int b) {
   if (a == b) return;
   if (a < b) std::swap(a, b);
   parent[a] = b;  // the lowest index is the root, whatever the order of the unions
-}
-
-// whether data.runs is the index of the contact list: consecutive runs that cover it exactly
-bool RunsCoverList(const Data& data) {
-  int next = 0;
-  for (int r = 0; r < data.nruns; ++r) {
-    const PairRun& run = data.runs[r];
-    if (run.begin != next || run.count < 1) return false;
-    next += run.count;
-  }
-  return next == data.ncontact;
 }
 
 // calls f(body_a, body_b, begin, count) for each run of contacts of one pair of bodies, in list
@@ -70,7 +61,7 @@ void Groups::Reserve(int nbody, int max_contacts) {
 void BuildGroups(Data& data, Groups& g) {
   const int nbody = static_cast<int>(data.bodies.size());
   const int ncontact = data.ncontact;
-  const bool indexed = RunsCoverList(data);
+  const bool indexed = geometry::RunsIndexList(data);
   int* parent = g.parent.data();
   int* count = g.count.data();
   int* body_group = data.body_group.data();

@@ -26,8 +26,10 @@
 namespace rigidtouch::dynamics {
 
 /// Scratch for one group's solve, sized once for the largest allowed group; reused every tick:
-/// the units' own scratch (block Cholesky, assembly, lagged factor) and the solve's counter.
-struct GroupSolverScratch {
+/// the units' own scratch (block Cholesky, assembly, lagged factor) and the solve's counter. On its
+/// own cache lines: the two threads' scratches sit side by side (VelocityScratch), and each
+/// thread's counters would otherwise share a line with what the other reads.
+struct alignas(64) GroupSolverScratch {
   int max_bodies = 0, max_contacts = 0;
   BlockCholesky factor;    // ordering, fill-in analysis and factor over the group's bodies
   GroupAssembly assembly;  // structure, patches, right-hand side and solution

@@ -17,21 +17,29 @@ namespace {
 // their geom pairs are indexed for MatchPair: data.previous_runs sorted by pair, the runs whose
 // first geom is g at previous_runs[run_start[g] .. run_start[g + 1]). A counting sort on the first
 // geom replaces a comparison sort; DetectContacts writes each geom pair in one run at most, so
-// the order is the one a sort by pair gives.
+// the order is the one a sort by pair gives. The runs are last tick's data.runs when they index
+// its list (RunsIndexList), else found in the list.
 void RememberPrevious(Data& data, CollisionScratch& s) {
+  const bool indexed = RunsIndexList(data);
+  const int nlast = data.nruns;
   std::swap(data.contacts, data.previous);
   data.nprevious = data.ncontact;
   data.ncontact = 0;
   data.nruns = 0;
   const Contact* prev = data.previous.data();
   const int nprev = data.nprevious;
-  // calls f(geom_a, geom_b, begin, count) for each run of one geom pair, in list order
-  auto for_each_run = [prev, nprev](auto&& f) {
+  const PairRun* last = data.runs.data();  // written again only after the index is made
+  // calls f(run) for each run of one geom pair, in list order
+  auto for_each_run = [indexed, last, nlast, prev, nprev](auto&& f) {
+    if (indexed) {
+      for (int r = 0; r < nlast; ++r) f(last[r]);
+      return;
+    }
     for (int begin = 0; begin < nprev;) {
-      const int ga = prev[begin].geom_a, gb = prev[begin].geom_b;
+      const Contact& c = prev[begin];
       int end = begin + 1;
-      while (end < nprev && prev[end].geom_a == ga && prev[end].geom_b == gb) ++end;
-      f(ga, gb, begin, end - begin);
+      while (end < nprev && prev[end].geom_a == c.geom_a && prev[end].geom_b == c.geom_b) ++end;
+      f(PairRun{c.geom_a, c.geom_b, c.body_a, c.body_b, begin, end - begin});
       begin = end;
     }
   };
@@ -39,8 +47,8 @@ void RememberPrevious(Data& data, CollisionScratch& s) {
   std::vector<int>& fill = s.run_fill;
   std::fill(start.begin(), start.end(), 0);
   int nruns = 0;
-  for_each_run([&start, &nruns](int ga, int, int, int) {
-    ++start[ga + 1];
+  for_each_run([&start, &nruns](const PairRun& run) {
+    ++start[run.geom_a + 1];
     ++nruns;
   });
   const int ngeom = static_cast<int>(fill.size());
@@ -49,11 +57,12 @@ void RememberPrevious(Data& data, CollisionScratch& s) {
     fill[g] = start[g];
   }
   PairRun* runs = data.previous_runs.data();
-  for_each_run([&start, &fill, runs, prev](int ga, int gb, int begin, int count) {
-    // insertion into geom ga's bucket, sorted by the second geom
+  for_each_run([&start, &fill, runs](const PairRun& run) {
+    // insertion into its first geom's bucket, sorted by the second geom
+    const int ga = run.geom_a;
     int j = fill[ga]++;
-    for (; j > start[ga] && runs[j - 1].geom_b > gb; --j) runs[j] = runs[j - 1];
-    runs[j] = PairRun{ga, gb, prev[begin].body_a, prev[begin].body_b, begin, count};
+    for (; j > start[ga] && runs[j - 1].geom_b > run.geom_b; --j) runs[j] = runs[j - 1];
+    runs[j] = run;
   });
   data.nprevious_runs = nruns;
 }
@@ -565,6 +574,16 @@ void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Work
 }
 
 }  // namespace
+
+bool RunsIndexList(const Data& data) {
+  int next = 0;
+  for (int r = 0; r < data.nruns; ++r) {
+    const PairRun& run = data.runs[r];
+    if (run.begin != next || run.count < 1) return false;
+    next += run.count;
+  }
+  return next == data.ncontact;
+}
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s, Worker* worker) {
   if (worker != nullptr) {

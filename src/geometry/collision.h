@@ -103,13 +103,18 @@ struct CollisionScratch {
   ~CollisionScratch();
 };
 
+/// Whether data.runs indexes data.contacts: consecutive runs of at least one point each that
+/// cover contacts[0 .. ncontact) exactly, as DetectContacts writes them (a list written by hand
+/// has none). Only the runs are read.
+bool RunsIndexList(const Data& data);
+
 /// Detects contacts at the poses in `data.bodies` into data.contacts (first data.ncontact valid,
-/// the points of one geom pair contiguous), matching each to the contacts data.contacts held
-/// before the call (they become data.previous) to keep ids and friction anchors and to mark new
-/// contacts. Reads the bodies' rotations from data.R_WB (the kinematics stage). Never allocates or
-/// throws; a full contact list counts Warning::kContactFull. With a worker (Model::threads 2,
-/// buffers sized by ReserveTwoThreads) the two threads share the narrow phase; the contacts are
-/// the same, bit for bit.
+/// the points of one geom pair contiguous, and indexed by data.runs), matching each to the contacts
+/// data.contacts held before the call (they become data.previous) to keep ids and friction anchors
+/// and to mark new contacts. Reads the bodies' rotations from data.R_WB (the kinematics stage).
+/// Never allocates or throws; a full contact list counts Warning::kContactFull. With a worker
+/// (Model::threads 2, buffers sized by ReserveTwoThreads) the two threads share the narrow phase;
+/// the contacts are the same, bit for bit.
 void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch,
                     Worker* worker = nullptr);
 
