@@ -1,8 +1,8 @@
 #include "contact/groups.h"
 
-#include "geometry/collision.h"
-
 #include <utility>
+
+#include "geometry/collision.h"
 
 namespace rigidtouch::contact {
 namespace {

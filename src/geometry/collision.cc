@@ -135,9 +135,12 @@ void AssignNewIds(Data& data, int begin, int end) {
   }
 }
 
-// MatchPair and AssignNewIds on one thread, and the pair's run appended to data.runs
+// MatchPair and AssignNewIds on one thread, and the pair's run appended to data.runs (a buffer
+// smaller than the contact list's, in a Data not made by MakeData, leaves the index short:
+// RunsIndexList then says so, and the list is read instead)
 void MatchAndNumber(Data& data, const CollisionScratch& s, int begin, int end) {
   if (MatchPair(data, s, begin, end)) AssignNewIds(data, begin, end);
+  if (data.nruns >= static_cast<int>(data.runs.size())) return;
   const Contact& first = data.contacts[begin];
   data.runs[data.nruns++] =
       PairRun{first.geom_a, first.geom_b, first.body_a, first.body_b, begin, end - begin};
@@ -506,7 +509,8 @@ bool WritePlaces(const Data& data, CollisionScratch& s, int* total, int* nruns) 
   }
   *total = next;
   *nruns = run;
-  return next <= static_cast<int>(data.contacts.size());
+  return next <= static_cast<int>(data.contacts.size()) &&
+         run <= static_cast<int>(data.runs.size());
 }
 
 // fewer pairs than this are not worth the hand-off to the worker
@@ -576,6 +580,7 @@ void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Work
 }  // namespace
 
 bool RunsIndexList(const Data& data) {
+  if (data.nruns > static_cast<int>(data.runs.size())) return false;
   int next = 0;
   for (int r = 0; r < data.nruns; ++r) {
     const PairRun& run = data.runs[r];
