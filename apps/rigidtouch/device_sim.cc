@@ -71,6 +71,7 @@ void Run(const DeviceSimFlags& f) {
         return true;
       },
       &stop);
+  server.Release();  // the device stops pushing with the renderer's last command
   const nlohmann::json result = {{"loop", loop::ToJson(stats)},
                                  {"link", device::ToJson(server.counters())},
                                  {"energy_to_user_J", sim.energy_to_user_J()},

@@ -72,8 +72,15 @@ class HdDevice final : public rigidtouch::device::Device {
 };
 
 HDCallbackCode HDCALLBACK ServoTick(void* server) {
+  auto* s = static_cast<rigidtouch::device::UdpDeviceServer*>(server);
   hdBeginFrame(hdGetCurrentDevice());
-  static_cast<rigidtouch::device::UdpDeviceServer*>(server)->Step();
+  if (g_stop.load()) {
+    // the last servo tick: zero force, on the servo thread (the device holds its last command)
+    s->Release();
+    hdEndFrame(hdGetCurrentDevice());
+    return HD_CALLBACK_DONE;
+  }
+  s->Step();
   hdEndFrame(hdGetCurrentDevice());
   return HD_CALLBACK_CONTINUE;
 }
@@ -95,6 +102,7 @@ int main(int argc, char** argv) try {
       hdScheduleAsynchronous(ServoTick, &server, HD_MAX_SCHEDULER_PRIORITY);
   hdStartScheduler();
   while (!g_stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::this_thread::sleep_for(std::chrono::milliseconds(10));  // the servo tick's Release
   hdStopScheduler();
   hdUnschedule(tick);
   hdDisableDevice(handle);

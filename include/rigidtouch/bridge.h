@@ -141,7 +141,8 @@ struct UdpCounters {
   std::uint64_t test_dropped_incoming = 0;
   /// Datagrams not sent because of the test-only loss simulation.
   std::uint64_t test_dropped_outgoing = 0;
-  /// Server side: zero-force writes because there was no command yet or the watchdog tripped.
+  /// Server side: zero-force writes because there was no command yet, the watchdog tripped or
+  /// the server was released (Release).
   std::uint64_t fallback_writes = 0;
   /// Server side: Device::Read calls that returned valid = false.
   std::uint64_t invalid_device_states = 0;
@@ -182,7 +183,8 @@ struct UdpDeviceServerOptions {
 /// Serves one Device over UDP. Call Step once per device period (from the vendor's servo
 /// callback or a rate loop): it reads the device, sends its state to the session's peer, drains
 /// hellos and commands (only authenticated ones of the session; newest wins) and writes the
-/// newest command to the device with its force clamped to device.limits().max_force_N, or zero
+/// newest command to the device with its force clamped to device.limits().max_force_N (and the
+/// torque scaled with it), or zero
 /// force flagged safe-fallback when there is none yet or the watchdog has tripped. A session
 /// starts with an authenticated hello; while it is live, hellos from other addresses are
 /// refused. Step never blocks, allocates or throws. Not thread-safe: call every member from the
@@ -204,6 +206,11 @@ class UdpDeviceServer {
 
   /// Runs one device period (see the class comment).
   void Step();
+  /// Writes the zero wrench, flagged safe-fallback, to the device and drops the newest command,
+  /// so that later Steps write zero until the renderer sends a new one. Call it from the thread
+  /// that drives Step when the bridge stops (after the last Step): a device holds its last
+  /// command, and the renderer's may still be a push into a wall.
+  void Release();
 
   /// Returns the counters since construction.
   const UdpCounters& counters() const;

@@ -26,7 +26,9 @@ struct DeviceLimits {
 
 /// A haptic device. Implementations never throw from Read, Write or EndPeriod: errors are
 /// reported through DeviceState::valid and counters of the implementation. The driver calls
-/// them from one thread, once each per period, in the order Read, Write, EndPeriod.
+/// them from one thread, once each per period, in the order Read, Write, EndPeriod; when it stops
+/// it calls Write once more, after the last EndPeriod, with the zero wrench (flagged
+/// safe-fallback), so that a device that holds its last command stops pushing.
 class Device {
  public:
   virtual ~Device() = default;

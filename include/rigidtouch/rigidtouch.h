@@ -44,6 +44,12 @@ Data MakeData(const Model& model);
 /// Puts `data` back to the initial state; keeps its buffers.
 void ResetData(const Model& model, Data& data);
 
+/// Whether `data` was made by MakeData for this model: one loaded from the same file by the same
+/// LoadModel call (or a copy of it, however configured since), with the sizes MakeData used.
+/// Tick, ResetData and KineticEnergy assume it and do not check (a Data of another scene would
+/// be read and written past its buffers); the Python module checks it and raises.
+bool DataFitsModel(const Model& model, const Data& data);
+
 /// Input of one tick.
 struct TickInput {
   DeviceState device;  // ignored when model.device.coupling is kNone

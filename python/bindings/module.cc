@@ -406,6 +406,15 @@ void DefineData(py::module_& m) {
           "warnings counted so far {name: ticks}");
 }
 
+// a Data of another scene would be read and written past its buffers: refused before any tick
+void RequireDataOf(const Model& model, const Data& data) {
+  if (!DataFitsModel(model, data)) {
+    throw py::value_error(
+        "data was not made by make_data for this model (another scene, or another load of it): "
+        "call make_data(model)");
+  }
+}
+
 // loading, configuring and stepping a scene
 void DefineTick(py::module_& m) {
   m.def(
@@ -431,12 +440,20 @@ void DefineTick(py::module_& m) {
   m.def(
       "make_data", [](const Model& model) { return MakeData(model); }, "model"_a,
       "Allocates all state of `model`, at its initial state.");
-  m.def("reset_data", &ResetData, "model"_a, "data"_a,
-        "Puts `data` back to the initial state (keeps its buffers, so views stay valid).");
+  m.def(
+      "reset_data",
+      [](const Model& model, Data& data) {
+        RequireDataOf(model, data);
+        ResetData(model, data);
+      },
+      "model"_a, "data"_a,
+      "Puts `data` back to the initial state (keeps its buffers, so views stay valid). Raises "
+      "ValueError if `data` was not made for `model`.");
   m.def(
       "tick",
       [](const Model& model, Data& data, std::optional<py::dict> device_state,
          std::optional<Vec3> tool_force_N, std::optional<Vec3> tool_torque_Nm) {
+        RequireDataOf(model, data);
         TickInput input;
         if (device_state) input.device = MakeDeviceState(*device_state);
         if (tool_force_N) input.tool_wrench.force_N = *tool_force_N;
@@ -450,11 +467,14 @@ void DefineTick(py::module_& m) {
       "sequence}. device_state: a dict of position_m [m], velocity_mps [m/s], "
       "angular_velocity_radps [rad/s], orientation_wxyz, time_s [s], sequence, valid, fresh "
       "(used unless the coupling is none); tool_force_N [N] and tool_torque_Nm [N m]: the user "
-      "wrench on the tool (coupling none). Never raises: problems are counted in data.warnings.");
+      "wrench on the tool (coupling none). Raises ValueError for a data not made for `model` or "
+      "a malformed device_state, before the tick; the tick itself never raises: problems are "
+      "counted in data.warnings.");
   m.def(
       "run",
       [](const Model& model, Data& data, long steps, std::optional<Vec3> tool_force_N) {
         if (steps < 0) throw py::value_error("steps = " + std::to_string(steps) + ": valid >= 0");
+        RequireDataOf(model, data);
         TickInput input;
         if (tool_force_N) input.tool_wrench.force_N = *tool_force_N;
         py::gil_scoped_release release;
@@ -463,8 +483,13 @@ void DefineTick(py::module_& m) {
       "model"_a, "data"_a, "steps"_a, "tool_force_N"_a = py::none(),
       "Runs `steps` ticks with a constant user force on the tool [N] (coupling none), without "
       "the GIL, as `rigidtouch simulate` does.");
-  m.def("kinetic_energy", &KineticEnergy, "model"_a, "data"_a,
-        "Total kinetic energy of the dynamic bodies [J].");
+  m.def(
+      "kinetic_energy",
+      [](const Model& model, const Data& data) {
+        RequireDataOf(model, data);
+        return KineticEnergy(model, data);
+      },
+      "model"_a, "data"_a, "Total kinetic energy of the dynamic bodies [J].");
 }
 
 // the simulated hand and device

@@ -129,6 +129,25 @@ def test_bad_input_raises_value_error_naming_it():
     assert model.contact.stiffness_N_per_m == 3000.0 and model.render.renderer == "impulse"
 
 
+def test_data_of_another_model_is_refused_before_the_tick():
+    # a Data sized for the wall, stepped with the stack's model, was read and written past its
+    # buffers (a crash); now every call that takes both refuses it
+    wall = rt.load_model(os.path.join(ROOT, "scenes", "wall.xml"))
+    stack = rt.load_model(STACK)
+    wall_data = rt.make_data(wall)
+    for call in (lambda: rt.tick(stack, wall_data), lambda: rt.run(stack, wall_data, 1),
+                 lambda: rt.reset_data(stack, wall_data),
+                 lambda: rt.kinetic_energy(stack, wall_data)):
+        with pytest.raises(ValueError, match="not made by make_data for this model"):
+            call()
+    # another load of the same file is another model too; the data's own model still works
+    with pytest.raises(ValueError, match="make_data"):
+        rt.tick(rt.load_model(os.path.join(ROOT, "scenes", "wall.xml")), wall_data)
+    rt.configure(wall, contact={"stiffness_N_per_m": 3000.0})
+    rt.tick(wall, wall_data)
+    assert wall_data.step == 1
+
+
 def test_tap_equals_the_cli_tap(tmp_path):
     # the same flags through the same settings resolution: the same run, to the last bit
     trace_csv = tmp_path / "trace.csv"

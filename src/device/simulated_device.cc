@@ -8,6 +8,7 @@
 #include <string>
 
 #include "io/normal_deviate.h"
+#include "render/output.h"
 
 namespace rigidtouch::device {
 
@@ -234,11 +235,9 @@ void SimulatedDevice::Write(const DeviceCommand& command) {
     displayed_force_N_.setZero();
     return;
   }
-  const double max_N = limits_.max_force_N;
-  const double norm_N = force_N.norm();
-  if (max_N > 0.0 && norm_N > max_N) {
-    // keep the direction: clipping per axis would turn the force
-    force_N *= max_N / norm_N;
+  // keep the direction (clipping per axis would turn the force), and round down to the limit
+  Vec3 torque_Nm = command.torque_Nm;
+  if (render::LimitForce(limits_.max_force_N, force_N, torque_Nm)) {
     last_clipped_ = true;
     ++clipped_count_;
   }

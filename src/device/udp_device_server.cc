@@ -8,6 +8,7 @@
 #include "device/udp_link.h"
 #include "device/udp_protocol.h"
 #include "device/udp_socket.h"
+#include "render/output.h"
 
 namespace rigidtouch::device {
 namespace {
@@ -54,6 +55,7 @@ struct UdpDeviceServer::Impl {
         loss(options.test_loss) {}
 
   void Step();
+  void Release();
   void SendState();
   void DrainDatagrams(std::int64_t now_ns);
   void HandleHello(const PacketHeader& header, const UdpEndpoint& source, std::int64_t now_ns);
@@ -96,6 +98,9 @@ UdpDeviceServer& UdpDeviceServer::operator=(UdpDeviceServer&&) noexcept = defaul
 void UdpDeviceServer::Step() {
   impl_->Step();
 }
+void UdpDeviceServer::Release() {
+  impl_->Release();
+}
 const UdpCounters& UdpDeviceServer::counters() const {
   return impl_->counters;
 }
@@ -133,6 +138,16 @@ void UdpDeviceServer::Impl::Step() {
     device.Write(command);
     return;
   }
+  DeviceCommand zero;
+  zero.sequence = sequence;
+  zero.safe_fallback = true;
+  device.Write(zero);
+  ++counters.fallback_writes;
+}
+
+void UdpDeviceServer::Impl::Release() {
+  // the command is dropped: Step writes zero until the renderer sends a new one
+  has_command = false;
   DeviceCommand zero;
   zero.sequence = sequence;
   zero.safe_fallback = true;
@@ -238,12 +253,10 @@ void UdpDeviceServer::Impl::HandleCommand(const PacketHeader& header, const UdpE
     ++counters.stale;
     return;
   }
-  // the bridge knows the hardware's limit; the renderer's own clipping is not relied on.
-  // stableNorm: a finite force near 1e300 must not overflow to an infinite norm
-  const double max_force_N = device.limits().max_force_N;
-  const double norm_N = decoded.force_N.stableNorm();
-  if (max_force_N > 0.0 && norm_N > max_force_N) {
-    decoded.force_N *= max_force_N / norm_N;
+  // the bridge knows the hardware's limit; the renderer's own clipping is not relied on. The
+  // renderer's own clip (overflow-safe, rounded down to the limit, the torque scaled with the
+  // force): a plain scale by limit / norm can land one rounding above the limit
+  if (render::LimitForce(device.limits().max_force_N, decoded.force_N, decoded.torque_Nm)) {
     decoded.clipped = true;
     ++counters.clamped_commands;
   }

@@ -106,6 +106,17 @@ class HapticStep {
     return !device_.Ended();
   }
 
+  // after the last period: the zero wrench, flagged safe-fallback, answering the last state read
+  // (so that a bridge does not drop it as older than the last command). A device holds its last
+  // command until the next Write, and a bridge until its watchdog trips: without this, the last
+  // tick's force would go on pushing the hand after the loop stopped.
+  void Release() {
+    DeviceCommand zero;
+    zero.sequence = input_.device.sequence;
+    zero.safe_fallback = true;
+    device_.Write(zero);
+  }
+
  private:
   const Model& model_;
   Data& data_;
@@ -136,6 +147,7 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
   RateLoop loop(with_worker);
   HapticStep step(model, data, device, 1.0 / options.rate_hz, traces, records, observer, r);
   r.timing = loop.Run([&step](std::int64_t, double) { return step(); }, stop);
+  step.Release();
   return r;
 }
 
@@ -154,6 +166,7 @@ HapticLoopResult RunHapticTicks(const Model& model, Data& data, device::Device& 
     ++r.timing.ticks;
     if (!step()) break;
   }
+  step.Release();
   r.timing.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (r.timing.elapsed_s > 0.0) {
     r.timing.achieved_rate_hz = static_cast<double>(r.timing.ticks) / r.timing.elapsed_s;

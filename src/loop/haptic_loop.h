@@ -53,6 +53,11 @@ class TickObserver {
 /// and device.limits().max_force_N (read every tick: a bridge may announce its limits late),
 /// setting DeviceCommand::clipped and Warning::kForceClipped.
 ///
+/// When it stops (the duration, `*stop`, the device's end), the loop writes one more command
+/// after the last EndPeriod: the zero wrench, flagged safe-fallback, with the last state's
+/// sequence, so that the device does not go on displaying the last tick's force. Over the UDP
+/// bridge that is one datagram; the bridge's watchdog zeroes the force if it is lost.
+///
 /// `records`, when given, receives every tick's device state (as read, `fresh` as decided) and
 /// command (as written), with the device's annotations, for `--record` (never blocks).
 HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& device,
@@ -63,8 +68,8 @@ HapticLoopResult RunHapticLoop(const Model& model, Data& data, device::Device& d
 /// Runs `ticks` periods of the same step as RunHapticLoop back to back, without waiting for
 /// deadlines (as fast as they compute; a replayed device, offline), or fewer if the device ends
 /// or `*stop` is set. The device still ends each
-/// period with EndPeriod(1 / rate_hz). Timing statistics hold only ticks, elapsed_s and the
-/// achieved rate.
+/// period with EndPeriod(1 / rate_hz), and gets the zero wrench last, as from RunHapticLoop.
+/// Timing statistics hold only ticks, elapsed_s and the achieved rate.
 HapticLoopResult RunHapticTicks(const Model& model, Data& data, device::Device& device,
                                 double rate_hz, std::int64_t ticks, const std::atomic<bool>* stop,
                                 TraceQueue* traces = nullptr, RecordQueue* records = nullptr,

@@ -55,12 +55,29 @@ Data MakeData(const Model& model) {
   ws.contact.Reserve(nbody, ncap);
   ws.velocity.Reserve(nbody, ncap, model.max_group_bodies, model.threads);
   ws.impulse.Reserve(model);
+  ws.made_for = model.collision;
   if (model.threads == 2) {
     ws.collision.ReserveTwoThreads(model);
     ws.worker = std::make_unique<geometry::Worker>();
   }
   ResetData(model, data);
   return data;
+}
+
+bool DataFitsModel(const Model& model, const Data& data) {
+  if (data.workspace == nullptr) return false;
+  const std::weak_ptr<mjModel_>& made_for = data.workspace->made_for;
+  // the same compiled scene: neither owner orders before the other (both empty for a model
+  // built without one); an expired one is another scene, even at the same address
+  const bool same_scene = !made_for.owner_before(model.collision) &&
+                          !model.collision.owner_before(made_for) &&
+                          (model.collision == nullptr || !made_for.expired());
+  const std::size_t nbody = model.bodies.size();
+  const auto ncap = static_cast<std::size_t>(model.max_contacts);
+  return same_scene && data.bodies.size() == nbody && data.window.size() == nbody &&
+         data.contacts.size() == ncap && data.previous.size() == ncap &&
+         data.workspace->collision.poses.size() == model.geoms.size() &&
+         model.initial.size() == nbody;
 }
 
 void ResetState(const Model& model, Data& data) {

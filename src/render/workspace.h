@@ -21,6 +21,9 @@ struct Workspace {
   // Model::threads 2: the second thread, shared by stages 2 (narrow phase) and 5 (group solves);
   // null with one thread
   std::unique_ptr<geometry::Worker> worker;
+  // the compiled scene of the model MakeData sized everything for (DataFitsModel); not owned, so
+  // that a Data does not keep its model's MuJoCo model alive
+  std::weak_ptr<mjModel_> made_for;
 };
 
 /// Puts the simulated state back to the model's initial state (bodies, contacts and their

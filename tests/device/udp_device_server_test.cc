@@ -5,6 +5,7 @@
 
 #include <array>
 #include <chrono>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -192,7 +193,9 @@ TEST(UdpDeviceServer, EveryCommandIsClampedToTheDevicesLimit) {
   ASSERT_TRUE(client.Handshake(server, 1));
   client.Command(server, 1, -1000.0);  // the injected 1000 N of the review
   StepUntilReceived(server, 2);
-  EXPECT_EQ(device.last.force_N, Vec3(-3.0, 0.0, 0.0));
+  EXPECT_NEAR(device.last.force_N.x(), -3.0, 1e-12);
+  EXPECT_LE(device.last.force_N.norm(), 3.0);
+  EXPECT_EQ(device.last.force_N.tail<2>(), Eigen::Vector2d::Zero());
   EXPECT_TRUE(device.last.clipped);
   client.Command(server, 2, 1e300);  // finite, but its squared norm is not
   StepUntilReceived(server, 3);
@@ -202,6 +205,63 @@ TEST(UdpDeviceServer, EveryCommandIsClampedToTheDevicesLimit) {
   EXPECT_EQ(device.last.force_N.x(), 2.5);
   EXPECT_FALSE(device.last.clipped);
   EXPECT_EQ(server.counters().clamped_commands, 2u);
+}
+
+// the clamp lands at or below the limit, never a rounding above it (a plain scale by
+// limit / norm did for about a third of these), and scales the torque by the same factor
+TEST(UdpDeviceServer, TheClampNeverEndsAboveTheLimitAndScalesTheTorque) {
+  constexpr double kLimit_N = 3.3;
+  FakeDevice device(kLimit_N);
+  UdpDeviceServer server(device, ServerOptions());
+  Client client;
+  ASSERT_TRUE(client.Handshake(server, 1));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  for (int k = 1; k <= 200; ++k) {
+    DeviceCommand command;
+    command.sequence = static_cast<std::uint64_t>(k);
+    command.force_N = Vec3(u(rng), u(rng), u(rng));
+    command.torque_Nm = Vec3(u(rng), u(rng), u(rng));
+    const PacketHeader header{PacketType::kCommand, client.client_nonce, client.server_nonce,
+                              ++client.sent_counter};
+    const CommandPacket packet = EncodeCommand(command, header, client.key);
+    client.Send(server, packet);
+    StepUntilReceived(server, static_cast<std::uint64_t>(k) + 1);
+    ASSERT_TRUE(device.last.clipped) << k;
+    EXPECT_LE(device.last.force_N.norm(), kLimit_N) << k;
+    EXPECT_NEAR(device.last.force_N.norm(), kLimit_N, 1e-12) << k;
+    const double scale = device.last.force_N.norm() / command.force_N.norm();
+    EXPECT_NEAR((device.last.torque_Nm - scale * command.torque_Nm).norm(), 0.0,
+                1e-12 * command.torque_Nm.norm())
+        << k;
+  }
+}
+
+// a stopping bridge leaves its device with zero force, and keeps it there until the renderer
+// sends a new command (not the last one it had, however fresh)
+TEST(UdpDeviceServer, ReleaseWritesZeroUntilANewCommand) {
+  FakeDevice device;
+  UdpDeviceServer server(device, ServerOptions());
+  Client client;
+  ASSERT_TRUE(client.Handshake(server, 1));
+  client.Command(server, 1, 2.0);
+  StepUntilReceived(server, 2);
+  ASSERT_EQ(device.last.force_N.x(), 2.0);
+  const std::uint64_t writes = device.writes;
+  server.Release();
+  EXPECT_EQ(device.writes, writes + 1);
+  EXPECT_EQ(device.last.force_N, Vec3::Zero());
+  EXPECT_TRUE(device.last.safe_fallback);
+  for (int k = 0; k < 5; ++k) {
+    server.Step();  // well within the watchdog
+    EXPECT_EQ(device.last.force_N, Vec3::Zero());
+    EXPECT_TRUE(device.last.safe_fallback);
+  }
+  EXPECT_FALSE(server.watchdog_tripped());
+  client.Command(server, 2, 3.0);
+  StepUntilReceived(server, 3);
+  EXPECT_EQ(device.last.force_N.x(), 3.0);
+  EXPECT_FALSE(device.last.safe_fallback);
 }
 
 TEST(UdpDeviceServer, AnotherAddressCannotTakeOverALiveSession) {

@@ -120,6 +120,7 @@ TEST(HapticLoop, CallsReadWriteEndPeriodOncePerTickInOrder) {
   ASSERT_GT(r.timing.ticks, 0);
   std::string expected;
   for (std::int64_t k = 0; k < r.timing.ticks; ++k) expected += "RWE";
+  expected += "W";  // the zero wrench after the last period
   EXPECT_EQ(dev.calls, expected);
   EXPECT_DOUBLE_EQ(dev.last_period_s, 1.0 / kRateHz);
   ASSERT_EQ(samples.size(), static_cast<std::size_t>(r.timing.ticks));
@@ -170,6 +171,55 @@ Model DirectWall(double max_force_N) {
   o.device.max_force_N = max_force_N;
   o.timestep_s = 1.0 / kRateHz;
   return LoadModel(std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml", o);
+}
+
+// a handle held 0.5 mm inside the shipped wall (the tool centre touches it at 5 mm), one new
+// reading per Read; remembers every command
+class PressingDevice final : public device::Device {
+ public:
+  PressingDevice() { commands.reserve(4000); }
+  DeviceState Read() override {
+    DeviceState s;
+    s.sequence = ++sequence_;
+    s.position_m = Vec3(0.0, 0.0, 0.0045);
+    return s;
+  }
+  void Write(const DeviceCommand& command) override {
+    if (commands.size() < commands.capacity()) commands.push_back(command);
+  }
+  const device::DeviceLimits& limits() const override { return limits_; }
+  std::uint64_t sequence() const { return sequence_; }
+
+  std::vector<DeviceCommand> commands;
+
+ private:
+  std::uint64_t sequence_ = 0;
+  device::DeviceLimits limits_;
+};
+
+// a device holds its last command: when the loop stops, paced or not, the hand pressing into the
+// wall gets the zero wrench last, flagged safe-fallback and answering the last state read (a
+// bridge drops a command older than its newest)
+TEST(HapticLoop, StopsWithTheZeroWrench) {
+  for (const bool paced : {false, true}) {
+    SCOPED_TRACE(paced ? "RunHapticLoop" : "RunHapticTicks");
+    const Model model = DirectWall(0.0);
+    Data data = MakeData(model);
+    PressingDevice dev;
+    const HapticLoopResult r = paced ? RunHapticLoop(model, data, dev, Options(0.05), nullptr)
+                                     : RunHapticTicks(model, data, dev, kRateHz, 50, nullptr);
+    const auto& c = dev.commands;
+    ASSERT_GE(r.timing.ticks, 2);
+    ASSERT_EQ(static_cast<std::int64_t>(c.size()), r.timing.ticks + 1);
+    const DeviceCommand& last_tick = c[c.size() - 2];
+    EXPECT_GT(last_tick.force_N.norm(), 0.1);  // pressing into the wall to the end
+    EXPECT_FALSE(last_tick.safe_fallback);
+    EXPECT_EQ(c.back().force_N, Vec3::Zero());
+    EXPECT_EQ(c.back().torque_Nm, Vec3::Zero());
+    EXPECT_TRUE(c.back().safe_fallback);
+    EXPECT_EQ(c.back().sequence, dev.sequence());
+    EXPECT_EQ(c.back().sequence, last_tick.sequence);
+  }
 }
 
 // the device stops updating during contact, in the middle of a train: from the last fresh
