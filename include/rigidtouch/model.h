@@ -181,9 +181,12 @@ struct Model {
   /// (docs/method.md, "Contact defaults from the scene"); 0 if they were set by the user.
   double derived_scene_stiffness_N_per_m = 0.0;
   double derived_scene_damping_Ns_per_m = 0.0;
-  /// Body pairs that never collide (MJCF <contact><exclude>), as indices into `bodies` with -1 for
-  /// static geometry, each pair (a, b) with a < b, sorted and without repeats.
-  std::vector<std::pair<int, int>> excluded_body_pairs;
+  /// Geom pairs that never collide (MJCF <contact><exclude body1 body2>: every geom of the one
+  /// MJCF body with every geom of the other), as indices into `geoms`, each pair (a, b) with
+  /// a < b, sorted and without repeats. Kept by geoms, not by Model::bodies, because every static
+  /// MJCF body is body -1 there (and welded bodies are one): excluding one static body must leave
+  /// the others, and the world, in contact.
+  std::vector<std::pair<int, int>> excluded_geom_pairs;
 };
 
 }  // namespace rigidtouch

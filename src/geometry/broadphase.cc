@@ -195,17 +195,14 @@ struct PairSink {
   int dropped = 0;
 };
 
-// appends candidate pair (a, b) unless the scene excludes its bodies (`excluded`: MJCF
-// <contact><exclude>, sorted; empty in most scenes); beyond the sink's capacity it counts the pair
-// as dropped
-void AddPair(const std::vector<std::pair<int, int>>& excluded, const Broadphase& bp, PairSink& out,
-             int a, int b) {
-  if (!excluded.empty()) {
-    const int ba = bp.filters[a].body, bb = bp.filters[b].body;
-    if (std::binary_search(excluded.begin(), excluded.end(),
-                           std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)))) {
-      return;
-    }
+// appends candidate pair (a, b) unless the scene excludes it (`excluded`: MJCF
+// <contact><exclude> as geom pairs, sorted; empty in most scenes); beyond the sink's capacity it
+// counts the pair as dropped
+void AddPair(const std::vector<std::pair<int, int>>& excluded, PairSink& out, int a, int b) {
+  if (!excluded.empty() &&
+      std::binary_search(excluded.begin(), excluded.end(),
+                         std::pair<int, int>(std::min(a, b), std::max(a, b)))) {
+    return;
   }
   if (out.count < out.capacity) {
     out.pairs[out.count++] = {a, b};
@@ -244,7 +241,7 @@ void Sweep(const Model& model, std::span<const GeomPose> poses, const Broadphase
   const double *lo_s = bp.lo_s.data(), *hi_s = bp.hi_s.data(), *lo_p = bp.lo_p.data(),
                *hi_p = bp.hi_p.data(), *lo_q = bp.lo_q.data(), *hi_q = bp.hi_q.data();
   const Broadphase::Filter* filters = bp.filters.data();
-  const std::vector<std::pair<int, int>>& excluded = model.excluded_body_pairs;
+  const std::vector<std::pair<int, int>>& excluded = model.excluded_geom_pairs;
   const FloatBounds fb{bp.flo_s.data(), bp.fhi_s.data(), bp.flo_p.data(),
                        bp.fhi_p.data(), bp.flo_q.data(), bp.fhi_q.data()};
   for (int i = begin; i < end; ++i) {
@@ -259,12 +256,12 @@ void Sweep(const Model& model, std::span<const GeomPose> poses, const Broadphase
       const int j = hits[k];
       if (lo_q[i] <= hi_q[j] && lo_q[j] <= hi_q[i] && lo_p[i] <= hi_p[j] && lo_p[j] <= hi_p[i] &&
           lo_s[i] <= hi_s[j] && lo_s[j] <= hi_s[i] && CanCollide(filters[a], filters[order[j]])) {
-        AddPair(excluded, bp, out, a, order[j]);
+        AddPair(excluded, out, a, order[j]);
       }
     }
     for (int p : bp.planes) {
       if (CanCollide(filters[a], filters[p]) && BelowPlane(bp.boxes[a], poses[p])) {
-        AddPair(excluded, bp, out, a, p);
+        AddPair(excluded, out, a, p);
       }
     }
   }

@@ -341,19 +341,24 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
     geom.mj_geom = g;
     model.geoms.push_back(geom);
   }
-  // <contact><exclude body1 body2>: MuJoCo's signature is (body1 + 1) << 16 | (body2 + 1)
+  // <contact><exclude body1 body2>: MuJoCo's signature is (body1 + 1) << 16 | (body2 + 1), by
+  // MJCF body, so it becomes every pair of the two bodies' geoms
+  auto& excluded = model.excluded_geom_pairs;
+  const int ngeom = static_cast<int>(model.geoms.size());
   for (int e = 0; e < m->nexclude; ++e) {
     const int sig = m->exclude_signature[e];
     const int b1 = (sig >> 16) - 1, b2 = (sig & 0xFFFF) - 1;
-    if (b1 < 0 || b2 < 0 || b1 >= m->nbody || b2 >= m->nbody) continue;
-    const int i1 = body_index[b1], i2 = body_index[b2];
-    if (i1 == i2) continue;  // the same rigid body, or both static: never in contact anyway
-    model.excluded_body_pairs.emplace_back(std::min(i1, i2), std::max(i1, i2));
+    if (b1 < 0 || b2 < 0 || b1 >= m->nbody || b2 >= m->nbody || b1 == b2) continue;
+    for (int ga = 0; ga < ngeom; ++ga) {
+      if (m->geom_bodyid[model.geoms[ga].mj_geom] != b1) continue;
+      for (int gb = 0; gb < ngeom; ++gb) {
+        if (m->geom_bodyid[model.geoms[gb].mj_geom] != b2) continue;
+        excluded.emplace_back(std::min(ga, gb), std::max(ga, gb));
+      }
+    }
   }
-  std::sort(model.excluded_body_pairs.begin(), model.excluded_body_pairs.end());
-  model.excluded_body_pairs.erase(
-      std::unique(model.excluded_body_pairs.begin(), model.excluded_body_pairs.end()),
-      model.excluded_body_pairs.end());
+  std::sort(excluded.begin(), excluded.end());
+  excluded.erase(std::unique(excluded.begin(), excluded.end()), excluded.end());
 }
 
 int FindTool(const Model& model, const std::string& path, const std::string& tool_name) {

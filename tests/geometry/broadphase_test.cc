@@ -281,9 +281,8 @@ class ReferenceSweep {
     }
     std::vector<std::pair<int, int>> pairs;
     auto add = [&m, &pairs](int a, int b) {
-      const int ba = m.geoms[a].body, bb = m.geoms[b].body;
-      if (!std::binary_search(m.excluded_body_pairs.begin(), m.excluded_body_pairs.end(),
-                              std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)))) {
+      if (!std::binary_search(m.excluded_geom_pairs.begin(), m.excluded_geom_pairs.end(),
+                              std::pair<int, int>(std::min(a, b), std::max(a, b)))) {
         pairs.emplace_back(a, b);
       }
     };
@@ -354,7 +353,7 @@ Model PileModel(int nx, int ny, int nz, std::vector<GeomPose>& poses, std::mt199
   tool.contype = tool.conaffinity = 1;
   m.geoms.push_back(tool);
   poses.push_back(GeomPose{Vec3(0.051, 0.051, 0.0501 * nz + 0.004), Mat3::Identity()});
-  m.excluded_body_pairs = {{1, 2}, {1, 1 + nx}};
+  m.excluded_geom_pairs = {{1, 2}, {1, 1 + nx}};
   return m;
 }
 
@@ -455,9 +454,9 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
     } else {
       std::vector<std::pair<int, int>> brute = BruteForce(m, used);
       std::erase_if(brute, [&m](const std::pair<int, int>& p) {
-        const int ba = m.geoms[p.first].body, bb = m.geoms[p.second].body;
-        return std::binary_search(m.excluded_body_pairs.begin(), m.excluded_body_pairs.end(),
-                                  std::pair<int, int>(std::min(ba, bb), std::max(ba, bb)));
+        const int a = std::min(p.first, p.second), b = std::max(p.first, p.second);
+        return std::binary_search(m.excluded_geom_pairs.begin(), m.excluded_geom_pairs.end(),
+                                  std::pair<int, int>(a, b));
       });
       ASSERT_EQ(Sorted(found), Sorted(brute)) << "tick " << tick;
       ++compared;

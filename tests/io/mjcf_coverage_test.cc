@@ -166,8 +166,8 @@ std::string PassScene(const std::string& contact) {
 
 TEST(MjcfCoverageTest, ExcludedBodiesPassThroughEachOther) {
   const Model m = LoadXml(PassScene("<contact><exclude body1=\"ball\" body2=\"tool\"/></contact>"));
-  ASSERT_EQ(m.excluded_body_pairs.size(), 1u);
-  EXPECT_EQ(m.excluded_body_pairs[0], std::make_pair(0, 1));
+  ASSERT_EQ(m.excluded_geom_pairs.size(), 1u);
+  EXPECT_EQ(m.excluded_geom_pairs[0], std::make_pair(0, 1));  // the two balls' geoms
   Data d = MakeData(m);
   int most = 0;
   Step(m, d, 0.2, &most);  // 100 mm: right through
@@ -176,7 +176,7 @@ TEST(MjcfCoverageTest, ExcludedBodiesPassThroughEachOther) {
   EXPECT_NEAR(d.bodies[BodyIndex(m, "ball")].v_W.norm(), 0.0, 1e-12);
   // without the exclude they collide
   const Model m2 = LoadXml(PassScene(""));
-  EXPECT_TRUE(m2.excluded_body_pairs.empty());
+  EXPECT_TRUE(m2.excluded_geom_pairs.empty());
   Data d2 = MakeData(m2);
   most = 0;
   Step(m2, d2, 0.2, &most);
@@ -190,13 +190,43 @@ TEST(MjcfCoverageTest, ExcludeWithTheWorldLetsABodyFallThroughTheFloor) {
       "<body name=\"tool\" pos=\"0 0 0.011\"><freejoint/>"
       "<geom type=\"sphere\" size=\"0.01\" mass=\"0.1\"/></body></worldbody>"
       "<contact><exclude body1=\"world\" body2=\"tool\"/></contact></mujoco>");
-  ASSERT_EQ(m.excluded_body_pairs.size(), 1u);
-  EXPECT_EQ(m.excluded_body_pairs[0], std::make_pair(-1, 0));
+  ASSERT_EQ(m.excluded_geom_pairs.size(), 1u);
+  EXPECT_EQ(m.excluded_geom_pairs[0], std::make_pair(0, 1));  // the floor and the tool's sphere
   Data d = MakeData(m);
   int most = 0;
   Step(m, d, 0.3, &most);
   EXPECT_EQ(most, 0);
   EXPECT_LT(d.bodies[0].x_W.z(), -0.3);
+}
+
+// every static MJCF body is static geometry to rigidtouch (body -1), but an exclude names one of
+// them: excluding the shelf leaves the tool on the floor (it fell through the floor when the
+// exclude was kept by rigidtouch's bodies), as MuJoCo does; excluding the world drops the floor
+// and keeps the shelf
+TEST(MjcfCoverageTest, ExcludeWithOneStaticBodyKeepsTheOthers) {
+  const auto scene = [](const std::string& other) {
+    return "<mujoco><worldbody><geom name=\"floor\" type=\"plane\" size=\"1 1 0.1\"/>"
+           "<body name=\"shelf\" pos=\"0.5 0 0.1\"><geom type=\"box\" size=\"0.1 0.1 0.01\"/>"
+           "</body>"
+           "<body name=\"tool\" pos=\"0 0 0.02\"><freejoint/>"
+           "<geom type=\"sphere\" size=\"0.01\" mass=\"0.1\"/></body></worldbody>"
+           "<contact><exclude body1=\"tool\" body2=\"" +
+           other + "\"/></contact></mujoco>";
+  };
+  const Model shelf = LoadXml(scene("shelf"));
+  ASSERT_EQ(shelf.excluded_geom_pairs.size(), 1u);
+  EXPECT_EQ(shelf.excluded_geom_pairs[0], std::make_pair(1, 2));  // the shelf's box, the tool's
+  Data d = MakeData(shelf);
+  Step(shelf, d, 0.5);
+  EXPECT_GT(d.bodies[0].x_W.z(), 0.005);  // resting on the floor (centre 10 mm up, less sink)
+  EXPECT_LT(d.bodies[0].v_W.norm(), 1e-2);
+
+  const Model world = LoadXml(scene("world"));
+  ASSERT_EQ(world.excluded_geom_pairs.size(), 1u);
+  EXPECT_EQ(world.excluded_geom_pairs[0], std::make_pair(0, 2));  // the floor, the tool's
+  Data dw = MakeData(world);
+  Step(world, dw, 0.5);
+  EXPECT_LT(dw.bodies[0].x_W.z(), -0.5);  // through the floor
 }
 
 // ---------------------------------------------------------------------------- condim 1
