@@ -68,7 +68,9 @@ void Run(const BenchFlags& f) {
                 std::to_string(f.warmup) +
                 "): the fixed job is sized to the median of the last 200 warm-up steps");
   }
-  const Model model = LoadModel(f.scene.scene, ToLoadOptions(f.scene));
+  const Settings settings = ResolveSettings(f.scene);
+  RefuseUnusedRender(settings, {settings.load.render.renderer});
+  const Model model = LoadModel(f.scene.scene, settings.load);
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;

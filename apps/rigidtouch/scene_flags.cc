@@ -82,13 +82,16 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--material", f.material,
                   "the event renderer's material: rubber | wood | aluminium | FILE.json "
                   "(docs/renderers.md)");
-  app->add_option("--restitution", f.restitution, "restitution e in [0, 1] (impulse renderer)");
-  app->add_option("--t-collision", f.t_collision_s, "collision window t_c [s], at most 0.1");
-  app->add_option("--frequency", f.frequency_hz, "impulse-train frequency f [Hz]");
+  app->add_option("--restitution", f.restitution,
+                  "restitution e in [0, 1] (impulse renderer; the train's is 0)");
+  app->add_option("--t-collision", f.t_collision_s,
+                  "collision window t_c [s], at most 0.1 (train renderer)");
+  app->add_option("--frequency", f.frequency_hz, "impulse-train frequency f [Hz] (train renderer)");
   app->add_option("--stiffness", f.stiffness_N_per_m, "tool contact stiffness k [N/m]");
   app->add_option("--damping", f.damping_Ns_per_m, "tool contact damping b [N s/m]");
   app->add_flag("--reference-solver", f.reference_solver,
-                "use the exact pseudo-inverse of Eq. 5/8 (may pull; allocates)");
+                "use the exact pseudo-inverse of Eq. 5/8 (may pull; allocates; impulse and train "
+                "renderers)");
   app->add_flag("--passivity-control", f.passivity_control,
                 "passivity observer and controller at the device port (Hannaford and Ryu 2002; "
                 "docs/renderers.md)");
@@ -157,10 +160,6 @@ Settings ResolveSettings(const SceneFlags& f) {
   return s;
 }
 
-LoadOptions ToLoadOptions(const SceneFlags& f) {
-  return ResolveSettings(f).load;
-}
-
 void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double rate_hz) {
   LoadOptions& o = s.load;
   const double h = 1.0 / rate_hz;
@@ -197,6 +196,44 @@ void RefuseUnused(const Settings& s, const std::vector<std::string>& fields,
   for (const std::string& field : fields) {
     if (s.Given(field)) {
       throw Error(field + " (" + Where(s, field) + ") has no effect here: " + why + "; remove it");
+    }
+  }
+}
+
+namespace {
+
+// "the train renderer", "the impulse and train renderers", "the penalty or impulse renderers"
+std::string RendererList(std::vector<RendererKind> kinds, const std::string& conjunction) {
+  std::sort(kinds.begin(), kinds.end());
+  kinds.erase(std::unique(kinds.begin(), kinds.end()), kinds.end());
+  std::string list = "the ";
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    if (i > 0) list += i + 1 == kinds.size() ? " " + conjunction + " " : ", ";
+    list += io::RendererName(kinds[i]);
+  }
+  return list + (kinds.size() == 1 ? " renderer" : " renderers");
+}
+
+}  // namespace
+
+void RefuseUnusedRender(const Settings& s, const std::vector<RendererKind>& renderers) {
+  using K = RendererKind;
+  // the renderers that take each parameter (docs/renderers.md)
+  static const std::vector<std::pair<std::string, std::vector<K>>> takers = {
+      {"restitution", {K::kImpulse, K::kTrain}},
+      {"t_collision_s", {K::kTrain}},
+      {"frequency_hz", {K::kTrain}},
+      {"reference_solver", {K::kImpulse, K::kTrain}}};
+  for (const auto& [name, by] : takers) {
+    const std::string field = "render." + name;
+    if (field == "render.reference_solver" && !s.load.render.reference_solver) continue;
+    const bool used = std::any_of(renderers.begin(), renderers.end(), [&by](K k) {
+      return std::find(by.begin(), by.end(), k) != by.end();
+    });
+    if (!used) {
+      RefuseUnused(s, {field},
+                   name + " is used only by " + RendererList(by, "and") + ", not by " +
+                       RendererList(renderers, "or"));
     }
   }
 }

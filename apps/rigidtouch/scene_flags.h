@@ -66,9 +66,6 @@ struct Settings {
 };
 Settings ResolveSettings(const SceneFlags& flags);
 
-/// ResolveSettings(flags).load.
-LoadOptions ToLoadOptions(const SceneFlags& flags);
-
 /// Where the user did not write them, the tool contact's stiffness and damping and the force
 /// limit come from the device preset: the preset's maximum stiffness, damping k h capped at the
 /// preset's, the preset's force. A force limit the user wrote above the preset's is refused (the
@@ -80,6 +77,13 @@ void ApplyDevicePreset(Settings& settings, const device::DeviceLimits& preset, d
 /// Refuses any of `fields` the user wrote: they have no effect here, for the reason `why`.
 void RefuseUnused(const Settings& settings, const std::vector<std::string>& fields,
                   const std::string& why);
+
+/// Refuses the renderer parameters the user wrote that none of `renderers` (the renderers a run
+/// uses) takes, naming where each was written and the renderers that take it: restitution
+/// (impulse, and train, whose e must be 0), t_collision_s and frequency_hz (train),
+/// reference_solver when on (impulse, train). A reference solver written as off asks for nothing
+/// and is not refused. A material train's f and t_c are refused by ResolveSettings.
+void RefuseUnusedRender(const Settings& settings, const std::vector<RendererKind>& renderers);
 
 /// Runs `load` (which loads or configures a model); an Error about a parameter the user wrote
 /// gets where it was written appended ("(set by --stiffness)", "(set in k.json as

@@ -297,6 +297,7 @@ void Run(const ServeFlags& f) {
     }
     RefuseUnused(settings,
                  {"device.coupling_stiffness_N_per_m", "device.coupling_damping_Ns_per_m"}, why);
+    RefuseUnusedRender(settings, {settings.load.render.renderer});
   }
   const ServeRun s{f, choice, connect, rate_hz, lo, stop, traces.get(), records};
   if (replay) {

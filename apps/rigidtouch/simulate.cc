@@ -20,7 +20,9 @@ struct SimulateFlags {
 
 void Run(const SimulateFlags& f) {
   if (f.steps < 0) throw Error("--steps must be >= 0, got " + std::to_string(f.steps));
-  const Model model = LoadModel(f.scene.scene, ToLoadOptions(f.scene));
+  const Settings settings = ResolveSettings(f.scene);
+  RefuseUnusedRender(settings, {settings.load.render.renderer});
+  const Model model = LoadModel(f.scene.scene, settings.load);
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;

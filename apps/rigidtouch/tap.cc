@@ -108,6 +108,8 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     throw Error(std::string(f.coupling ? "--coupling" : "device.coupling in " + f.scene.config) +
                 " none has no device; valid couplings for tap: direct, virtual");
   }
+  // a comparison's renderers share the flags: Run checks them against the whole list
+  if (!spec) RefuseUnusedRender(settings, {c.load.render.renderer});
   c.script.seed = f.seed;
   c.script.speed_spread = f.spread;
   return c;
@@ -395,9 +397,13 @@ void Run(const TapFlags& f) {
     const std::vector<analysis::RendererSpec> specs =
         analysis::ParseRendererList(f.compare_walls ? analysis::kWallsSet : f.compare);
     // refused before the first run, not when its wall comes
+    std::vector<RendererKind> renderers;
     for (const analysis::RendererSpec& spec : specs) {
       if (spec.render) RefuseUnused(ResolveSettings(f.scene), kWallFixedFields, kWallFixedWhy);
+      renderers.push_back(spec.renderer);
     }
+    // a parameter is used when one renderer of the list takes it
+    RefuseUnusedRender(ResolveSettings(f.scene), renderers);
     Compare(f, specs, f.compare_walls ? "walls" : "compare");
     return;
   }

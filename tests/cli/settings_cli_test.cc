@@ -5,6 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "cli/cli_util.h"
 
@@ -99,6 +100,73 @@ TEST_F(SettingsCliTest, ValuesThatCannotBeUsedAreRefusedSayingWhereTheyWereWritt
       << c.err;
   // tap takes the config's coupling when --coupling is not given
   EXPECT_EQ(Json(RunCli("tap --taps 1 --json --config " + v))["coupling"], "virtual");
+}
+
+// expects exit status 2 and every one of `parts` in stderr
+void ExpectRefused(const std::string& command, const std::vector<std::string>& parts) {
+  const CliResult r = RunCli(command);
+  EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.err;
+  EXPECT_EQ(r.err.rfind("rigidtouch: error: ", 0), 0u) << command << "\n" << r.err;
+  for (const std::string& part : parts) {
+    EXPECT_NE(r.err.find(part), std::string::npos) << command << "\n" << r.err;
+  }
+}
+
+// a renderer parameter the chosen renderer does not use is refused, naming the flag or the
+// config field and the renderers that use it (it was accepted and dropped, even out of range)
+TEST_F(SettingsCliTest, RendererParametersTheRendererDoesNotUseAreRefused) {
+  const std::string simulate =
+      "simulate --steps 1 --scene " + std::string(RIGIDTOUCH_SCENES) + "/wall.xml";
+  ExpectRefused(simulate +
+                    " --renderer penalty --frequency -5 --t-collision 9 --restitution 0.7 "
+                    "--reference-solver",
+                {"render.restitution (set by --restitution) has no effect here",
+                 "used only by the impulse and train renderers"});
+  const std::string f_why =
+      "render.frequency_hz (set by --frequency) has no effect here: "
+      "frequency_hz is used only by the train renderer, not by the ";
+  const std::string tc_why =
+      "render.t_collision_s (set by --t-collision) has no effect here: "
+      "t_collision_s is used only by the train renderer";
+  ExpectRefused(simulate + " --renderer penalty --frequency -5", {f_why + "penalty renderer"});
+  ExpectRefused(simulate + " --renderer impulse --frequency -5", {f_why + "impulse renderer"});
+  ExpectRefused(simulate + " --renderer impulse --frequency -5 --t-collision 9",
+                {tc_why + ", not by the impulse renderer"});
+  ExpectRefused(simulate + " --renderer penalty --reference-solver",
+                {"render.reference_solver (set by --reference-solver) has no effect here"});
+  ExpectRefused(simulate + " --renderer event --material wood --restitution 0.5",
+                {"render.restitution (set by --restitution)", "not by the event renderer"});
+  // the same fields in a config file's render section, with the renderer from the file or a flag
+  const std::string p = Config("p.json", R"({"render": {"renderer": "penalty",
+                                                        "frequency_hz": -5}})");
+  ExpectRefused(simulate + " --config " + p,
+                {"render.frequency_hz (set in " + p + " as render.frequency_hz) has no effect"});
+  const std::string tc = Config("tc.json", R"({"render": {"t_collision_s": 9}})");
+  ExpectRefused(simulate + " --renderer impulse --config " + tc,
+                {"render.t_collision_s (set in " + tc + " as render.t_collision_s)"});
+  ExpectRefused("bench --steps 1 --warmup 0 --scene " + std::string(RIGIDTOUCH_SCENES) +
+                    "/wall.xml --renderer penalty --restitution 0.5",
+                {"render.restitution (set by --restitution) has no effect here"});
+  // tap and serve, and a comparison where no renderer of the list uses the value
+  ExpectRefused("tap --taps 1 --renderer penalty --frequency 77", {f_why + "penalty renderer"});
+  ExpectRefused("tap --taps 1 --config " + tc + " --renderer impulse",
+                {"render.t_collision_s (set in " + tc + " as render.t_collision_s)"});
+  ExpectRefused("tap --taps 1 --compare penalty,impulse --frequency 77 --out-dir " +
+                    (dir_ / "compare").string(),
+                {f_why + "penalty or impulse renderers"});
+  EXPECT_FALSE(fs::exists(dir_ / "compare"));
+  ExpectRefused("serve --device sim --taps 1 --renderer impulse --t-collision 0.05", {tc_why});
+  // what the renderer uses, the defaults, and a reference solver switched off are accepted
+  EXPECT_EQ(RunCli(simulate + " --renderer impulse --restitution 0.5 --reference-solver").exit_code,
+            0);
+  EXPECT_EQ(RunCli(simulate + " --renderer train --frequency 100 --t-collision 0.05 "
+                              "--restitution 0 --reference-solver")
+                .exit_code,
+            0);
+  EXPECT_EQ(RunCli(simulate + " --renderer penalty").exit_code, 0);
+  const std::string off = Config("off.json", R"({"render": {"reference_solver": false}})");
+  EXPECT_EQ(RunCli(simulate + " --renderer penalty --config " + off).exit_code, 0);
+  EXPECT_EQ(Json(RunCli("tap --taps 1 --json --renderer impulse"))["renderer"], "impulse");
 }
 
 // a scene law the user wrote that cannot hold a body is used and warned about, in tap as in
