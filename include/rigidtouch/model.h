@@ -87,7 +87,8 @@ struct ContactParams {
   /// stiff enough that a 10-box stack compresses less than 1 mm.
   double scene_stiffness_N_per_m = 2.0e5;
   double scene_damping_Ns_per_m = 100.0;
-  /// Coulomb friction during penalty contact; negative means "use the MJCF geom friction".
+  /// Coulomb friction during penalty contact, >= 0; exactly -1 means "use the MJCF geom
+  /// friction" (Configure refuses any other negative value).
   double friction_static = -1.0;
   double friction_kinetic = -1.0;
   /// Tangential stick-anchor spring relative to the normal stiffness and damping.

@@ -223,9 +223,9 @@ void DefineParams(py::module_& m) {
       .def_readwrite("scene_damping_Ns_per_m", &ContactParams::scene_damping_Ns_per_m,
                      "damping of contacts between other bodies [N s/m]")
       .def_readwrite("friction_static", &ContactParams::friction_static,
-                     "static Coulomb coefficient; negative: the MJCF geom friction")
+                     "static Coulomb coefficient, >= 0; -1: the MJCF geom friction")
       .def_readwrite("friction_kinetic", &ContactParams::friction_kinetic,
-                     "kinetic Coulomb coefficient; negative: the MJCF geom friction")
+                     "kinetic Coulomb coefficient, >= 0; -1: the MJCF geom friction")
       .def_readwrite("tangential_ratio", &ContactParams::tangential_ratio,
                      "tangential anchor spring relative to the normal law")
       .def_readwrite("onset_speed_mps", &ContactParams::onset_speed_mps,

@@ -228,10 +228,12 @@ void RequireContact(const ContactParams& c) {
                 "k >= 0 N/m, finite");
   RequireFinite("scene_damping_Ns_per_m", c.scene_damping_Ns_per_m, 0.0, kInf,
                 "b >= 0 N s/m, finite");
-  RequireFinite("friction_static", c.friction_static, -1.0, kInf,
-                ">= 0, or -1 for the MJCF geom friction");
-  RequireFinite("friction_kinetic", c.friction_kinetic, -1.0, kInf,
-                ">= 0, or -1 for the MJCF geom friction");
+  // -1 exactly stands for the MJCF geom friction; any other negative value is not a coefficient
+  for (const auto& [name, mu] : {std::pair{"friction_static", c.friction_static},
+                                 std::pair{"friction_kinetic", c.friction_kinetic}}) {
+    Require(mu == -1.0 || (std::isfinite(mu) && mu >= 0.0), name, mu,
+            ">= 0, or -1 for the MJCF geom friction");
+  }
   if (c.friction_static >= 0.0 && c.friction_kinetic >= 0.0) {
     Require(c.friction_static >= c.friction_kinetic, "friction_static", c.friction_static,
             ">= friction_kinetic (" + std::to_string(c.friction_kinetic) + ")");

@@ -169,6 +169,24 @@ TEST_F(SettingsCliTest, RendererParametersTheRendererDoesNotUseAreRefused) {
   EXPECT_EQ(Json(RunCli("tap --taps 1 --json --renderer impulse"))["renderer"], "impulse");
 }
 
+// friction coefficients: >= 0, or exactly -1 for the MJCF geom friction; another negative value
+// was taken as -1
+TEST_F(SettingsCliTest, NegativeFrictionOtherThanMinusOneIsRefused) {
+  const std::string simulate =
+      "simulate --steps 1 --scene " + std::string(RIGIDTOUCH_SCENES) + "/wall.xml --config ";
+  const std::string both =
+      Config("mu.json", R"({"contact": {"friction_static": -0.5, "friction_kinetic": -0.2}})");
+  ExpectRefused(simulate + both, {"parameter friction_static = -0.5 is out of range: valid >= 0, "
+                                  "or -1 for the MJCF geom friction",
+                                  "(set in " + both + " as contact.friction_static)"});
+  const std::string kinetic = Config("k.json", R"({"contact": {"friction_kinetic": -0.2}})");
+  ExpectRefused(simulate + kinetic, {"parameter friction_kinetic = -0.2 is out of range",
+                                     "(set in " + kinetic + " as contact.friction_kinetic)"});
+  const std::string mjcf =
+      Config("m.json", R"({"contact": {"friction_static": -1, "friction_kinetic": 0}})");
+  EXPECT_EQ(RunCli(simulate + mjcf).exit_code, 0);
+}
+
 // a scene law the user wrote that cannot hold a body is used and warned about, in tap as in
 // simulate (tap loads its scene inside the library and printed no load warning)
 // threads (issue 19): the flag beats the config file, both are used (bench reports them) and

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <tuple>
 
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
@@ -275,6 +276,29 @@ TEST(FrictionSlipTest, InclineJustAboveTheFrictionAngleSlidesAtCoulombAccelerati
   const double a_launched = (launched.bodies[0].v_W.dot(downhill) - v0) / 0.5;
   std::printf("tan 0.46, launched at 0.2 m/s: acceleration %.6g\n", a_launched);
   EXPECT_NEAR(a_launched, expected, 0.02 * expected);
+}
+
+// A coefficient is >= 0, or exactly -1 for the MJCF geom friction (docs/config.md): any other
+// negative value is refused naming the parameter and the range (it was read as -1); the model is
+// not loaded.
+TEST(FrictionSlipTest, NegativeCoefficientsOtherThanMinusOneAreRefused) {
+  const std::string range = "is out of range: valid >= 0, or -1 for the MJCF geom friction";
+  for (const auto& [mu_static, mu_kinetic, message] :
+       {std::tuple{-0.5, -0.2, "parameter friction_static = -0.5 " + range},
+        std::tuple{-1.0, -0.2, "parameter friction_kinetic = -0.2 " + range},
+        std::tuple{-1e-9, 0.0, "parameter friction_static = -1e-09 " + range},
+        std::tuple{0.3, -1.5, "parameter friction_kinetic = -1.5 " + range}}) {
+    try {
+      LoadBox("refused", 0.0, 0.0, mu_static, mu_kinetic);
+      ADD_FAILURE() << mu_static << ", " << mu_kinetic << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+  // -1 (either or both) and 0 are accepted
+  EXPECT_NO_THROW(LoadBox("mjcf", 0.0, 0.0, -1.0, -1.0));
+  EXPECT_NO_THROW(LoadBox("mixed", 0.0, 0.0, -1.0, 0.0));
+  EXPECT_NO_THROW(LoadBox("zero", 0.0, 0.0, 0.0, 0.0));
 }
 
 }  // namespace
