@@ -70,6 +70,7 @@ void Run(const BenchFlags& f) {
   }
   const Settings settings = ResolveSettings(f.scene);
   RefuseUnusedRender(settings, {settings.load.render.renderer});
+  RefuseDeviceSettings(settings, "bench");
   const Model model = LoadModel(f.scene.scene, settings.load);
   PrintLoadWarnings(model);
   Data data = MakeData(model);

@@ -238,6 +238,16 @@ void RefuseUnusedRender(const Settings& s, const std::vector<RendererKind>& rend
   }
 }
 
+void RefuseDeviceSettings(const Settings& s, const std::string& command) {
+  const std::string why =
+      command + " has no device (the tool is pushed by the constant --tool-force)";
+  if (s.load.device.coupling != Coupling::kNone) RefuseUnused(s, {"device.coupling"}, why);
+  RefuseUnused(s,
+               {"device.max_force_N", "device.coupling_stiffness_N_per_m",
+                "device.coupling_damping_Ns_per_m"},
+               why);
+}
+
 std::string OriginNote(const Settings& s, const std::string& message) {
   // Configure's messages read "parameter NAME = ..."
   const std::string tag = "parameter ";

@@ -85,6 +85,11 @@ void RefuseUnused(const Settings& settings, const std::vector<std::string>& fiel
 /// and is not refused. A material train's f and t_c are refused by ResolveSettings.
 void RefuseUnusedRender(const Settings& settings, const std::vector<RendererKind>& renderers);
 
+/// Refuses the device settings the user wrote in a subcommand that has no device (`command`:
+/// simulate, bench; the tool is pushed by the constant --tool-force): the force limit, the
+/// virtual coupling's spring and damper, and a coupling other than none.
+void RefuseDeviceSettings(const Settings& settings, const std::string& command);
+
 /// Runs `load` (which loads or configures a model); an Error about a parameter the user wrote
 /// gets where it was written appended ("(set by --stiffness)", "(set in k.json as
 /// contact.stiffness_N_per_m)").

@@ -22,6 +22,7 @@ void Run(const SimulateFlags& f) {
   if (f.steps < 0) throw Error("--steps must be >= 0, got " + std::to_string(f.steps));
   const Settings settings = ResolveSettings(f.scene);
   RefuseUnusedRender(settings, {settings.load.render.renderer});
+  RefuseDeviceSettings(settings, "simulate");
   const Model model = LoadModel(f.scene.scene, settings.load);
   PrintLoadWarnings(model);
   Data data = MakeData(model);

@@ -187,6 +187,33 @@ TEST_F(SettingsCliTest, NegativeFrictionOtherThanMinusOneIsRefused) {
   EXPECT_EQ(RunCli(simulate + mjcf).exit_code, 0);
 }
 
+// simulate and bench have no device (a constant tool force): a device setting is refused
+// instead of dropped (or, for a coupling, moving the tool to a device that is not there)
+TEST_F(SettingsCliTest, SimulateAndBenchRefuseDeviceSettings) {
+  const std::string wall = " --steps 1 --scene " + std::string(RIGIDTOUCH_SCENES) + "/wall.xml";
+  const std::string device = Config("d.json", R"({"device": {"max_force_N": 5,
+      "coupling_stiffness_N_per_m": 1, "coupling_damping_Ns_per_m": 7}})");
+  const std::string direct = Config("direct.json", R"({"device": {"coupling": "direct"}})");
+  for (const std::string command : {"simulate", "bench --warmup 0"}) {
+    const std::string name = command.substr(0, command.find(' '));
+    ExpectRefused(command + wall + " --config " + device, {"device.max_force_N (set in " + device +
+                                                           " as device.max_force_N) has no "
+                                                           "effect here: " +
+                                                           name + " has no device"});
+    ExpectRefused(command + wall + " --config " + direct,
+                  {"device.coupling (set in " + direct + " as device.coupling) has no effect"});
+    for (const char* field : {"coupling_stiffness_N_per_m", "coupling_damping_Ns_per_m"}) {
+      const std::string one =
+          Config(std::string(field) + ".json", "{\"device\": {\"" + std::string(field) + "\": 1}}");
+      ExpectRefused(command + wall + " --config " + one,
+                    {"device." + std::string(field) + " (set in " + one});
+    }
+    // the coupling simulate and bench run is none: writing it is not refused
+    const std::string none = Config("none.json", R"({"device": {"coupling": "none"}})");
+    EXPECT_EQ(RunCli(command + wall + " --config " + none).exit_code, 0) << command;
+  }
+}
+
 // a scene law the user wrote that cannot hold a body is used and warned about, in tap as in
 // simulate (tap loads its scene inside the library and printed no load warning)
 // threads (issue 19): the flag beats the config file, both are used (bench reports them) and
