@@ -62,7 +62,9 @@ nlohmann::json ReferenceJson(long units, const std::vector<double>& job_sorted,
 }
 
 void Run(const BenchFlags& f) {
-  if (f.steps < 1) throw Error("--steps must be >= 1");
+  if (f.steps < 1) throw Error("--steps must be >= 1, got " + std::to_string(f.steps));
+  if (f.warmup < 0) throw Error("--warmup must be >= 0, got " + std::to_string(f.warmup));
+  const Vec3 tool_force = ToolForce(f.tool_force);
   if (f.reference && f.warmup < kReferenceWarmup) {
     throw Error("--reference needs --warmup >= " + std::to_string(kReferenceWarmup) + " (got " +
                 std::to_string(f.warmup) +
@@ -75,7 +77,7 @@ void Run(const BenchFlags& f) {
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
-  input.tool_wrench.force_N = Vec3(f.tool_force[0], f.tool_force[1], f.tool_force[2]);
+  input.tool_wrench.force_N = tool_force;
   // the last warm-up steps are timed when the reference job is sized from them
   std::vector<double> warm_ns;
   for (long s = 0; s < f.warmup; ++s) {

@@ -1,8 +1,12 @@
 #include "scene_flags.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
+#include <limits>
+#include <system_error>
 
 #include "io/config.h"
 #include "io/output_file.h"
@@ -60,6 +64,38 @@ CLI::Validator InRange(double lo, double hi, const std::string& unit) {
         return "";
       },
       "[" + io::FormatNumber(lo) + ", " + (std::isinf(hi) ? "inf" : io::FormatNumber(hi)) + "]");
+}
+
+CLI::Validator SeedRange() {
+  const std::string max = std::to_string(std::numeric_limits<std::uint64_t>::max());
+  const std::string valid = "valid 0 to " + max;
+  return CLI::Validator(
+      [valid](std::string& text) -> std::string {
+        const bool signed_text = !text.empty() && (text[0] == '-' || text[0] == '+');
+        const std::size_t begin = signed_text ? 1 : 0;
+        if (begin == text.size() ||
+            text.find_first_not_of("0123456789", begin) != std::string::npos) {
+          return text + " is not a whole number: " + valid;
+        }
+        std::uint64_t value = 0;
+        const std::from_chars_result r =
+            std::from_chars(text.data() + begin, text.data() + text.size(), value);
+        if (r.ec == std::errc::result_out_of_range || (text[0] == '-' && value != 0)) {
+          return text + " is out of range: " + valid;
+        }
+        text = std::to_string(value);  // decimal, whatever CLI11 would read 010 as
+        return "";
+      },
+      "[0, " + max + "]");
+}
+
+Vec3 ToolForce(const std::vector<double>& xyz) {
+  const Vec3 force(xyz.at(0), xyz.at(1), xyz.at(2));
+  if (!force.allFinite()) {
+    throw Error("--tool-force must be finite, got " + io::FormatNumber(xyz[0]) + " " +
+                io::FormatNumber(xyz[1]) + " " + io::FormatNumber(xyz[2]));
+  }
+  return force;
 }
 
 void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description) {

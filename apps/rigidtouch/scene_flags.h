@@ -44,6 +44,15 @@ extern const char kPrecedence[];
 /// subcommand gives: "VALUE is out of range: valid LO to HI UNIT".
 CLI::Validator InRange(double lo, double hi, const std::string& unit);
 
+/// A CLI11 transform for --seed: a whole number from 0 to 2^64 - 1 written in decimal, refused
+/// otherwise with "VALUE is out of range: valid 0 to 18446744073709551615" (or "is not a whole
+/// number: ..."). CLI11 alone wraps -1 to 2^64 - 1, saturates a larger number and reads 0x10 as
+/// hexadecimal and 010 as octal; the value is passed on in plain decimal.
+CLI::Validator SeedRange();
+
+/// The constant tool force of --tool-force FX FY FZ (simulate, bench); refused unless finite.
+Vec3 ToolForce(const std::vector<double>& xyz);
+
 /// Adds --rate with the one range every subcommand takes (render::kMinRate_hz to kMaxRate_hz).
 void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description);
 

@@ -20,6 +20,7 @@ struct SimulateFlags {
 
 void Run(const SimulateFlags& f) {
   if (f.steps < 0) throw Error("--steps must be >= 0, got " + std::to_string(f.steps));
+  const Vec3 tool_force = ToolForce(f.tool_force);
   const Settings settings = ResolveSettings(f.scene);
   RefuseUnusedRender(settings, {settings.load.render.renderer});
   RefuseDeviceSettings(settings, "simulate");
@@ -27,8 +28,7 @@ void Run(const SimulateFlags& f) {
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
-  input.tool_wrench.force_N = Vec3(f.tool_force[0], f.tool_force[1], f.tool_force[2]);
-  if (!input.tool_wrench.force_N.allFinite()) throw Error("--tool-force must be finite");
+  input.tool_wrench.force_N = tool_force;
   nlohmann::json impulses = nlohmann::json::array();
   int max_contacts = 0;
   const WarningStat& non_finite = data.warnings[static_cast<int>(Warning::kNonFiniteState)];

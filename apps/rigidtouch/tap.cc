@@ -483,7 +483,9 @@ std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
   app->add_option("--speed", f->speed_mps, "approach speed [m/s]")->capture_default_str();
   app->add_option("--spread", f->spread, "relative random spread of the speed (seeded)");
   app->add_option("--taps", f->taps, "number of taps")->capture_default_str();
-  app->add_option("--seed", f->seed, "random seed")->capture_default_str();
+  app->add_option("--seed", f->seed, "random seed, 0 to 2^64 - 1")
+      ->capture_default_str()
+      ->transform(SeedRange());
   app->add_option("--trace", f->trace, "write the trace CSV here");
   app->add_option(
       "--plot", f->plot,

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli/cli_util.h"
 
@@ -57,6 +59,23 @@ TEST(BenchCliTest, TheReferenceNeedsTheWarmUpItIsSizedFrom) {
             std::string::npos)
       << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
+}
+
+// bench's own flags: a non-finite tool force (refused by simulate too) and a negative step
+// count are refused, naming the flag, instead of being run or reported as given
+TEST(BenchCliTest, NonFiniteToolForceAndNegativeStepCountsAreRefused) {
+  const std::string bench = "bench --json --scene " + std::string(RIGIDTOUCH_SCENES) + "/wall.xml";
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --steps 1 --warmup 0 --tool-force 0 0 nan", "--tool-force must be finite"},
+           {" --steps 1 --warmup 0 --tool-force inf 0 0", "--tool-force must be finite"},
+           {" --steps 1 --warmup -5", "--warmup must be >= 0, got -5"},
+           {" --steps -3 --warmup 0", "--steps must be >= 1, got -3"}}) {
+    const CliResult r = RunCli(bench + args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("rigidtouch: error: " + message), std::string::npos) << args << r.err;
+    EXPECT_TRUE(r.out.empty()) << args << r.out;
+  }
+  EXPECT_EQ(Json(RunCli(bench + " --steps 1 --warmup 0"))["warmup_steps"], 0);
 }
 
 }  // namespace

@@ -176,5 +176,38 @@ TEST(TapCliTest, BadInputGetsAClearError) {
   fs::remove_all(dir);
 }
 
+// --seed takes 0 to 2^64 - 1 in decimal: a negative or larger seed was wrapped or saturated
+TEST(TapCliTest, SeedsOutsideTheirRangeAreRefused) {
+  for (const std::string seed : {"-1", "18446744073709551616", "99999999999999999999999"}) {
+    const CliResult r = RunCli("tap --taps 1 --seed " + seed);
+    EXPECT_EQ(r.exit_code, 2) << seed << "\n" << r.err;
+    EXPECT_NE(r.err.find("rigidtouch: error: --seed: " + seed +
+                         " is out of range: valid 0 to 18446744073709551615"),
+              std::string::npos)
+        << seed << "\n"
+        << r.err;
+  }
+  // a hexadecimal or octal reading is not guessed: decimal digits only
+  for (const std::string seed : {"0x10", "1.5", "seven"}) {
+    const CliResult r = RunCli("tap --taps 1 --seed " + seed);
+    EXPECT_EQ(r.exit_code, 2) << seed << "\n" << r.err;
+    EXPECT_NE(r.err.find("rigidtouch: error: --seed: " + seed +
+                         " is not a whole number: valid 0 to 18446744073709551615"),
+              std::string::npos)
+        << seed << "\n"
+        << r.err;
+  }
+  // the ends of the range run, and a seed is the same seed however it is written
+  for (const std::string seed : {"0", "18446744073709551615"}) {
+    const CliResult r = RunCli("tap --taps 1 --spread 0.2 --json --seed " + seed);
+    EXPECT_EQ(r.exit_code, 0) << seed << "\n" << r.err;
+  }
+  const CliResult ten = RunCli("tap --taps 2 --spread 0.2 --json --seed 10");
+  const CliResult padded = RunCli("tap --taps 2 --spread 0.2 --json --seed 010");
+  ASSERT_EQ(ten.exit_code, 0) << ten.err;
+  ASSERT_EQ(padded.exit_code, 0) << padded.err;
+  EXPECT_TRUE(ten.out == padded.out) << "--seed 010 did not run as --seed 10";
+}
+
 }  // namespace
 }  // namespace rigidtouch::test
