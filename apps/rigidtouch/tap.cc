@@ -160,6 +160,15 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"passivity_dissipated_J", t.passivity_dissipated_J}});
   }
   const bool train = m.render.renderer == RendererKind::kTrain;
+  // what the device displays (the contact law under direct coupling, the coupling under virtual)
+  // against what the preset says it can: tap's device is simulated and renders a wall beyond
+  // them (a Z-width map explores past them), where serve refuses it for a real device
+  const bool direct = m.device.coupling == Coupling::kDirect;
+  const double k = direct ? m.contact.stiffness_N_per_m : m.device.coupling_stiffness_N_per_m;
+  const double b = direct ? m.contact.damping_Ns_per_m : m.device.coupling_damping_Ns_per_m;
+  const auto within = [](double value, double limit) { return !(limit > 0.0) || value <= limit; };
+  const bool displayable =
+      within(k, run.device.max_stiffness_N_per_m) && within(b, run.device.max_damping_Ns_per_m);
   return {
       {"renderer", io::RendererName(m.render.renderer)},
       {"restitution", m.render.restitution},
@@ -173,6 +182,7 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"coupling", coupling},
       {"stiffness_N_per_m", m.contact.stiffness_N_per_m},
       {"damping_Ns_per_m", m.contact.damping_Ns_per_m},
+      {"displayable", displayable},
       {"tool_mass_kg", m.bodies[m.tool].mass_kg},
       {"energy_to_user_J", run.energy_to_user_J},
       {"passivity_control", m.render.passivity_control},
@@ -449,6 +459,11 @@ void Run(const TapFlags& f) {
   }
   std::cout << kTableHeader << "\n" << Row(result["renderer"].get<std::string>(), run) << "\n";
   PrintWarnings(result["warnings"], std::cout);
+  if (!result["displayable"].get<bool>()) {
+    std::cout << "note: the rendered stiffness or damping is above what the " << run.device.name
+              << " can display (its max_stiffness_N_per_m, max_damping_Ns_per_m); the simulated "
+                 "device renders it, serve would refuse it\n";
+  }
   ThrowIfNonFinite(NonFinite(run));
 }
 

@@ -177,6 +177,29 @@ TEST(TapCliTest, BadInputGetsAClearError) {
 }
 
 // --seed takes 0 to 2^64 - 1 in decimal: a negative or larger seed was wrapped or saturated
+// tap's device is simulated: a wall stiffer or more damped than the preset can display is
+// rendered (a Z-width map explores past the limits), and said so, where serve refuses it
+TEST(TapCliTest, AWallTheDeviceCannotDisplayIsRunAndSaidSo) {
+  const CliResult stiff = RunCli("tap --taps 1 --stiffness 1e5 --json");
+  ASSERT_EQ(stiff.exit_code, 0) << stiff.err;
+  const auto j = nlohmann::json::parse(stiff.out);
+  EXPECT_EQ(j["stiffness_N_per_m"].get<double>(), 1e5);
+  EXPECT_FALSE(j["displayable"].get<bool>());
+  const CliResult damped = RunCli("tap --taps 1 --damping 100");
+  ASSERT_EQ(damped.exit_code, 0) << damped.err;
+  EXPECT_NE(damped.out.find("note: the rendered stiffness or damping is above what the touch "
+                            "can display"),
+            std::string::npos)
+      << damped.out;
+  const CliResult fine = RunCli("tap --taps 1 --json");
+  ASSERT_EQ(fine.exit_code, 0) << fine.err;
+  EXPECT_TRUE(nlohmann::json::parse(fine.out)["displayable"].get<bool>());
+  const CliResult served = RunCli("serve --duration 0.01 --stiffness 1e5");
+  EXPECT_EQ(served.exit_code, 2) << served.err;
+  EXPECT_NE(served.err.find("is above what the device can display"), std::string::npos)
+      << served.err;
+}
+
 TEST(TapCliTest, SeedsOutsideTheirRangeAreRefused) {
   for (const std::string seed : {"-1", "18446744073709551616", "99999999999999999999999"}) {
     const CliResult r = RunCli("tap --taps 1 --seed " + seed);
