@@ -109,7 +109,7 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   if (scene_required) scene->required();
   app->add_option("--config", f.config,
                   "JSON file with rigidtouch parameters (tool, timestep_s, contact, render, "
-                  "device; docs/cli.md)");
+                  "device; docs/config.md)");
   app->add_option("--tool", f.tool,
                   "name of the free body that is the tool (default: the config's, else tool)");
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");

@@ -37,7 +37,7 @@ struct SceneFlags {
   std::optional<int> threads;  // --threads (AddThreadsFlag)
 };
 
-/// How a setting is resolved, stated in every subcommand's --help and in docs/cli.md.
+/// How a setting is resolved, stated in every subcommand's --help and in docs/config.md.
 extern const char kPrecedence[];
 
 /// A CLI11 check that a number lies in [lo, hi] (hi may be infinity), with the message every
