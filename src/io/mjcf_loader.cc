@@ -16,6 +16,7 @@
 #include "geometry/collision.h"
 #include "io/mjcf_checks.h"
 #include "io/mjcf_compile.h"
+#include "render/limits.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -452,6 +453,14 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   const mjModel* m = raw;
   model.source = path;
   model.timestep_s = options.timestep_s.value_or(m->opt.timestep);
+  // the scene's own step, named where it was written (Configure's message would name only the
+  // parameter); a step given by the caller is checked, and named, there
+  const double h = m->opt.timestep;
+  if (!options.timestep_s && !(h >= render::kMinTimestep_s && h <= render::kMaxTimestep_s)) {
+    throw Error("scene file '" + path + "': <option timestep=\"" + Num(h) +
+                "\"> is out of range: valid " + Num(render::kMinTimestep_s) + " to " +
+                Num(render::kMaxTimestep_s) + " s (or give the time step in the config or a flag)");
+  }
   model.gravity_W = Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
   if (!model.gravity_W.allFinite() || model.gravity_W.norm() > kMaxGravity) {
     throw Error("scene file '" + path + "': option gravity (" + Num(model.gravity_W.x()) + " " +

@@ -149,6 +149,24 @@ TEST(MjcfLoaderTest, SaneSceneLoads) {
             "");
 }
 
+// the scene's own time step out of range is refused naming the file and the element (Configure
+// named only the parameter); a step the caller gives instead is used
+TEST(MjcfLoaderTest, ASceneTimestepOutOfRangeNamesTheFileAndElement) {
+  const std::string tool = "size=\"0.01\" mass=\"0.1\"";
+  for (const std::string h : {"0.5", "1e-9"}) {
+    const std::string path =
+        test::WriteTempFile("timestep.xml", BoundsScene("timestep=\"" + h + "\"", tool, ""));
+    const std::string e = LoadError(path);
+    EXPECT_NE(e.find("scene file '" + path + "': <option timestep=\""), std::string::npos) << e;
+    EXPECT_NE(e.find("is out of range: valid 1e-06 to 0.1 s"), std::string::npos) << e;
+  }
+  LoadOptions o;
+  o.timestep_s = 0.001;
+  const Model m =
+      LoadModel(test::WriteTempFile("timestep.xml", BoundsScene("timestep=\"0.5\"", tool, "")), o);
+  EXPECT_EQ(m.timestep_s, 0.001);
+}
+
 TEST(MjcfLoaderTest, AbsurdOrNonFiniteValuesNameTheBodyGeomKeyframeOrOption) {
   const std::string tool = "size=\"0.01\" mass=\"0.1\"";
   std::string e = BoundsError(BoundsScene("", "size=\"0.01\" mass=\"1e300\"", ""));
