@@ -287,7 +287,9 @@ void AddStudyCommand(CLI::App& root) {
   run->add_flag("--resume", run_options->resume, "Continue the session recorded in --log");
   run_options->seed_option =
       run->add_option("--seed", run_options->seed,
-                      "Session seed (default: the protocol's, else random; recorded in the log)");
+                      "Session seed, 0 to 2^64 - 1 (default: the protocol's, else random; "
+                      "recorded in the log)")
+          ->transform(SeedRange());
   run->add_option("--presenter", run_options->presenter,
                   "device: render on the device; text: dry run that prints the wall")
       ->check(CLI::IsMember({"device", "text"}))
@@ -314,7 +316,9 @@ void AddStudyCommand(CLI::App& root) {
   simulate->add_option("--participants", sim_options->participants, "Cohort size")
       ->required()
       ->check(CLI::Range(1, 1000000));
-  simulate->add_option("--seed", sim_options->seed, "Cohort seed")->required();
+  simulate->add_option("--seed", sim_options->seed, "Cohort seed, 0 to 2^64 - 1")
+      ->required()
+      ->transform(SeedRange());
   simulate->add_option("--log-dir", sim_options->log_dir,
                        "Write one log per participant here (created if missing)");
   simulate->add_flag("--resume", sim_options->resume, "Continue the logs in --log-dir");
@@ -339,8 +343,9 @@ void AddStudyCommand(CLI::App& root) {
       "(shares of participants at >= 90% and <= 50%)");
   predict->add_option("--protocol", predict_options->protocol, "Protocol JSON file")->required();
   predict->add_option("--observer", predict_options->observer, "Observer parameter JSON file");
-  predict->add_option("--seed", predict_options->seed, "Seed of the sampled taps")
-      ->capture_default_str();
+  predict->add_option("--seed", predict_options->seed, "Seed of the sampled taps, 0 to 2^64 - 1")
+      ->capture_default_str()
+      ->transform(SeedRange());
   predict->add_option("--taps", predict_options->taps, "Sampled taps per wall")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();

@@ -43,6 +43,29 @@ std::size_t Count(const std::map<std::string, std::vector<std::vector<int>>>& a)
   return n;
 }
 
+// a seed is a whole decimal number from 0 to 2^64 - 1 in every study subcommand (CLI11 alone
+// wrapped -1 to 2^64 - 1 and read 010 as octal)
+TEST(StudySimulateCliTest, SeedsOutsideTheirRangeAreRefused) {
+  const std::string protocol = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
+  const fs::path dir = TempDir("simseed");
+  for (const std::string& cmd :
+       {"study predict --protocol " + protocol + " --seed ",
+        "study simulate --protocol " + protocol + " --participants 1 --log-dir " +
+            (dir / "logs").string() + " --seed ",
+        "study run --protocol " + protocol + " --presenter text --participant p1 --log " +
+            (dir / "run.jsonl").string() + " --seed "}) {
+    for (const std::string seed : {"-1", "18446744073709551616"}) {
+      const CliResult r = RunCli(cmd + seed);
+      EXPECT_EQ(r.exit_code, 2) << cmd << seed << "\n" << r.err;
+      EXPECT_NE(r.err.find("--seed: " + seed + " is out of range"), std::string::npos)
+          << cmd << seed << "\n"
+          << r.err;
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "logs")) << "nothing is written for a refused seed";
+  EXPECT_FALSE(fs::exists(dir / "run.jsonl"));
+}
+
 TEST(StudySimulateCliTest, KilledAndResumedEqualsAnUninterruptedRun) {
   const fs::path dir = TempDir("simkill");
   const std::string protocol = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
