@@ -18,6 +18,23 @@ std::vector<CommandFactory>& Commands() {
   return commands;
 }
 
+namespace {
+
+// when the first word names no subcommand: that word and the valid ones (CLI11 says only that a
+// subcommand is required); empty otherwise
+std::string UnknownSubcommand(const CLI::App& app, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return "";
+  const std::string word = argv[1];
+  std::string valid;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    if (sub->get_name() == word) return "";
+    valid += (valid.empty() ? "" : ", ") + sub->get_name();
+  }
+  return "unknown subcommand '" + word + "'; valid: " + valid;
+}
+
+}  // namespace
+
 }  // namespace rigidtouch::cli
 
 int main(int argc, char** argv) {
@@ -40,6 +57,12 @@ int main(int argc, char** argv) {
     return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
     // CLI11 would exit with its own code (above 100) and no prefix: one voice for every error
+    const std::string unknown = rigidtouch::cli::UnknownSubcommand(app, argc, argv);
+    if (!unknown.empty()) {
+      std::cerr << "rigidtouch: error: " << unknown << "\n"
+                << "Run `" << argv[0] << " --help` for the subcommands.\n";
+      return 2;
+    }
     std::cerr << "rigidtouch: error: " << e.what() << "\n"
               << "Run `" << argv[0] << (argc > 1 ? std::string(" ") + argv[1] : std::string())
               << " --help` for the options.\n";

@@ -31,6 +31,23 @@ class SettingsCliTest : public ::testing::Test {
   fs::path dir_;
 };
 
+// a first word that names no subcommand is named, with the valid ones (CLI11 said only "A
+// subcommand is required", and pointed at `rigidtouch nosuch --help`)
+TEST_F(SettingsCliTest, AnUnknownSubcommandIsNamed) {
+  const CliResult r = RunCli("nosuch --json");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("rigidtouch: error: unknown subcommand 'nosuch'; valid: bench, "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("tap, view"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("nosuch --help"), std::string::npos) << r.err;
+  // an unknown flag of a known subcommand keeps CLI11's words and that subcommand's help
+  const CliResult flag = RunCli("tap --nosuch");
+  EXPECT_EQ(flag.exit_code, 2);
+  EXPECT_NE(flag.err.find("--nosuch"), std::string::npos) << flag.err;
+  EXPECT_NE(flag.err.find("tap --help"), std::string::npos) << flag.err;
+}
+
 TEST_F(SettingsCliTest, StiffnessFromTheConfigBeatsThePresetAndTheFlagBeatsTheConfig) {
   const std::string k = Config("k.json", R"({"contact": {"stiffness_N_per_m": 300}})");
   // the Touch preset's 400 N/m is the default; the file's 300 wins over it; the flag over both
