@@ -568,6 +568,16 @@ TapOutcome RunTapFlags(const std::vector<std::string>& args) {
   });
 }
 
+std::vector<std::string> TapFlagNames() {
+  CLI::App app{"rigidtouch tap"};
+  AddTapOptions(&app);
+  std::vector<std::string> names;
+  for (const CLI::Option* option : app.get_options()) {
+    for (const std::string& name : option->get_lnames()) names.push_back(name);
+  }
+  return names;
+}
+
 analysis::TapSetup PrepareTapFlags(const std::vector<std::string>& args) {
   const auto f = ParseTapFlags(args);
   return WithOrigins(ResolveSettings(f->scene),

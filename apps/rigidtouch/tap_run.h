@@ -27,4 +27,8 @@ TapOutcome RunTapFlags(const std::vector<std::string>& args);
 /// a loop driven from elsewhere. Throws Error as RunTapFlags.
 analysis::TapSetup PrepareTapFlags(const std::vector<std::string>& args);
 
+/// The long names of tap's flags, without the dashes (for a sweep's spec to be checked before it
+/// runs).
+std::vector<std::string> TapFlagNames();
+
 }  // namespace rigidtouch::cli

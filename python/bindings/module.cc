@@ -567,6 +567,8 @@ void DefineSimulatedDevice(py::module_& m) {
 
 // the CLI's tap experiment and study analyses in process
 void DefineTapAndStudy(py::module_& m) {
+  m.def("_tap_flag_names", &cli::TapFlagNames,
+        "The long names of `rigidtouch tap`'s flags, without the dashes.");
   m.def(
       "_prepare_tap",
       [](const std::vector<std::string>& args) {

@@ -79,22 +79,31 @@ def load_spec(spec):
 
 def points(spec):
     """The sweep's points in order: a list of dicts of tap flags."""
+    where = f"sweep spec '{spec}'" if isinstance(spec, (str, os.PathLike)) else "sweep spec"
     spec = load_spec(spec)
     unknown = set(spec) - {"base", "grid", "description"}
     if unknown:
-        raise SpecError(f"sweep spec: unknown field(s) {', '.join(sorted(unknown))}; valid: "
+        raise SpecError(f"{where}: unknown field(s) {', '.join(sorted(unknown))}; valid: "
                         "base, grid, description")
     base = spec.get("base", {})
     grid = spec.get("grid", {})
     if not isinstance(base, dict) or not isinstance(grid, dict):
-        raise SpecError("sweep spec: base and grid must be objects")
+        raise SpecError(f"{where}: base and grid must be objects")
     for key in list(base) + list(grid):
         if key in ("trace", "plot", "json", "compare_walls", "out_dir"):
-            raise SpecError(f"sweep spec: '{key}' writes files or prints; a sweep records "
+            raise SpecError(f"{where}: '{key}' writes files or prints; a sweep records "
                             "metrics only")
+    from rigidtouch import _rigidtouch
+    flags = set(_rigidtouch._tap_flag_names())
+    for part, section in (("base", base), ("grid", grid)):
+        for key in section:
+            flag = key.replace("_", "-")
+            if flag not in flags:
+                raise SpecError(f"{where}: {part}.{key} is not a flag of tap (--{flag}); "
+                                "see `rigidtouch tap --help`")
     both = set(base) & set(grid)
     if both:
-        raise SpecError(f"sweep spec: {', '.join(sorted(both))} in both base and grid")
+        raise SpecError(f"{where}: {', '.join(sorted(both))} in both base and grid")
     keys = list(grid)
     axes = [_values(k, grid[k]) for k in keys]
     return [dict(base, **dict(zip(keys, combo))) for combo in itertools.product(*axes)]

@@ -37,6 +37,13 @@ def test_points_of_a_grid():
         sw.points({"grids": {}})
     with pytest.raises(sw.SpecError, match="trace"):
         sw.points({"base": {"trace": "x.csv"}})
+    # a key that is no flag of tap is a spec error before anything runs (it was a failed point,
+    # with CLI11's words in the results file only)
+    with pytest.raises(sw.SpecError, match=r"grid.nosuch is not a flag of tap \(--nosuch\)"):
+        sw.points({"base": {}, "grid": {"nosuch": [1]}})
+    with pytest.raises(sw.SpecError, match=r"base.stifness is not a flag of tap"):
+        sw.points({"base": {"stifness": 300.0}})
+    assert sw.points({"base": {"wall_point": [0, 0, 0], "wall_normal": [0, 0, 1]}})
 
 
 def test_sweep_records_and_resumes(tmp_path):
