@@ -339,6 +339,12 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
     geom.contype = m->geom_contype[g];
     geom.conaffinity = m->geom_conaffinity[g];
     GeomPose(m, model, g, geom);
+    // the pose composed over its bodies: each body's offset may be in range and the sum not (a
+    // static body 1e300 m out, a welded chain reaching 1e7 m)
+    CheckVec(path,
+             "the position of geom '" + geom.name +
+                 (geom.body < 0 ? "' in the world" : "' relative to its free body"),
+             geom.pos_B.data(), 3, kMaxPosition, "m");
     geom.mj_geom = g;
     model.geoms.push_back(geom);
   }

@@ -169,6 +169,15 @@ TEST(MjcfLoaderTest, ASceneTimestepOutOfRangeNamesTheFileAndElement) {
 
 TEST(MjcfLoaderTest, AbsurdOrNonFiniteValuesNameTheBodyGeomKeyframeOrOption) {
   const std::string tool = "size=\"0.01\" mass=\"0.1\"";
+  // each offset in range, the composed pose not: a static body far out (it loaded)
+  const std::string far = BoundsError(
+      BoundsScene("", tool, "",
+                  "<body pos=\"9000 0 0\"><body pos=\"9000 0 0\"><geom name=\"far\" type=\"box\" "
+                  "size=\"0.1 0.1 0.1\"/></body></body>"));
+  EXPECT_NE(far.find("the position of geom 'far' in the world[0] is 18000 m, outside the valid "
+                     "range [-10000, 10000] m"),
+            std::string::npos)
+      << far;
   std::string e = BoundsError(BoundsScene("", "size=\"0.01\" mass=\"1e300\"", ""));
   EXPECT_NE(e.find("the mass of body 'tool' is 1e+300 kg, outside the valid range [1e-09, 1e+09]"),
             std::string::npos)
