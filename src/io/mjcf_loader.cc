@@ -388,6 +388,20 @@ void InitialState(const mjModel* m, const std::string& path, Model& model) {
   if (key >= 0) {
     std::copy(m->key_qpos + key * m->nq, m->key_qpos + (key + 1) * m->nq, qpos.begin());
     std::copy(m->key_qvel + key * m->nv, m->key_qvel + (key + 1) * m->nv, qvel.begin());
+    if (m->key_time[key] != 0.0) {
+      model.load_warnings.push_back("scene file '" + path + "': keyframe 'initial' has time=\"" +
+                                    Num(m->key_time[key]) +
+                                    "\"; rigidtouch starts every run at t = 0 and ignores it");
+    }
+  }
+  // only the keyframe named 'initial' is a start: say so of the others rather than drop them
+  for (int k = 0; k < m->nkey; ++k) {
+    if (k == key) continue;
+    const std::string name = MjName(m, mjOBJ_KEY, k);
+    model.load_warnings.push_back(
+        "scene file '" + path + "': keyframe '" + name +
+        "' is not used: rigidtouch starts from the keyframe named 'initial' (name it so to start "
+        "from it)");
   }
   const std::string from = key >= 0 ? "keyframe 'initial'" : "the default pose";
   for (const auto& b : model.bodies) {
