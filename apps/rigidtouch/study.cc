@@ -105,7 +105,24 @@ std::unique_ptr<st::StimulusSource> TapSource(const std::string& scene, const st
   return st::MakeTapStimulusSource(options);
 }
 
+// the text presenter renders nothing: a device flag given with it would be silently unused
+void RefuseDeviceFlagsForText(const RunOptions& o) {
+  const std::pair<const char*, bool> flags[] = {{"--scene", !o.scene.empty()},
+                                                {"--device", o.device.has_value()},
+                                                {"--connect", o.connect.has_value()},
+                                                {"--preset", o.preset.has_value()},
+                                                {"--key", !o.key_file.empty()}};
+  for (const auto& [flag, given] : flags) {
+    if (given) {
+      throw Error(std::string(flag) +
+                  " has no effect with --presenter text (a dry run that renders nothing); "
+                  "remove it, or use --presenter device");
+    }
+  }
+}
+
 void Run(const RunOptions& o) {
+  if (o.presenter == "text") RefuseDeviceFlagsForText(o);
   const st::Protocol protocol = st::LoadProtocol(o.protocol);
   // with --json, stdout carries only the final JSON object
   std::ostream& screen = o.json ? std::cerr : std::cout;

@@ -66,6 +66,25 @@ TEST(StudySimulateCliTest, SeedsOutsideTheirRangeAreRefused) {
   EXPECT_FALSE(fs::exists(dir / "run.jsonl"));
 }
 
+// the text presenter renders nothing: a device flag with it is refused, before any log exists
+TEST(StudySimulateCliTest, TheTextPresenterRefusesTheDevicesFlags) {
+  const std::string protocol = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
+  const fs::path dir = TempDir("textflags");
+  const std::string run = "study run --protocol " + protocol +
+                          " --presenter text --participant p1 --log " +
+                          (dir / "run.jsonl").string();
+  for (const std::string flag :
+       {"--scene scenes/stack.xml", "--device omega3", "--connect sim", "--key k.key"}) {
+    const CliResult r = RunCli(run + " " + flag);
+    EXPECT_EQ(r.exit_code, 2) << flag << "\n" << r.err;
+    const std::string name = flag.substr(0, flag.find(' '));
+    EXPECT_NE(r.err.find("rigidtouch: error: " + name + " has no effect with --presenter text"),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "run.jsonl"));
+}
+
 TEST(StudySimulateCliTest, KilledAndResumedEqualsAnUninterruptedRun) {
   const fs::path dir = TempDir("simkill");
   const std::string protocol = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
