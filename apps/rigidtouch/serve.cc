@@ -358,7 +358,8 @@ void Register(CLI::App& root) {
                   "pin the loop thread to this CPU (the trace writer runs on the others); -1: "
                   "not pinned")
       ->capture_default_str();
-  app->add_option("--watchdog", f->watchdog_s, "no fresh device state for this long: zero force")
+  app->add_option("--watchdog", f->watchdog_s,
+                  "udp: no fresh device state for this long: zero force")
       ->capture_default_str();
   app->add_option("--startup-timeout", f->startup_timeout_s,
                   "udp: no first state from the device within this long [s]: exit with status 5")
@@ -369,7 +370,7 @@ void Register(CLI::App& root) {
   app->add_option("--max-device-speed", f->max_device_speed_mps,
                   "a device state faster than this [m/s] is implausible: zero force")
       ->capture_default_str();
-  app->add_option("--test-drop", f->test_drop, "TEST ONLY: drop this fraction of packets");
+  app->add_option("--test-drop", f->test_drop, "udp, TEST ONLY: drop this fraction of packets");
   app->add_option("--key", f->key_file,
                   "udp: pre-shared key file (rigidtouch keygen); default: the per-user key, "
                   "created on first use");
@@ -400,13 +401,23 @@ void Register(CLI::App& root) {
       return v && v->starts_with(kReplayPrefix);
     };
     const bool replaying = replay(f->device) || replay(f->connect);
+    const auto udp = [](const std::optional<std::string>& v) {
+      return v && v->starts_with("udp://");
+    };
+    const bool bridged = udp(f->device) || udp(f->connect);
     if (!replaying && app->count("--replay-pace") > 0) {
       throw Error("serve: --replay-pace applies to --connect replay:LOG only");
     }
-    if (replaying && (app->count("--taps") + app->count("--speed")) > 0) {
-      throw Error(
-          "serve: --taps and --speed script the simulated hand; a replay moves the handle "
-          "as recorded");
+    if ((replaying || bridged) && (app->count("--taps") + app->count("--speed")) > 0) {
+      throw Error(std::string("serve: --taps and --speed script the simulated hand; ") +
+                  (replaying ? "a replay moves the handle as recorded"
+                             : "a device through the bridge is moved by its own hand"));
+    }
+    // the bridge's own settings: unused by the in-process simulated device and by a replay
+    for (const char* flag : {"--key", "--watchdog", "--startup-timeout", "--test-drop"}) {
+      if (!bridged && app->count(flag) > 0) {
+        throw Error(std::string("serve: ") + flag + " applies to --connect udp://HOST:PORT only");
+      }
     }
     WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
   });

@@ -72,6 +72,27 @@ TEST(ServeCliTest, StiffnessAboveTheDevicesIsRefused) {
   }
 }
 
+// the bridge's flags with the in-process simulated device, and the simulated hand's with the
+// bridge, were accepted and unused (even out of range: --test-drop 2, --watchdog -1)
+TEST(ServeCliTest, FlagsOfAnotherDeviceAreRefused) {
+  for (const std::string flag :
+       {"--key /nonexistent/k.key", "--watchdog -1", "--test-drop 2", "--startup-timeout 5"}) {
+    const CliResult r = RunCli("serve --device sim --duration 0.01 " + flag);
+    EXPECT_EQ(r.exit_code, 2) << flag << "\n" << r.err;
+    const std::string name = flag.substr(0, flag.find(' '));
+    EXPECT_NE(r.err.find("rigidtouch: error: serve: " + name +
+                         " applies to --connect udp://HOST:PORT only"),
+              std::string::npos)
+        << r.err;
+  }
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  const CliResult taps = RunCli("serve --connect " + addr + " --taps 2 --duration 0.01");
+  EXPECT_EQ(taps.exit_code, 2) << taps.err;
+  EXPECT_NE(taps.err.find("a device through the bridge is moved by its own hand"),
+            std::string::npos)
+      << taps.err;
+}
+
 // no device server: a clear message after the startup timeout, exit status 5, not 0
 TEST(ServeCliTest, NoAnsweringDeviceFailsAfterTheStartupTimeout) {
   const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
