@@ -2,6 +2,7 @@
 // figures; `--compare LIST` runs renderers side by side, `--compare-walls` the method's three
 // walls and pure penalty (the main job).
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -193,6 +194,19 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"taps", taps},
       {"warnings", WarningsJson(run.warnings)},
       {"non_finite_state", NonFiniteJson(NonFinite(run))}};
+}
+
+// matplotlib takes the figure's format from the extension: one it cannot write is refused before
+// the run (it failed after it, with a Python traceback)
+void CheckFigureFormat(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (const char* ok : {".png", ".pdf", ".svg", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff"}) {
+    if (ext == ok) return;
+  }
+  throw Error("--plot '" + path + "': the figure's format comes from its extension, one of .png, " +
+              ".pdf, .svg, .eps, .ps, .jpg, .tif (got '" + ext + "')");
 }
 
 // draws a figure; a missing matplotlib is reported, not fatal (the trace is already written)
@@ -431,7 +445,10 @@ void Run(const TapFlags& f) {
   }
   // a bad output path fails now, not after the run; the figure first, so a missing folder is
   // blamed on the path the user wrote, not on the temporary trace beside it
-  if (!f.plot.empty()) io::CheckOutputPath(f.plot, "figure");
+  if (!f.plot.empty()) {
+    CheckFigureFormat(f.plot);
+    io::CheckOutputPath(f.plot, "figure");
+  }
   if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
   const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, f.wall));
   PrintLoadWarnings(run.model);

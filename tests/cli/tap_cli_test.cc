@@ -200,6 +200,21 @@ TEST(TapCliTest, AWallTheDeviceCannotDisplayIsRunAndSaidSo) {
       << served.err;
 }
 
+// a figure format matplotlib cannot write is refused before the run (it failed after it, with
+// a Python traceback); the extension's case does not matter
+TEST(TapCliTest, APlotFormatMatplotlibCannotWriteIsRefusedBeforeTheRun) {
+  const std::filesystem::path dir = TempDir("plotformat");
+  const std::string txt = (dir / "q.txt").string();
+  const CliResult r = RunCli("tap --taps 1 --plot " + txt);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("rigidtouch: error: --plot '" + txt +
+                       "': the figure's format comes from its extension"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("Traceback"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::is_empty(dir)) << "no trace or figure written";
+}
+
 TEST(TapCliTest, SeedsOutsideTheirRangeAreRefused) {
   for (const std::string seed : {"-1", "18446744073709551616", "99999999999999999999999"}) {
     const CliResult r = RunCli("tap --taps 1 --seed " + seed);
