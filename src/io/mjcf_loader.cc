@@ -7,9 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "dynamics/kinematics.h"
 #include "geometry/capacity.h"
@@ -455,6 +458,40 @@ void CheckInitialOverlap(const Model& model, const std::string& path) {
   }
 }
 
+// MuJoCo's warnings while it compiles a scene (a NaN in the XML, ...), kept by the thread that
+// compiles so that they become load warnings naming the file, instead of an unprefixed line on
+// stdout and a MUJOCO_LOG.TXT in the working directory. MuJoCo's hook is one pointer for the
+// process: it is set once (a compilation on each thread keeps its own warnings through the
+// thread-local list) and never written again, so concurrent loads do not race on it.
+thread_local std::vector<std::string>* t_compile_warnings = nullptr;
+void (*g_previous_warning)(const char*) = nullptr;
+
+void KeepCompileWarning(const char* message) {
+  if (t_compile_warnings != nullptr) {
+    t_compile_warnings->push_back(message);
+  } else if (g_previous_warning != nullptr) {
+    g_previous_warning(message);  // a hook the host program set before rigidtouch's
+  } else {
+    std::cerr << "rigidtouch: warning: MuJoCo: " << message << "\n";
+  }
+}
+
+// this thread's MuJoCo warnings go to `into` while it lives
+class CompileWarnings {
+ public:
+  explicit CompileWarnings(std::vector<std::string>* into) {
+    static std::once_flag hooked;
+    std::call_once(hooked, [] {
+      g_previous_warning = mju_user_warning;
+      mju_user_warning = &KeepCompileWarning;
+    });
+    t_compile_warnings = into;
+  }
+  ~CompileWarnings() { t_compile_warnings = nullptr; }
+  CompileWarnings(const CompileWarnings&) = delete;
+  CompileWarnings& operator=(const CompileWarnings&) = delete;
+};
+
 }  // namespace
 
 Model LoadModel(const std::string& path, const LoadOptions& options) {
@@ -463,12 +500,20 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
     throw Error("scene file '" + path + "' does not exist or is not a regular file");
   }
   char error[1024] = "";
-  // compiled without MuJoCo's solver sizes (nconmax, njmax, nstack): rigidtouch sizes its own
-  mjModel* raw = io::CompileWithoutSolverSizes(path, error, sizeof(error));
+  std::vector<std::string> mujoco_warnings;
+  mjModel* raw = nullptr;
+  {
+    const CompileWarnings kept(&mujoco_warnings);
+    // compiled without MuJoCo's solver sizes (nconmax, njmax, nstack): rigidtouch sizes its own
+    raw = io::CompileWithoutSolverSizes(path, error, sizeof(error));
+  }
   if (raw == nullptr) {
     throw Error("scene file '" + path + "': MuJoCo could not compile it: " + error);
   }
   Model model;
+  for (const std::string& w : mujoco_warnings) {
+    model.load_warnings.push_back("scene file '" + path + "': MuJoCo: " + w);
+  }
   model.collision = std::shared_ptr<mjModel>(raw, [](mjModel* m) { mj_deleteModel(m); });
   const mjModel* m = raw;
   model.source = path;

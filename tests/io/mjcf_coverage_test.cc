@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -463,6 +464,20 @@ TEST_P(WarnedElementTest, SceneLoadsAndAWarningNamesTheElement) {
 
 INSTANTIATE_TEST_SUITE_P(MjcfCoverage, WarnedElementTest, ::testing::ValuesIn(WarnedCases()),
                          CaseName);
+
+// MuJoCo's own warning while it compiles becomes a load warning naming the file; it printed an
+// unprefixed line and wrote MUJOCO_LOG.TXT into the working directory
+TEST(MjcfCoverageTest, MujocosCompileWarningIsALoadWarning) {
+  std::filesystem::remove("MUJOCO_LOG.TXT");
+  const Model m = LoadXml(Scene("",
+                                "<geom type=\"box\" size=\"0.1 0.1 0.01\" pos=\"1 0 0\" "
+                                "rgba=\"nan 0 0 1\"/>"),
+                          "nan.xml");
+  std::string all;
+  for (const std::string& w : m.load_warnings) all += w + "\n";
+  EXPECT_NE(all.find("nan.xml': MuJoCo: XML contains a 'NaN'"), std::string::npos) << all;
+  EXPECT_FALSE(std::filesystem::exists("MUJOCO_LOG.TXT"));
+}
 
 TEST(MjcfCoverageTest, PlainScenesLoadWithoutWarnings) {
   for (const char* name : {"box_plane.xml", "sphere_plane.xml", "stack3.xml", "two_spheres.xml",
