@@ -68,10 +68,9 @@ bool DataFitsModel(const Model& model, const Data& data) {
   if (data.workspace == nullptr) return false;
   const std::weak_ptr<mjModel_>& made_for = data.workspace->made_for;
   // the same compiled scene: neither owner orders before the other (both empty for a model
-  // built without one); an expired one is another scene, even at the same address
-  const bool same_scene = !made_for.owner_before(model.collision) &&
-                          !model.collision.owner_before(made_for) &&
-                          (model.collision == nullptr || !made_for.expired());
+  // built without one); another scene at the same address has another owner
+  const bool same_scene =
+      !made_for.owner_before(model.collision) && !model.collision.owner_before(made_for);
   const std::size_t nbody = model.bodies.size();
   const auto ncap = static_cast<std::size_t>(model.max_contacts);
   return same_scene && data.bodies.size() == nbody && data.window.size() == nbody &&

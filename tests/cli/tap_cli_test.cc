@@ -216,21 +216,19 @@ TEST(TapCliTest, APlotFormatMatplotlibCannotWriteIsRefusedBeforeTheRun) {
 }
 
 TEST(TapCliTest, SeedsOutsideTheirRangeAreRefused) {
-  for (const std::string seed : {"-1", "18446744073709551616", "99999999999999999999999"}) {
-    const CliResult r = RunCli("tap --taps 1 --seed " + seed);
+  // out of range, and (a hexadecimal or octal reading is not guessed) not decimal digits
+  const std::pair<const char*, const char*> refused[] = {
+      {"-1", "is out of range"},
+      {"18446744073709551616", "is out of range"},
+      {"99999999999999999999999", "is out of range"},
+      {"0x10", "is not a whole number"},
+      {"1.5", "is not a whole number"},
+      {"seven", "is not a whole number"}};
+  for (const auto& [seed, why] : refused) {
+    const CliResult r = RunCli(std::string("tap --taps 1 --seed ") + seed);
     EXPECT_EQ(r.exit_code, 2) << seed << "\n" << r.err;
-    EXPECT_NE(r.err.find("rigidtouch: error: --seed: " + seed +
-                         " is out of range: valid 0 to 18446744073709551615"),
-              std::string::npos)
-        << seed << "\n"
-        << r.err;
-  }
-  // a hexadecimal or octal reading is not guessed: decimal digits only
-  for (const std::string seed : {"0x10", "1.5", "seven"}) {
-    const CliResult r = RunCli("tap --taps 1 --seed " + seed);
-    EXPECT_EQ(r.exit_code, 2) << seed << "\n" << r.err;
-    EXPECT_NE(r.err.find("rigidtouch: error: --seed: " + seed +
-                         " is not a whole number: valid 0 to 18446744073709551615"),
+    EXPECT_NE(r.err.find(std::string("rigidtouch: error: --seed: ") + seed + " " + why +
+                         ": valid 0 to 18446744073709551615"),
               std::string::npos)
         << seed << "\n"
         << r.err;
