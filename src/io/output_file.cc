@@ -42,6 +42,13 @@ std::string FolderProblem(const std::string& dir) {
   if (::access(dir.c_str(), W_OK | X_OK) != 0) {
     return "folder '" + dir + "' is not writable (" + Reason(errno) + ")";
   }
+  // access() passes for root, and on file systems that take no new files (/proc, /sys): a file
+  // created and removed at once is the only sure test, made before the run rather than after it
+  std::string probe = (fs::path(dir) / ".rigidtouch-probe.XXXXXX").string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) return "folder '" + dir + "' takes no new file (" + Reason(errno) + ")";
+  ::close(fd);
+  ::unlink(probe.c_str());
   return "";
 }
 

@@ -82,6 +82,17 @@ TEST_F(OutputFileTest, RefusesLinksFifosDevicesFoldersAndReadOnlyFiles) {
             (std::vector<std::string>{"fifo", "link.csv", "ro.csv", "sub", "target.csv"}));
 }
 
+// a folder that access() calls writable but that takes no file (root passes every access check;
+// /proc takes no new file even from root) is refused before the run, not after it (exit 2, not 4)
+TEST_F(OutputFileTest, AFolderThatTakesNoNewFileIsRefusedBeforeTheRun) {
+  const std::string e = CheckError("/proc/t.csv");
+  EXPECT_NE(e.find("folder '/proc'"), std::string::npos) << e;
+  EXPECT_THROW(CheckOutputDir("/proc/out", "output folder"), Error);
+  // the test leaves nothing behind in a folder that takes files
+  EXPECT_EQ(CheckError(Path("t.csv")), "");
+  EXPECT_TRUE(Entries().empty());
+}
+
 TEST_F(OutputFileTest, OutputDirMayBeCreatedUnderAWritableFolder) {
   EXPECT_NO_THROW(CheckOutputDir(Path("a/b/c"), "output folder"));
   std::ofstream(Path("file")) << "x";
