@@ -22,6 +22,10 @@ struct DeviceLimits {
   double max_stiffness_N_per_m = 0.0;
   /// Maximum closed-loop linear damping [N s/m]; 0 means unknown.
   double max_damping_Ns_per_m = 0.0;
+  /// Maximum continuous torque [N m]; 0 means the device displays no torque, and none is sent
+  /// (every preset is a 3-DoF force device). The loop's last guard and the bridge's device side
+  /// clip the torque's magnitude to it.
+  double max_torque_Nm = 0.0;
 };
 
 /// A haptic device. Implementations never throw from Read, Write or EndPeriod: errors are

@@ -48,7 +48,7 @@ DeviceSpec ReadDeviceSpec(const std::string& path) {
   const io::StrictObject o(
       source, doc, "",
       {"name", "max_force_N", "max_stiffness_N_per_m", "max_damping_Ns_per_m", "apparent_mass_kg",
-       "encoder_resolution_m", "velocity_filter_hz", "delay_ticks"},
+       "encoder_resolution_m", "velocity_filter_hz", "delay_ticks", "max_torque_Nm"},
       "a device spec");
   DeviceSpec spec;
   spec.file = path;
@@ -60,6 +60,9 @@ DeviceSpec ReadDeviceSpec(const std::string& path) {
       Required(o, "max_stiffness_N_per_m", 0.0, 1e7, "N/m (0: unknown)");
   spec.limits.max_damping_Ns_per_m =
       Required(o, "max_damping_Ns_per_m", 0.0, 1e5, "N s/m (0: unknown)");
+  // optional: a 3-DoF force device (0, the default) gets no torque
+  spec.limits.max_torque_Nm =
+      o.Has("max_torque_Nm") ? Required(o, "max_torque_Nm", 0.0, 1e3, "N m (0: no torque)") : 0.0;
   spec.model.apparent_mass_kg = Required(o, "apparent_mass_kg", 0.0, 100.0, "kg");
   spec.model.encoder_resolution_m =
       Required(o, "encoder_resolution_m", 0.0, 0.01, "m (0: no quantization)");

@@ -12,24 +12,25 @@ namespace rigidtouch::device {
 namespace {
 
 // values as CHAI3D 3.x sets m_maxLinearForce [N], m_maxLinearStiffness [N/m] and
-// m_maxLinearDamping [N/(m/s)] in its device classes
+// m_maxLinearDamping [N/(m/s)] in its device classes; torque 0: each displays force only (3-DoF)
 const std::array<DeviceLimits, 6>& PresetTable() {
   static const std::array<DeviceLimits, 6> table = {{
       // CHAI3D CPhantomDevices.cpp, model name "Touch" (3D Systems / Geomagic Touch)
-      {"touch", 3.3, 400.0, 4.0},
+      {"touch", 3.3, 400.0, 4.0, 0.0},
       // CHAI3D CPhantomDevices.cpp, model name "PHANTOM Omni"
-      {"omni", 3.3, 700.0, 5.0},
+      {"omni", 3.3, 700.0, 5.0, 0.0},
       // CHAI3D CFalconDevice.cpp (Novint Falcon)
-      {"falcon", 8.0, 3000.0, 20.0},
+      {"falcon", 8.0, 3000.0, 20.0, 0.0},
       // CHAI3D CDeltaDevices.cpp, Force Dimension omega.3 defaults
-      {"omega3", 12.0, 5000.0, 30.0},
+      {"omega3", 12.0, 5000.0, 30.0, 0.0},
       // assumption: a mid-range desktop device. force and stiffness match CHAI3D's virtual
       // device (CVirtualDevice.cpp: 10 N, 1000 N/m); damping 10 N s/m is our choice, between
       // the PHANToM family (4-8) and the Falcon (20), since CHAI3D's virtual 100 is not physical
-      {"generic", 10.0, 1000.0, 10.0},
-      // not a device: the method itself, no force, stiffness or damping limit (its 1 um encoder
-      // and zero delay are in device_spec.cc's PresetSpec)
-      {"ideal", 0.0, 0.0, 0.0},
+      {"generic", 10.0, 1000.0, 10.0, 0.0},
+      // not a device: the method itself, no force, stiffness or damping limit, and no torque (the
+      // simulated hand takes force only); its 1 um encoder and zero delay are in device_spec.cc's
+      // PresetSpec
+      {"ideal", 0.0, 0.0, 0.0, 0.0},
   }};
   return table;
 }

@@ -75,6 +75,7 @@ SimulatedDevice::SimulatedDevice(const DeviceLimits& limits, const HandParams& h
                                  const DeviceModelParams& model, const TapScript& script)
     : limits_(limits), hand_(hand), model_(model), script_(script) {
   CheckRange("limits.max_force_N", limits.max_force_N, 0.0, 1e4, false, false, "N");
+  CheckRange("limits.max_torque_Nm", limits.max_torque_Nm, 0.0, 1e3, false, false, "N m");
   CheckRange("hand.mass_kg", hand.mass_kg, 0.0, 100.0, true, false, "kg");
   CheckRange("hand.damping_Ns_per_m", hand.damping_Ns_per_m, 0.0, 1e4, false, false, "N s/m");
   CheckRange("hand.stiffness_N_per_m", hand.stiffness_N_per_m, 0.0, 1e6, false, false, "N/m");

@@ -256,7 +256,9 @@ void UdpDeviceServer::Impl::HandleCommand(const PacketHeader& header, const UdpE
   // the bridge knows the hardware's limit; the renderer's own clipping is not relied on. The
   // renderer's own clip (overflow-safe, rounded down to the limit, the torque scaled with the
   // force): a plain scale by limit / norm can land one rounding above the limit
-  if (render::LimitForce(device.limits().max_force_N, decoded.force_N, decoded.torque_Nm)) {
+  const bool torque_clipped = render::LimitTorque(device.limits().max_torque_Nm, decoded.torque_Nm);
+  if (render::LimitForce(device.limits().max_force_N, decoded.force_N, decoded.torque_Nm) ||
+      torque_clipped) {
     decoded.clipped = true;
     ++counters.clamped_commands;
   }

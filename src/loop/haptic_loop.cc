@@ -55,7 +55,10 @@ class HapticStep {
     const double limit_N =
         render::StricterLimit(model_.device.max_force_N, device_.limits().max_force_N);
     r_.force_limit_N = limit_N;
-    if (render::LimitForce(limit_N, command.force_N, command.torque_Nm)) {
+    // the torque within the device's own torque limit (none for a 3-DoF force device)
+    const bool torque_clipped =
+        render::LimitTorque(device_.limits().max_torque_Nm, command.torque_Nm);
+    if (render::LimitForce(limit_N, command.force_N, command.torque_Nm) || torque_clipped) {
       ++r_.guard_clipped_ticks;
       command.clipped = true;
       data_.WarnAt(Warning::kForceClipped, tick_step);

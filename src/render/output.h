@@ -12,6 +12,11 @@ namespace rigidtouch::render {
 /// Returns whether it scaled. Used by the render stage and by the haptic loop's last guard.
 bool LimitForce(double max_force_N, Vec3& force_N, Vec3& torque_Nm);
 
+/// Clips a torque's magnitude to max_torque_Nm, keeping its direction, rounded down and
+/// overflow-safe; a non-finite torque becomes zero. max_torque_Nm <= 0 (a device that displays
+/// no torque) makes the torque zero without counting it as clipped. Returns whether it clipped.
+bool LimitTorque(double max_torque_Nm, Vec3& torque_Nm);
+
 /// Sums the tool's contact forces into data (tool_penalty_force_W, penetration, normal, count;
 /// the contacts of the tool's group, as this tick's stage 3 built the groups) and returns the
 /// command: penalty (or coupling) + Eq. 9 impulsive force, clipped to

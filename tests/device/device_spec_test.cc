@@ -46,6 +46,8 @@ TEST(DeviceSpecTest, IdealHasNoLimitAFineEncoderAndNoDelay) {
   // a real preset keeps its limits and the default sensing (the Omni's 55 um encoder)
   const DeviceSpec touch = ParseDeviceSpec("touch");
   EXPECT_EQ(touch.limits.max_force_N, 3.3);
+  EXPECT_EQ(touch.limits.max_torque_Nm, 0.0);  // force only (3-DoF)
+  EXPECT_EQ(ideal.limits.max_torque_Nm, 0.0);
   EXPECT_EQ(touch.model.encoder_resolution_m, DeviceModelParams{}.encoder_resolution_m);
 }
 
@@ -61,6 +63,13 @@ TEST(DeviceSpecTest, AFileGivesEveryField) {
   EXPECT_EQ(s.model.encoder_resolution_m, 1e-5);
   EXPECT_EQ(s.model.velocity_cutoff_hz, 200.0);
   EXPECT_EQ(s.model.delay_ticks, 1);
+  EXPECT_EQ(s.limits.max_torque_Nm, 0.0);  // not given: a 3-DoF force device, no torque
+  std::string with_torque = kFull;
+  with_torque.replace(with_torque.find(R"("delay_ticks": 1)"), 16,
+                      R"("delay_ticks": 1, "max_torque_Nm": 0.4)");
+  const std::string torque_path = Write("torque.json", with_torque);
+  EXPECT_EQ(ParseDeviceSpec(torque_path).limits.max_torque_Nm, 0.4);
+  std::filesystem::remove(torque_path);
   // without a name, the file's stem
   std::string unnamed = kFull;
   unnamed.replace(unnamed.find(R"("name": "lab", )"), 15, "");
@@ -88,7 +97,9 @@ TEST(DeviceSpecTest, BadSpecsNameTheField) {
        "out of range"},
       {R"("delay_ticks": 1)", R"("delay_ticks": 3)", "delay_ticks", ""},
       {R"(, "delay_ticks": 1)", "", "delay_ticks", "missing"},
-      {R"("delay_ticks": 1)", R"("delay_ticks": 1, "max_torque_Nm": 1)", "max_torque_Nm", ""},
+      {R"("delay_ticks": 1)", R"("delay_ticks": 1, "max_torque_N": 1)", "max_torque_N", ""},
+      {R"("delay_ticks": 1)", R"("delay_ticks": 1, "max_torque_Nm": -1)", "max_torque_Nm",
+       "out of range"},
       {R"("max_stiffness_N_per_m": 800)", R"("max_stiffness_N_per_m": 1e9)",
        "max_stiffness_N_per_m", "out of range"},
   };

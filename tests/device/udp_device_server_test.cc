@@ -32,7 +32,9 @@ DeviceKey KeyOf(std::uint8_t fill) {
 // a device that moves along x one millimetre per read and remembers the last command
 class FakeDevice final : public Device {
  public:
-  explicit FakeDevice(double max_force_N = 0.0) { limits_ = {"fake", max_force_N, 800.0, 1.5}; }
+  explicit FakeDevice(double max_force_N = 0.0, double max_torque_Nm = 0.0) {
+    limits_ = {"fake", max_force_N, 800.0, 1.5, max_torque_Nm};
+  }
   DeviceState Read() override {
     ++reads;
     DeviceState state;
@@ -211,7 +213,7 @@ TEST(UdpDeviceServer, EveryCommandIsClampedToTheDevicesLimit) {
 // limit / norm did for about a third of these), and scales the torque by the same factor
 TEST(UdpDeviceServer, TheClampNeverEndsAboveTheLimitAndScalesTheTorque) {
   constexpr double kLimit_N = 3.3;
-  FakeDevice device(kLimit_N);
+  FakeDevice device(kLimit_N, 1e3);  // a torque limit above every torque sent
   UdpDeviceServer server(device, ServerOptions());
   Client client;
   ASSERT_TRUE(client.Handshake(server, 1));
@@ -234,6 +236,47 @@ TEST(UdpDeviceServer, TheClampNeverEndsAboveTheLimitAndScalesTheTorque) {
     EXPECT_NEAR((device.last.torque_Nm - scale * command.torque_Nm).norm(), 0.0,
                 1e-12 * command.torque_Nm.norm())
         << k;
+  }
+}
+
+// the device side keeps the torque within its device's torque limit: none for a device that
+// displays no torque (max_torque_Nm 0, every preset), at most the limit otherwise (a clamp),
+// whatever the renderer sent
+TEST(UdpDeviceServer, TheTorqueIsWithinTheDevicesTorqueLimitOrZero) {
+  for (const double limit_Nm : {0.0, 0.5}) {
+    SCOPED_TRACE(limit_Nm);
+    FakeDevice device(0.0, limit_Nm);
+    UdpDeviceServer server(device, ServerOptions());
+    Client client;
+    ASSERT_TRUE(client.Handshake(server, 1));
+    const Vec3 sent[] = {{3.0, 0.0, 4.0}, {0.1, 0.2, 0.2}, {1e300, -1e300, 0.0}};
+    std::uint64_t k = 0;
+    for (const Vec3& torque : sent) {
+      ++k;
+      DeviceCommand command;
+      command.sequence = k;
+      command.force_N = Vec3(1.0, 0.0, 0.0);
+      command.torque_Nm = torque;
+      const PacketHeader header{PacketType::kCommand, client.client_nonce, client.server_nonce,
+                                ++client.sent_counter};
+      client.Send(server, EncodeCommand(command, header, client.key));
+      StepUntilReceived(server, k + 1);
+      const Vec3& shown = device.last.torque_Nm;
+      EXPECT_EQ(device.last.force_N, Vec3(1.0, 0.0, 0.0));  // the force is not the torque's
+      if (limit_Nm == 0.0) {
+        EXPECT_EQ(shown, Vec3::Zero());
+        EXPECT_FALSE(device.last.clipped);
+      } else if (torque.norm() <= limit_Nm) {
+        EXPECT_EQ(shown, torque);
+        EXPECT_FALSE(device.last.clipped);
+      } else {
+        EXPECT_LE(shown.norm(), limit_Nm);
+        EXPECT_NEAR(shown.norm(), limit_Nm, 1e-12);
+        EXPECT_NEAR(shown.normalized().dot(torque.stableNormalized()), 1.0, 1e-12);
+        EXPECT_TRUE(device.last.clipped);
+      }
+    }
+    EXPECT_EQ(server.counters().clamped_commands, limit_Nm > 0.0 ? 2u : 0u);
   }
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -300,6 +301,82 @@ TEST(HapticLoop, EveryCommandIsClippedToTheStricterOfModelAndDeviceLimits) {
     EXPECT_LE(r.max_force_N, k.limit_N);
     EXPECT_DOUBLE_EQ(r.force_limit_N, k.limit_N);
     EXPECT_TRUE(r.finite);
+  }
+}
+
+// a tool of two spheres whose lower one presses into the wall 20 mm (in x) from the tool's
+// centre of mass: the contact force has a lever arm, so the tick's command carries a torque. A
+// device that displays no torque (max_torque_Nm 0, every preset) gets none; one with a torque limit
+// gets at most that, counted as a clip; one whose limit is above the torque gets it unchanged.
+class LeverDevice final : public device::Device {
+ public:
+  explicit LeverDevice(double max_torque_Nm) {
+    limits_.max_torque_Nm = max_torque_Nm;
+    commands.reserve(4000);
+  }
+  DeviceState Read() override {
+    DeviceState s;
+    s.sequence = ++sequence_;
+    s.position_m = Vec3(0.0, 0.0, 0.0095);  // the lower sphere 0.5 mm inside the wall
+    return s;
+  }
+  void Write(const DeviceCommand& command) override {
+    if (commands.size() < commands.capacity()) commands.push_back(command);
+  }
+  const device::DeviceLimits& limits() const override { return limits_; }
+  std::vector<DeviceCommand> commands;
+
+ private:
+  std::uint64_t sequence_ = 0;
+  device::DeviceLimits limits_;
+};
+
+TEST(HapticLoop, TheTorqueIsWithinTheDevicesTorqueLimitOrZero) {
+  const std::string scene = ::testing::TempDir() + "lever_tool.xml";
+  {
+    std::ofstream f(scene);
+    f << R"(<mujoco><worldbody><geom name="wall" type="plane" size="1 1 0.1"/>
+      <body name="tool" pos="0 0 0.1"><freejoint/>
+        <geom type="sphere" size="0.005" pos="0.02 0 -0.005" mass="0.05"/>
+        <geom type="sphere" size="0.005" pos="-0.02 0 0.005" mass="0.05"/>
+      </body></worldbody></mujoco>)";
+  }
+  LoadOptions o;
+  o.device.coupling = Coupling::kDirect;
+  o.timestep_s = 1.0 / kRateHz;
+  const Model model = LoadModel(scene, o);
+  // a limit above it: the torque the tick computes
+  double free_Nm = 0.0;
+  {
+    Data data = MakeData(model);
+    LeverDevice dev(1e3);
+    const HapticLoopResult r = RunHapticTicks(model, data, dev, kRateHz, 50, nullptr);
+    ASSERT_EQ(dev.commands.size(), 51u);
+    for (const DeviceCommand& c : dev.commands) {
+      // the penalty force acts 20 mm from the centre of mass along x (closed form, to rounding)
+      EXPECT_NEAR(c.torque_Nm.norm(), 0.02 * c.penalty_force_N.norm(), 1e-12);
+      free_Nm = std::max(free_Nm, c.torque_Nm.norm());
+    }
+    EXPECT_EQ(r.guard_clipped_ticks, 0);
+  }
+  ASSERT_GT(free_Nm, 0.01);
+  for (const double limit_Nm : {0.0, 0.5 * free_Nm}) {
+    SCOPED_TRACE(limit_Nm);
+    Data data = MakeData(model);
+    LeverDevice dev(limit_Nm);
+    const HapticLoopResult r = RunHapticTicks(model, data, dev, kRateHz, 50, nullptr);
+    double most_Nm = 0.0;
+    for (const DeviceCommand& c : dev.commands) {
+      EXPECT_LE(c.torque_Nm.norm(), limit_Nm);
+      EXPECT_GT(c.force_N.norm() + (c.safe_fallback ? 1.0 : 0.0), 0.0);  // force still sent
+      most_Nm = std::max(most_Nm, c.torque_Nm.norm());
+    }
+    if (limit_Nm > 0.0) {
+      EXPECT_NEAR(most_Nm, limit_Nm, 1e-12 * limit_Nm);  // clipped, not zeroed
+      EXPECT_GT(r.guard_clipped_ticks, 0);
+    } else {
+      EXPECT_EQ(r.guard_clipped_ticks, 0);  // no torque is not a clip
+    }
   }
 }
 
