@@ -58,9 +58,12 @@ class HapticStep {
     // the torque within the device's own torque limit (none for a 3-DoF force device)
     const bool torque_clipped =
         render::LimitTorque(device_.limits().max_torque_Nm, command.torque_Nm);
-    if (render::LimitForce(limit_N, command.force_N, command.torque_Nm) || torque_clipped) {
+    const bool force_clipped = render::LimitForce(limit_N, command.force_N, command.torque_Nm);
+    if (force_clipped || torque_clipped) {
       ++r_.guard_clipped_ticks;
       command.clipped = true;
+    }
+    if (force_clipped) {
       data_.WarnAt(Warning::kForceClipped, tick_step);
       if (command.impulsive_force_N.squaredNorm() > 0.0) {
         data_.WarnAt(Warning::kImpulseClipped, tick_step);

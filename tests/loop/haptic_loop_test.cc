@@ -371,9 +371,12 @@ TEST(HapticLoop, TheTorqueIsWithinTheDevicesTorqueLimitOrZero) {
       EXPECT_GT(c.force_N.norm() + (c.safe_fallback ? 1.0 : 0.0), 0.0);  // force still sent
       most_Nm = std::max(most_Nm, c.torque_Nm.norm());
     }
+    // the force is not clipped: a torque clip is a clip, not Warning::kForceClipped
+    EXPECT_EQ(data.warnings[static_cast<int>(Warning::kForceClipped)].count, 0);
     if (limit_Nm > 0.0) {
       EXPECT_NEAR(most_Nm, limit_Nm, 1e-12 * limit_Nm);  // clipped, not zeroed
       EXPECT_GT(r.guard_clipped_ticks, 0);
+      EXPECT_EQ(r.clipped_ticks, r.guard_clipped_ticks);
     } else {
       EXPECT_EQ(r.guard_clipped_ticks, 0);  // no torque is not a clip
     }
