@@ -74,16 +74,9 @@ bool LimitTorque(double max_torque_Nm, Vec3& torque_Nm) {
     torque_Nm.setZero();
     return true;
   }
-  // in units of the largest component, so that no square overflows
-  const double m = torque_Nm.cwiseAbs().maxCoeff();
-  if (m == 0.0) return false;
-  const Vec3 u = torque_Nm / m;
-  const double n_u = u.norm();  // in [1, sqrt(3)]
-  if (n_u <= max_torque_Nm / m) return false;
-  torque_Nm = u * (max_torque_Nm / n_u);
-  constexpr double kShrink = 1.0 - 4.0 * std::numeric_limits<double>::epsilon();
-  for (int k = 0; k < 4 && torque_Nm.norm() > max_torque_Nm; ++k) torque_Nm *= kShrink;
-  return true;
+  // the force clip's arithmetic (overflow-safe, rounded down), with nothing scaled alongside
+  Vec3 none = Vec3::Zero();
+  return LimitForce(max_torque_Nm, torque_Nm, none);
 }
 
 DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequence) {
