@@ -260,7 +260,10 @@ void RefuseUnusedRender(const Settings& s, const std::vector<RendererKind>& rend
       {"t_collision_s", {K::kTrain}},
       {"frequency_hz", {K::kTrain}},
       {"reference_solver", {K::kImpulse, K::kTrain}}};
-  for (const auto& [name, by] : takers) {
+  for (const auto& taker : takers) {
+    // named references, not a structured binding: clang 14 cannot capture a binding in a lambda
+    const std::string& name = taker.first;
+    const std::vector<K>& by = taker.second;
     const std::string field = "render." + name;
     if (field == "render.reference_solver" && !s.load.render.reference_solver) continue;
     const bool used = std::any_of(renderers.begin(), renderers.end(), [&by](K k) {

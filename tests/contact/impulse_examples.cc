@@ -1,4 +1,5 @@
 #include "contact/impulse_examples.h"
+#include "draw.h"
 
 #include <cmath>
 
@@ -39,7 +40,7 @@ void AddFaceRows(ImpulseExample& example, int upper, int lower, double half_size
 Vec3 UniformInBall(std::mt19937_64& rng, double radius) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   for (;;) {
-    const Vec3 v(unit(rng), unit(rng), unit(rng));
+    const Vec3 v = test::Draw3(unit, rng);
     if (v.squaredNorm() <= 1.0) return radius * v;
   }
 }
@@ -47,7 +48,7 @@ Vec3 UniformInBall(std::mt19937_64& rng, double radius) {
 Vec3 UnitVector(std::mt19937_64& rng) {
   std::normal_distribution<double> normal(0.0, 1.0);
   for (;;) {
-    const Vec3 v(normal(rng), normal(rng), normal(rng));
+    const Vec3 v = test::Draw3(normal, rng);
     if (v.norm() > 1e-6) return v.normalized();
   }
 }
@@ -139,8 +140,9 @@ ImpulseExample BoxGrid(int nx, int ny, int nz, std::uint64_t seed) {
   for (int ix = 0; ix < nx; ++ix) {
     for (int iy = 0; iy < ny; ++iy) {
       for (int iz = 0; iz < nz; ++iz) {
-        const Vec3 v_W(horizontal(rng), horizontal(rng), vertical(rng));
-        const Vec3 w_W(angular(rng), angular(rng), angular(rng));
+        Vec3 v_W = test::Draw2(horizontal, rng, 0.0);
+        v_W.z() = vertical(rng);
+        const Vec3 w_W = test::Draw3(angular, rng);
         example.bodies.push_back(MakeBody(kMass_kg, inv_inertia, v_W, w_W));
         AddFaceRows(example, index(ix, iy, iz), iz == 0 ? -1 : index(ix, iy, iz - 1), kHalf_m);
       }
@@ -167,12 +169,12 @@ ImpulseExample RandomGroup(std::mt19937_64& rng, const RandomGroupOptions& optio
   const int num_bodies = num_bodies_dist(rng);
   for (int k = 0; k < num_bodies; ++k) {
     const double mass_kg = std::exp(log_mass(rng));
-    const Vec3 half_sizes_m(half_size(rng), half_size(rng), half_size(rng));
+    const Vec3 half_sizes_m = test::Draw3(half_size, rng);
     const Mat3 rotation = RandomRotation(rng);
     const Mat3 inv_inertia_W =
         rotation * BoxInvInertia(mass_kg, half_sizes_m) * rotation.transpose();
-    const Vec3 v_W(unit(rng), unit(rng), unit(rng));
-    const Vec3 w_W = 3.0 * Vec3(unit(rng), unit(rng), unit(rng));
+    const Vec3 v_W = test::Draw3(unit, rng);
+    const Vec3 w_W = 3.0 * test::Draw3(unit, rng);
     example.bodies.push_back(
         MakeBody(mass_kg, 0.5 * (inv_inertia_W + inv_inertia_W.transpose()), v_W, w_W));
   }
@@ -186,8 +188,10 @@ ImpulseExample RandomGroup(std::mt19937_64& rng, const RandomGroupOptions& optio
         body_b = body_dist(rng);
       } while (body_b == body_a);
     }
-    example.rows.push_back(
-        MakeRow(body_a, body_b, UnitVector(rng), UniformInBall(rng, 0.3), UniformInBall(rng, 0.3)));
+    const Vec3 normal = UnitVector(rng);
+    const Vec3 r_a = UniformInBall(rng, 0.3);
+    const Vec3 r_b = UniformInBall(rng, 0.3);
+    example.rows.push_back(MakeRow(body_a, body_b, normal, r_a, r_b));
   }
   return example;
 }

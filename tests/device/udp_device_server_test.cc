@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "device/udp_device.h"
+#include "draw.h"
 #include "limit_malloc.h"
 #include "loop/test_poll.h"
 
@@ -222,8 +223,8 @@ TEST(UdpDeviceServer, TheClampNeverEndsAboveTheLimitAndScalesTheTorque) {
   for (int k = 1; k <= 200; ++k) {
     DeviceCommand command;
     command.sequence = static_cast<std::uint64_t>(k);
-    command.force_N = Vec3(u(rng), u(rng), u(rng));
-    command.torque_Nm = Vec3(u(rng), u(rng), u(rng));
+    command.force_N = test::Draw3(u, rng);
+    command.torque_Nm = test::Draw3(u, rng);
     const PacketHeader header{PacketType::kCommand, client.client_nonce, client.server_nonce,
                               ++client.sent_counter};
     const CommandPacket packet = EncodeCommand(command, header, client.key);

@@ -1,6 +1,7 @@
 // The broad phase against a brute-force check of every geom pair: the same candidate pairs, in
 // the sweep order that DetectContacts relies on for a deterministic contact order.
 #include "geometry/broadphase.h"
+#include "draw.h"
 
 #include <gtest/gtest.h>
 
@@ -28,7 +29,7 @@ Model RandomModel(std::mt19937_64& rng, int ngeom) {
                 : t == 1 ? GeomType::kCapsule
                          : GeomType::kBox;
     geom.body = t < 0 ? -1 : body(rng);
-    geom.size = Vec3(size(rng), size(rng), size(rng));
+    geom.size = test::Draw3(size, rng);
     geom.rbound_m = geom.size.norm();
     geom.contype = bits(rng);
     geom.conaffinity = bits(rng);
@@ -46,7 +47,7 @@ void RandomPoses(std::mt19937_64& rng, const Model& m, std::vector<GeomPose>& po
       const Quat q(Eigen::AngleAxisd(tilt(rng), Vec3::UnitX()));
       poses[g] = GeomPose{Vec3(0.0, 0.0, 0.1 * static_cast<double>(g)), q.toRotationMatrix()};
     } else {
-      poses[g] = GeomPose{Vec3(x(rng), x(rng), x(rng)), Quat::UnitRandom().toRotationMatrix()};
+      poses[g] = GeomPose{test::Draw3(x, rng), Quat::UnitRandom().toRotationMatrix()};
     }
   }
 }
@@ -120,7 +121,7 @@ TEST(BroadphaseTest, SamePairsAsBruteForceInSweepOrder) {
         RandomPoses(rng, m, poses);
       } else {
         for (std::size_t g = 0; g < poses.size(); ++g) {
-          if (m.geoms[g].type != GeomType::kPlane) poses[g].p_W += Vec3(step(rng), step(rng), 0.0);
+          if (m.geoms[g].type != GeomType::kPlane) poses[g].p_W += test::Draw2(step, rng, 0.0);
         }
       }
       FindPairs(m, poses, bp);
@@ -169,7 +170,7 @@ TEST(BroadphaseTest, ANanGeomLeavesTheOthersPairsIntact) {
     std::normal_distribution<double> step(0.0, 0.01);
     for (int tick = 0; tick < 20; ++tick) {
       for (std::size_t g = 0; g < poses.size(); ++g) {
-        if (m.geoms[g].type != GeomType::kPlane) poses[g].p_W += Vec3(step(rng), step(rng), 0.0);
+        if (m.geoms[g].type != GeomType::kPlane) poses[g].p_W += test::Draw2(step, rng, 0.0);
       }
       std::vector<GeomPose> used = poses;
       if (tick % 2 == 1) used[2 + scene % 5].p_W = Vec3::Constant(std::nan(""));
@@ -208,7 +209,7 @@ TEST(BroadphaseTest, SweepsAlongTheAxisOfWidestSpread) {
     std::uniform_real_distribution<double> u(-0.5, 0.5);
     for (std::size_t g = 0; g < m.geoms.size(); ++g) {
       if (m.geoms[g].type == GeomType::kPlane) continue;
-      poses[g].p_W = Vec3(u(rng), u(rng), u(rng)).cwiseProduct(k.extent_m);
+      poses[g].p_W = test::Draw3(u, rng).cwiseProduct(k.extent_m);
     }
     FindPairs(m, poses, bp);
     EXPECT_EQ(bp.axis, k.axis) << k.extent_m.transpose();
@@ -338,7 +339,7 @@ Model PileModel(int nx, int ny, int nz, std::vector<GeomPose>& poses, std::mt199
         box.rbound_m = box.size.norm();
         box.contype = box.conaffinity = 1;
         m.geoms.push_back(box);
-        const Vec3 axis = Vec3(tilt(rng), tilt(rng), tilt(rng));
+        const Vec3 axis = test::Draw3(tilt, rng);
         poses.push_back(
             GeomPose{Vec3(0.051 * x, 0.051 * y, 0.025 + 0.0501 * z),
                      Quat(Eigen::AngleAxisd(axis.norm(), axis.normalized())).toRotationMatrix()});
@@ -400,7 +401,7 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
   int total = 0, compared = 0, axis_switches = 0;
   for (int tick = 0; tick < 80; ++tick) {
     std::vector<GeomPose> used = poses;
-    for (int g = 1; g <= nbox; ++g) used[g].p_W += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    for (int g = 1; g <= nbox; ++g) used[g].p_W += test::Draw3(jitter, rng);
     if (tick >= 20) {  // a column slides by up to 3 mm into its neighbour
       for (int g = 1; g <= nbox; g += 36) used[g].p_W.x() += 1e-4 * (tick - 20);
     }

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "draw.h"
 #include "dynamics/kinematics.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
@@ -122,8 +123,10 @@ TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
     for (int trial = 0; trial < 200; ++trial) {
       if (trial == 100) s.Reset(m);
       for (BodyState& b : d.bodies) {
-        b.x_W = 0.05 * Vec3(u(rng), u(rng), u(rng));
-        b.q_WB = Quat(u(rng), u(rng), u(rng), u(rng)).normalized();
+        b.x_W = 0.05 * test::Draw3(u, rng);
+        const double w = u(rng);
+        const Vec3 xyz = test::Draw3(u, rng);
+        b.q_WB = Quat(w, xyz.x(), xyz.y(), xyz.z()).normalized();
         switch (trial % 10) {
           case 7:
             b.q_WB.x() = nan;
@@ -235,9 +238,9 @@ void ExpectMatchingAsTheReference(bool without_runs) {
     const double step = trial % 17 == 0 ? 0.01 : 0.0015;
     for (std::size_t b = 0; b < rest.size(); ++b) {
       BodyState& x = d.bodies[b];
-      x.x_W = rest[b].x_W + step * Vec3(u(rng), u(rng), u(rng));
-      x.q_WB =
-          (rest[b].q_WB * Quat(1.0, 0.2 * step * u(rng), 0.2 * step * u(rng), 0.0)).normalized();
+      x.x_W = rest[b].x_W + step * test::Draw3(u, rng);
+      const Vec3 turn = 0.2 * step * test::Draw2(u, rng, 0.0);
+      x.q_WB = (rest[b].q_WB * Quat(1.0, turn.x(), turn.y(), 0.0)).normalized();
     }
     const int next_id = d.next_contact_id;
     dynamics::ComputeKinematics(d);

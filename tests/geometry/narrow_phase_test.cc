@@ -13,6 +13,7 @@
 #include <random>
 #include <string>
 
+#include "draw.h"
 #include "limit_malloc.h"
 
 namespace rigidtouch::geometry {
@@ -802,12 +803,14 @@ void ExpectAgreement(const Agreement& a, int min_compared) {
 constexpr int kRandomPoses = 20000;
 
 Vec3 RandomHalf(std::mt19937_64& rng) {
-  return Vec3(Uniform(rng, 0.005, 0.05), Uniform(rng, 0.005, 0.05), Uniform(rng, 0.005, 0.05));
+  std::uniform_real_distribution<double> half(0.005, 0.05);
+  return test::Draw3(half, rng);
 }
 
 GeomPose RandomPlane(std::mt19937_64& rng) {
-  return Pose(Vec3(Uniform(rng, -0.1, 0.1), Uniform(rng, -0.1, 0.1), Uniform(rng, -0.1, 0.1)),
-              RandomRotation(rng));
+  std::uniform_real_distribution<double> offset(-0.1, 0.1);
+  const Vec3 p_W = test::Draw3(offset, rng);
+  return Pose(p_W, RandomRotation(rng));
 }
 
 TEST(NarrowPhaseMujocoTest, SpherePlaneAgrees) {
@@ -818,10 +821,12 @@ TEST(NarrowPhaseMujocoTest, SpherePlaneAgrees) {
         s.size2 = kPlaneSize;
         s.pose2 = RandomPlane(rng);
         const Mat3& R = s.pose2.R_WG;
-        s.pose1 = Pose(s.pose2.p_W + Uniform(rng, -0.1, 0.1) * R.col(0) +
-                           Uniform(rng, -0.1, 0.1) * R.col(1) +
-                           Uniform(rng, -0.5, 1.5) * s.size1.x() * R.col(2),
-                       RandomRotation(rng));
+        const double along_x = Uniform(rng, -0.1, 0.1);
+        const double along_y = Uniform(rng, -0.1, 0.1);
+        const double height = Uniform(rng, -0.5, 1.5) * s.size1.x();
+        const Mat3 R_1 = RandomRotation(rng);
+        s.pose1 =
+            Pose(s.pose2.p_W + along_x * R.col(0) + along_y * R.col(1) + height * R.col(2), R_1);
         return s;
       });
   ExpectAgreement(a, 1000);
@@ -833,9 +838,11 @@ TEST(NarrowPhaseMujocoTest, SphereSphereAgrees) {
         Sample s;
         s.size1 = Vec3(Uniform(rng, 0.005, 0.05), 0, 0);
         s.size2 = Vec3(Uniform(rng, 0.005, 0.05), 0, 0);
-        s.pose1 = Pose(Vec3(Uniform(rng, -0.1, 0.1), Uniform(rng, -0.1, 0.1), 0.0));
+        std::uniform_real_distribution<double> offset(-0.1, 0.1);
+        s.pose1 = Pose(test::Draw2(offset, rng, 0.0));
         const double dist = Uniform(rng, 0.01, 1.3) * (s.size1.x() + s.size2.x());
-        s.pose2 = Pose(s.pose1.p_W + dist * RandomUnit(rng), RandomRotation(rng));
+        const Vec3 direction = RandomUnit(rng);
+        s.pose2 = Pose(s.pose1.p_W + dist * direction, RandomRotation(rng));
         return s;
       });
   ExpectAgreement(a, 1000);
@@ -851,10 +858,11 @@ TEST(NarrowPhaseMujocoTest, SphereBoxAgrees) {
         Sample s;
         s.size1 = Vec3(Uniform(rng, 0.005, 0.05), 0, 0);
         s.size2 = RandomHalf(rng);
-        s.pose2 = Pose(Vec3(Uniform(rng, -0.1, 0.1), 0.0, 0.1), RandomRotation(rng));
+        const double x_2 = Uniform(rng, -0.1, 0.1);
+        s.pose2 = Pose(Vec3(x_2, 0.0, 0.1), RandomRotation(rng));
         const Vec3 reach = s.size2 + Vec3::Constant(1.2 * s.size1.x());
-        const Vec3 x_G(Uniform(rng, -reach.x(), reach.x()), Uniform(rng, -reach.y(), reach.y()),
-                       Uniform(rng, -reach.z(), reach.z()));
+        Vec3 x_G;
+        for (int i = 0; i < 3; ++i) x_G[i] = Uniform(rng, -reach[i], reach[i]);
         s.pose1 = Pose(s.pose2.p_W + s.pose2.R_WG * x_G);
         return s;
       },
@@ -878,9 +886,10 @@ TEST(NarrowPhaseMujocoTest, BoxPlaneAgrees) {
         s.pose2 = RandomPlane(rng);
         const Mat3 R_box = RandomRotation(rng);
         const double reach = (R_box.transpose() * s.pose2.R_WG.col(2)).cwiseAbs().dot(s.size1);
-        s.pose1 = Pose(s.pose2.p_W + Uniform(rng, -0.1, 0.1) * s.pose2.R_WG.col(0) +
-                           Uniform(rng, -0.3, 1.2) * reach * s.pose2.R_WG.col(2),
-                       R_box);
+        const double along = Uniform(rng, -0.1, 0.1);
+        const double height = Uniform(rng, -0.3, 1.2) * reach;
+        s.pose1 =
+            Pose(s.pose2.p_W + along * s.pose2.R_WG.col(0) + height * s.pose2.R_WG.col(2), R_box);
         return s;
       });
   ExpectAgreement(a, 1000);
@@ -943,7 +952,8 @@ Sample RandomBoxPair(std::mt19937_64& rng) {
   Sample s;
   s.size1 = RandomHalf(rng);
   s.size2 = RandomHalf(rng);
-  s.pose1 = Pose(Vec3(Uniform(rng, -0.1, 0.1), 0.0, 0.1), RandomRotation(rng));
+  const double x_1 = Uniform(rng, -0.1, 0.1);
+  s.pose1 = Pose(Vec3(x_1, 0.0, 0.1), RandomRotation(rng));
   s.pose2.R_WG = RandomRotation(rng);
   const Vec3 dir = RandomUnit(rng);
   const double far = s.size1.norm() + s.size2.norm();
@@ -1013,7 +1023,9 @@ Sample RandomPair(std::mt19937_64& rng, GeomType t1, GeomType t2) {
   s.size2 = size(t2);
   s.pose1 = Pose(Vec3(0.0, 0.1, 0.0), RandomRotation(rng));
   const double far = radius(t1, s.size1) + radius(t2, s.size2);
-  s.pose2 = Pose(s.pose1.p_W + Uniform(rng, 0.0, 1.1) * far * RandomUnit(rng), RandomRotation(rng));
+  const double reach = Uniform(rng, 0.0, 1.1) * far;
+  const Vec3 direction = RandomUnit(rng);
+  s.pose2 = Pose(s.pose1.p_W + reach * direction, RandomRotation(rng));
   return s;
 }
 
@@ -1118,7 +1130,8 @@ TEST(NarrowPhaseTest, NeverAllocates) {
   for (int k = 0; k < 200; ++k) {
     const Vec3 h1 = RandomHalf(rng), h2 = RandomHalf(rng);
     const GeomPose p1 = Pose(Vec3::Zero(), RandomRotation(rng));
-    const GeomPose p2 = Pose(0.05 * RandomUnit(rng), RandomRotation(rng));
+    const Vec3 offset = 0.05 * RandomUnit(rng);
+    const GeomPose p2 = Pose(offset, RandomRotation(rng));
     total += Collide(GeomType::kBox, h1, p1, GeomType::kBox, h2, p2, out, kMaxPairContacts);
     total += Collide(GeomType::kPlane, kPlaneSize, p2, GeomType::kBox, h1, p1, out, 4);
     total += Collide(GeomType::kSphere, h1, p1, GeomType::kBox, h2, p2, out, 1);

@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "draw.h"
 #include "limit_malloc.h"
 #include "render/workspace.h"
 #include "rigidtouch/rigidtouch.h"
@@ -428,7 +429,7 @@ TEST(WorkerTest, KickedPileWithTheInteriorPointHintIsTheSameOnTwoThreads) {
   std::mt19937_64 rng(5);
   std::normal_distribution<double> v(0.0, 0.3 / std::sqrt(3.0)), w(0.0, 10.0 / std::sqrt(3.0));
   for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
-    const Vec3 dv(v(rng), v(rng), v(rng)), dw(w(rng), w(rng), w(rng));
+    const Vec3 dv = test::Draw3(v, rng), dw = test::Draw3(w, rng);
     d1.bodies[i].v_W += dv;
     d2.bodies[i].v_W += dv;
     d1.bodies[i].w_W += dw;

@@ -9,6 +9,7 @@
 #include <random>
 #include <string>
 
+#include "draw.h"
 #include "render/output.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
@@ -84,7 +85,7 @@ TEST(DeviceLimitsTest, LimitForceIsAHardBoundAndKeepsTheDirection) {
   int scaled = 0;
   for (int i = 0; i < 100000; ++i) {
     const double scale = std::pow(10.0, exponent(rng));
-    Vec3 v = scale * Vec3(unit(rng), unit(rng), unit(rng));
+    Vec3 v = scale * test::Draw3(unit, rng);
     const Vec3 direction = v.stableNormalized();
     const double limit = std::pow(10.0, exponent(rng) / 100.0);  // 0.9 N .. 1000 N
     Vec3 torque = Vec3::Zero();

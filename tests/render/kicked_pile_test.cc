@@ -13,6 +13,7 @@
 #include <random>
 #include <string>
 
+#include "draw.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -27,8 +28,8 @@ TEST(KickedPileTest, EveryImpulseOfALargeDegenerateGroupIsSolved) {
   // per component: 0.3 m/s and 10 rad/s in norm on average
   std::normal_distribution<double> v(0.0, 0.3 / std::sqrt(3.0)), w(0.0, 10.0 / std::sqrt(3.0));
   for (BodyState& body : data.bodies) {
-    body.v_W += Vec3(v(rng), v(rng), v(rng));
-    body.w_W += Vec3(w(rng), w(rng), w(rng));
+    body.v_W += test::Draw3(v, rng);
+    body.w_W += test::Draw3(w, rng);
   }
   const int failed_before = data.warnings[static_cast<int>(Warning::kSolverFailed)].count;
   int large = 0;

@@ -247,7 +247,7 @@ TEST(AnalysisTest, JsonHasTheAgreedFields) {
   // one participant gives no SD: written as null, not NaN
   const json single = ReportToJson(AnalyzeLogs({MakeLog(p, "P01", {Series(10, 8)})}));
   EXPECT_TRUE(single["tests"][0]["sd"].is_null());
-  EXPECT_NO_THROW(json::parse(single.dump()));
+  EXPECT_TRUE(json::accept(single.dump()));
   EXPECT_NE(ReportToText(AnalyzeLogs({MakeLog(p, "P01", {Series(10, 8)})})).find("t1: a vs b"),
             std::string::npos);
 }
