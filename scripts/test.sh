@@ -52,8 +52,12 @@ if [ "${1:-}" != "--quick" ]; then
     -DRIGIDTOUCH_SANITIZE=ON -DRIGIDTOUCH_BUILD_TESTS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
   cmake --build build-asan -j"$jobs"
   echo "AddressSanitizer build: $(($(date +%s) - start_s)) s"
+  # one test is left to the release pass: TapStimulusTest.IdenticalWallsThroughTheEngineGiveChance
+  # renders a tap on the simulated device for each of 4000 answers (13 s in the release build,
+  # 366 s here, near the tests' 600 s limit); the code it runs is run here by the other cases of
+  # tap_stimulus_test (the engine's taps) and by simulate_test (cohorts)
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --output-on-failure -j"$jobs" -LE no_sanitize)
+    ctest --output-on-failure -j"$jobs" -E '^TapStimulusTest\.IdenticalWallsThroughTheEngineGiveChance$')
   echo "AddressSanitizer pass: $(($(date +%s) - start_s)) s"
 
   echo "== ThreadSanitizer over the loop and device tests and the UDP bridge end to end"

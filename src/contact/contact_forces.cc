@@ -150,14 +150,15 @@ void GroupContactForces(const Model& model, Data& data, const ContactScratch& sc
   forces.implicit_end[g] = n;
 }
 
-// fewer contacts than this are not worth the hand-off to the worker
-constexpr int kMinContactsForTwoThreads = 128;
+// fewer contacts than this are not worth the hand-off to the worker; the range carries the
+// groups' solves too (stage 5, which shared its groups from 64 implicit contacts on its own)
+constexpr int kMinContactsForTwoThreads = 64;
 
 }  // namespace
 
-void ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
+bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
                        dynamics::VelocityScratch& forces, geometry::Worker* worker,
-                       geometry::Task alongside) {
+                       geometry::Task alongside, geometry::ItemTask after_group) {
   const int n = data.ncontact;
   const bool two = worker != nullptr && n >= kMinContactsForTwoThreads;
   // by groups when there is no worker, or when last tick had groups enough to share (the choice
@@ -180,15 +181,20 @@ void ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
       data.Warn(Warning::kGroupTooLarge);
     }
   }
-  geometry::ShareRange(two && G.ngroup >= 2 ? worker : nullptr, G.ngroup,
-                       [&model, &data, &scratch, &forces, by_groups](int g) {
-                         if (by_groups) {
-                           ClassifyGroup(model, data, scratch, g);
-                         } else {
-                           UpdateGroupWindow(model, data, scratch, g);
-                         }
-                         GroupContactForces(model, data, scratch, forces, g);
-                       });
+  const bool shared = two && G.ngroup >= 2;
+  geometry::ShareRangeSides(
+      shared ? worker : nullptr, G.ngroup,
+      [&model, &data, &scratch, &forces, by_groups, after_group](int g, int side) {
+        if (by_groups) {
+          ClassifyGroup(model, data, scratch, g);
+        } else {
+          UpdateGroupWindow(model, data, scratch, g);
+        }
+        GroupContactForces(model, data, scratch, forces, g);
+        after_group(g, side);
+      },
+      [] {});
+  return shared;
 }
 
 }  // namespace rigidtouch::contact

@@ -37,9 +37,12 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
 /// whole, classification and forces, so its contacts are read once, in one place. With a worker
 /// (threads 2), two or more groups and enough contacts, the two threads share the groups (no
 /// contact touches two); with one group, the classification is shared by blocks of contacts
-/// instead (ClassifyByPairs). The same results, bit for bit.
-void ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
+/// instead (ClassifyByPairs). The same results, bit for bit. `after_group(g, side)` runs on the
+/// thread that did group g, right after its forces (side 0 the tick's thread's end of the range,
+/// 1 the worker's): the tick solves the group there (stage 5, dynamics::SolveGroup) while its
+/// contacts are in that thread's cache. Returns whether the groups were shared by the threads.
+bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
                        dynamics::VelocityScratch& forces, geometry::Worker* worker = nullptr,
-                       geometry::Task alongside = {});
+                       geometry::Task alongside = {}, geometry::ItemTask after_group = {});
 
 }  // namespace rigidtouch::contact

@@ -1,7 +1,6 @@
 #include "dynamics/velocities.h"
 
 #include <algorithm>
-#include <utility>
 
 #include "dynamics/rigid_body.h"
 
@@ -14,62 +13,6 @@ void FreeMotion(const Model& model, Data& data, const VelocityScratch& scratch, 
   BodyState& s = data.bodies[i];
   s.v_W += h / model.bodies[i].mass_kg * scratch.force_W[i];
   s.w_W += h * WorldInverseInertiaTimes(model.bodies[i], data.R_WB[i], scratch.torque_W[i]);
-}
-
-// solves groups [begin, end) with `solver` (a group whose solve fails moves freely) and returns
-// how many failed; counts no warning, so that the worker can run it
-int SolveGroups(const Model& model, Data& data, const contact::Groups& groups,
-                VelocityScratch& scratch, GroupSolverScratch& solver, int first, int last) {
-  int failed = 0;
-  for (int g = first; g < last; ++g) {
-    const int nb = groups.body_start[g + 1] - groups.body_start[g];
-    const std::span<const int> bodies(groups.bodies.data() + groups.body_start[g], nb);
-    const int begin = scratch.implicit_start[g], end = scratch.implicit_end[g];
-    bool solved = false;
-    if (end > begin) {
-      const std::span<ImplicitContact> implicit(scratch.implicit.data() + begin, end - begin);
-      solved = SolveGroupVelocities(model, data, bodies, groups.slot, implicit, scratch.force_W,
-                                    scratch.torque_W, solver, scratch.kept);
-      if (solved) {
-        // report the implicit forces at the new velocities
-        for (const ImplicitContact& ic : implicit) {
-          Contact& c = data.contacts[ic.contact];
-          c.normal_force_N = std::max(0.0, ic.normal_force_N);
-          c.friction_force_W += ic.friction_force_W;
-        }
-      } else {
-        ++failed;
-      }
-    }
-    if (!solved) {
-      for (int i : bodies) FreeMotion(model, data, scratch, i);
-    }
-  }
-  return failed;
-}
-
-// The worker's part: groups taken from the back.
-void RunGroupJob(void* context) {
-  auto* job = static_cast<VelocityScratch::GroupJob*>(context);
-  VelocityScratch& s = *job->scratch;
-  for (int g = s.shared_groups.TakeBack(); g >= 0; g = s.shared_groups.TakeBack()) {
-    job->failed += SolveGroups(*job->model, *job->data, *job->groups, s, s.worker_solver, g, g + 1);
-  }
-}
-
-// fewer implicit contacts than this are not worth the hand-off to the worker
-constexpr int kMinContactsForTwoThreads = 64;
-
-// whether the groups are worth sharing with the worker: two or more with implicit contacts, and
-// enough implicit contacts
-bool WorthSharing(const contact::Groups& groups, const VelocityScratch& scratch) {
-  int solved = 0, implicit = 0;
-  for (int g = 0; g < groups.ngroup; ++g) {
-    const int n = scratch.implicit_end[g] - scratch.implicit_start[g];
-    solved += n > 0 ? 1 : 0;
-    implicit += n;
-  }
-  return solved >= 2 && implicit >= kMinContactsForTwoThreads;
 }
 
 }  // namespace
@@ -119,31 +62,53 @@ geometry::Task FreeMotionForces::AsTask() {
           this};
 }
 
-void UpdateVelocities(const Model& model, Data& data, const contact::Groups& groups,
-                      VelocityScratch& scratch, geometry::Worker* worker) {
+void BeginVelocities(VelocityScratch& scratch) {
+  scratch.worker_solver.lagged.reuse_factor = scratch.group_solver.lagged.reuse_factor;
+  scratch.failed_solves = {0, 0};
+}
+
+void SolveGroup(const Model& model, Data& data, const contact::Groups& groups,
+                VelocityScratch& scratch, int g, int side) {
+  const int nb = groups.body_start[g + 1] - groups.body_start[g];
+  const std::span<const int> bodies(groups.bodies.data() + groups.body_start[g], nb);
+  const int begin = scratch.implicit_start[g], end = scratch.implicit_end[g];
+  bool solved = false;
+  if (end > begin) {
+    const std::span<ImplicitContact> implicit(scratch.implicit.data() + begin, end - begin);
+    GroupSolverScratch& solver = side == 0 ? scratch.group_solver : scratch.worker_solver;
+    solved = SolveGroupVelocities(model, data, bodies, groups.slot, implicit, scratch.force_W,
+                                  scratch.torque_W, solver, scratch.kept);
+    if (solved) {
+      // report the implicit forces at the new velocities
+      for (const ImplicitContact& ic : implicit) {
+        Contact& c = data.contacts[ic.contact];
+        c.normal_force_N = std::max(0.0, ic.normal_force_N);
+        c.friction_force_W += ic.friction_force_W;
+      }
+    } else {
+      ++scratch.failed_solves[side];
+    }
+  }
+  if (!solved) {
+    for (int i : bodies) FreeMotion(model, data, scratch, i);
+  }
+}
+
+geometry::ItemTask GroupSolves::AsTask() {
+  return {[](void* context, int g, int side) {
+            const auto& s = *static_cast<const GroupSolves*>(context);
+            SolveGroup(s.model, s.data, s.groups, s.scratch, g, side);
+          },
+          this};
+}
+
+void EndVelocities(const Model& model, Data& data, VelocityScratch& scratch, bool shared) {
   const int nbody = static_cast<int>(model.bodies.size());
   for (int i = 0; i < nbody; ++i) {
     if (data.body_group[i] < 0) FreeMotion(model, data, scratch, i);
   }
-  if (worker == nullptr || !WorthSharing(groups, scratch)) {
-    const int failed =
-        SolveGroups(model, data, groups, scratch, scratch.group_solver, 0, groups.ngroup);
-    for (int k = 0; k < failed; ++k) data.Warn(Warning::kSolverFailed);
-    return;
-  }
-  // no state crosses groups (each keeps its factor with its bodies), so either thread may solve
-  // any group
-  scratch.worker_solver.lagged.reuse_factor = scratch.group_solver.lagged.reuse_factor;
-  scratch.shared_groups.Reset(0, groups.ngroup);
-  scratch.job = {&model, &data, &groups, &scratch, 0};
-  worker->Post(&RunGroupJob, &scratch.job);
-  int failed = 0;
-  for (int g = scratch.shared_groups.TakeFront(); g >= 0; g = scratch.shared_groups.TakeFront()) {
-    failed += SolveGroups(model, data, groups, scratch, scratch.group_solver, g, g + 1);
-  }
-  worker->Finish();
-  failed += scratch.job.failed;
-  ++scratch.shared_steps;
+  if (shared) ++scratch.shared_steps;
+  const int failed = scratch.failed_solves[0] + scratch.failed_solves[1];
   for (int k = 0; k < failed; ++k) data.Warn(Warning::kSolverFailed);
 }
 

@@ -2,6 +2,7 @@
 // 7): Eq. 1 over one step h for every dynamic body.
 #pragma once
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -30,18 +31,10 @@ struct VelocityScratch {
   std::vector<int> implicit_start;        // (nbody) group g's: [start[g], end[g])
   std::vector<int> implicit_end;          // (nbody)
   GroupSolverScratch group_solver;
-  // threads 2: the worker's solver scratch, and the job it is given (UpdateVelocities)
+  // threads 2: the solver scratch of the groups the worker's side of the range takes (SolveGroup)
   GroupSolverScratch worker_solver;
-  KeptFactors kept;  // every group's kept factor, whichever thread solves it
-  struct GroupJob {
-    const Model* model = nullptr;
-    Data* data = nullptr;
-    const contact::Groups* groups = nullptr;
-    VelocityScratch* scratch = nullptr;
-    int failed = 0;  // the worker's solves that failed (counted as warnings afterwards)
-  };
-  GroupJob job;
-  geometry::TwoEndedRange shared_groups;  // the groups of a shared step
+  KeptFactors kept;                    // every group's kept factor, whichever thread solves it
+  std::array<int, 2> failed_solves{};  // this step's failed group solves, by side
   long shared_steps = 0;  // steps whose groups were split between the threads (since Reserve)
 
   /// Sizes every buffer (the worker's solver scratch too with threads 2); the only allocating
@@ -83,17 +76,36 @@ struct FreeMotionForces {
   geometry::Task AsTask();
 };
 
-/// Stage 5: the new velocities. A group with implicit contacts is solved by SolveGroupVelocities
-/// (Warning::kSolverFailed, then free motion, if that fails); every other body moves freely under
-/// its explicit force. Writes each implicit contact's forces at the new velocities back into
-/// data.contacts.
-///
-/// With a worker (threads 2) and at least two groups to solve, this thread takes groups from the
-/// front and the worker from the back (its own solver scratch) until they meet. The groups share
-/// no body or contact, and each group's kept factor is stored with its bodies, whichever thread
-/// solved it, so every result is the same bit for bit.
-void UpdateVelocities(const Model& model, Data& data, const contact::Groups& groups,
-                      VelocityScratch& scratch, geometry::Worker* worker = nullptr);
+/// Stage 5's start, before stage 3 (ClassifyAndForces) solves the groups: the worker's solver
+/// takes the tick's settings, and no solve has failed yet.
+void BeginVelocities(VelocityScratch& scratch);
+
+/// Stage 5 for group g, run by stage 3-4's shared range right after the group's forces (as
+/// GroupSolves::AsTask), while its implicit contacts are in the cache of the thread that wrote
+/// them: a group with implicit contacts is solved by SolveGroupVelocities with side 0's solver
+/// scratch (the tick's thread's) or side 1's (the worker's); if that fails (counted, a
+/// Warning::kSolverFailed in EndVelocities) and for a group without implicit contacts, its bodies
+/// move freely under their explicit forces. Writes each implicit contact's forces at the new
+/// velocities back into data.contacts. Groups share no body or contact, and each group's kept
+/// factor is stored with its bodies, whichever side solved it, so every result is the same bit
+/// for bit on one thread or two.
+void SolveGroup(const Model& model, Data& data, const contact::Groups& groups,
+                VelocityScratch& scratch, int g, int side);
+
+/// SolveGroup's arguments, for running it as the stage 3-4 range's task after each group.
+struct GroupSolves {
+  const Model& model;
+  Data& data;
+  const contact::Groups& groups;
+  VelocityScratch& scratch;
+  /// A task that calls SolveGroup with these arguments (this object must outlive it).
+  geometry::ItemTask AsTask();
+};
+
+/// Stage 5's end: every body in no group moves freely under its explicit force, and the failed
+/// group solves are counted as warnings. `shared`: the groups were split between the threads
+/// (counted in shared_steps).
+void EndVelocities(const Model& model, Data& data, VelocityScratch& scratch, bool shared);
 
 /// Stage 7: semi-implicit Euler position update of every body with its new velocity.
 void IntegratePositions(const Model& model, Data& data);

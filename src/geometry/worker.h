@@ -57,6 +57,18 @@ struct Task {
   }
 };
 
+/// Work a stage runs for each item of its shared range once the stage's own work on it is done
+/// (ShareRangeSides' side: 0 the tick's thread's end of the range, 1 the worker's), so that the
+/// next stage's work on that item follows while its data is in the cache. An empty task does
+/// nothing.
+struct ItemTask {
+  void (*run)(void* context, int item, int side) = nullptr;
+  void* context = nullptr;
+  void operator()(int item, int side) const {
+    if (run != nullptr) run(context, item, side);
+  }
+};
+
 /// A counter that one thread raises and another waits on until it changes: the waiter spins
 /// for a number of polls, then sleeps on a futex, and never for longer than a bound, so that a
 /// wake-up that is lost costs at most that bound instead of leaving the waiter asleep for good
@@ -152,11 +164,15 @@ class Worker {
 /// order here. body must be safe to run for different k on the two threads at once. before(),
 /// if given, runs first on this thread while the worker starts on the range: for work of the
 /// tick's thread that the range's work neither reads nor writes. Never allocates.
+///
+/// ShareRangeSides calls body(k, side) instead: side 0 for the items this thread takes from the
+/// front, 1 for those taken from the back (by the worker, or by this thread when Finish takes the
+/// worker's job back, after its own), so that each side can have scratch of its own.
 template <class Body, class Before>
-void ShareRange(Worker* worker, int n, const Body& body, const Before& before) {
+void ShareRangeSides(Worker* worker, int n, const Body& body, const Before& before) {
   if (worker == nullptr) {
     before();
-    for (int k = 0; k < n; ++k) body(k);
+    for (int k = 0; k < n; ++k) body(k, 0);
     return;
   }
   struct Context {
@@ -167,12 +183,18 @@ void ShareRange(Worker* worker, int n, const Body& body, const Before& before) {
   worker->Post(
       [](void* c) {
         const auto* x = static_cast<const Context*>(c);
-        for (int k = x->range->TakeBack(); k >= 0; k = x->range->TakeBack()) (*x->body)(k);
+        for (int k = x->range->TakeBack(); k >= 0; k = x->range->TakeBack()) (*x->body)(k, 1);
       },
       &context);
   before();
-  for (int k = worker->range().TakeFront(); k >= 0; k = worker->range().TakeFront()) body(k);
+  for (int k = worker->range().TakeFront(); k >= 0; k = worker->range().TakeFront()) body(k, 0);
   worker->Finish();
+}
+
+template <class Body, class Before>
+void ShareRange(Worker* worker, int n, const Body& body, const Before& before) {
+  ShareRangeSides(
+      worker, n, [&body](int k, int) { body(k); }, before);
 }
 
 template <class Body>

@@ -42,11 +42,15 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   // linearised for the implicit solve. Both group by group, each group's whole on one thread;
   // stage 4's gravity, gyroscopic and user forces alongside the building of the groups (they
   // read only the bodies, which stage 3 does not write)
+  // 5. dynamics: the new velocities, implicit per group (backward Euler), free elsewhere; each
+  // group solved right after its stage 3 and 4, on the same thread, while its contacts are in
+  // that thread's cache (groups share no body or contact)
   dynamics::FreeMotionForces free{model, data, coupling.user, ws.velocity};
-  contact::ClassifyAndForces(model, data, ws.contact, ws.velocity, ws.worker.get(), free.AsTask());
-
-  // 5. dynamics: the new velocities, implicit per group (backward Euler), free elsewhere
-  dynamics::UpdateVelocities(model, data, ws.contact.groups, ws.velocity, ws.worker.get());
+  dynamics::GroupSolves solves{model, data, ws.contact.groups, ws.velocity};
+  dynamics::BeginVelocities(ws.velocity);
+  const bool shared = contact::ClassifyAndForces(model, data, ws.contact, ws.velocity,
+                                                 ws.worker.get(), free.AsTask(), solves.AsTask());
+  dynamics::EndVelocities(model, data, ws.velocity, shared);
 
   // 6. impulses: Eq. 5 (single impulse) or Eq. 8 (train) where the window's schedule (Eq. 6-7)
   // says one is due, on the velocities after stage 5
