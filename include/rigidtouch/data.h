@@ -24,25 +24,26 @@ struct Contact {
   int id = -1;                   // persistent identity across ticks
   int geom_a = -1, geom_b = -1;  // Model::geoms indices
   int body_a = -1, body_b = -1;
-  Vec3 p_W = Vec3::Zero();   // contact point (midpoint between the surfaces)
-  Vec3 n_W = Vec3::UnitZ();  // unit normal, from b towards a
-  double depth_m = 0.0;      // penetration, > 0 when the geoms overlap
-  int pair_points = 1;       // points the geom pair has this tick (shares the stiffness)
-  Vec3 p_A = Vec3::Zero();   // contact point in a's principal frame (for matching)
-  Vec3 p_B = Vec3::Zero();   // contact point in b's frame (world frame when b is static)
-  bool is_new = false;       // penetrating now, not matched to a penetrating contact before
-  bool sticking = false;     // friction anchor holds
+  int pair_points = 1;  // points the geom pair has this tick (shares the stiffness)
+  // what matching reads of last tick's contacts and carries over, together at the record's start
+  // (one or two cache lines of the 232 bytes, read for every contact in every tick)
+  Vec3 p_A = Vec3::Zero();  // contact point in a's principal frame (for matching)
   // friction stick anchor on a (a's frame) and b (b's frame), placed at the contact point each
   // tick with the stretch it had (so a rolling body's anchor does not leave the contact)
   Vec3 anchor_A = Vec3::Zero();
   Vec3 anchor_B = Vec3::Zero();
-  double normal_force_N = 0.0;           // penalty force this tick
+  bool is_new = false;    // penetrating now, not matched to a penetrating contact before
+  bool sticking = false;  // friction anchor holds
+  // this tick's phase and group, for reports and viewers (written by stage 3 with the windows)
+  ContactPhase phase = ContactPhase::kResting;
+  int group = -1;
+  Vec3 p_W = Vec3::Zero();      // contact point (midpoint between the surfaces)
+  Vec3 n_W = Vec3::UnitZ();     // unit normal, from b towards a
+  double depth_m = 0.0;         // penetration, > 0 when the geoms overlap
+  Vec3 p_B = Vec3::Zero();      // contact point in b's frame (world frame when b is static)
+  double normal_force_N = 0.0;  // penalty force this tick
   Vec3 friction_force_W = Vec3::Zero();  // on a
   double impulse_Ns = 0.0;               // normal impulse this tick
-  // this tick's group and phase, for reports and viewers (next to the forces: the stage that
-  // writes those writes these)
-  int group = -1;
-  ContactPhase phase = ContactPhase::kResting;
 };
 
 /// The contiguous run of one geom pair's points in a contact list (for grouping the bodies, and
