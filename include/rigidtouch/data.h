@@ -26,7 +26,7 @@ struct Contact {
   int body_a = -1, body_b = -1;
   int pair_points = 1;  // points the geom pair has this tick (shares the stiffness)
   // what matching reads of last tick's contacts and carries over, together at the record's start
-  // (one or two cache lines of the 232 bytes, read for every contact in every tick)
+  // (bytes 0 to 104: two or three cache lines, read for every contact in every tick)
   Vec3 p_A = Vec3::Zero();  // contact point in a's principal frame (for matching)
   // friction stick anchor on a (a's frame) and b (b's frame), placed at the contact point each
   // tick with the stretch it had (so a rolling body's anchor does not leave the contact)
