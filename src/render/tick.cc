@@ -41,7 +41,7 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   // 4. penalty: explicit contacts (tool contacts, Eq. 1's penalty term), scene contacts
   // linearised for the implicit solve. Both group by group, each group's whole on one thread;
   // stage 4's gravity, gyroscopic and user forces alongside the building of the groups (they
-  // read only the bodies, which stage 3 does not write)
+  // read only the bodies, which nothing writes before the groups are built and the forces done)
   // 5. dynamics: the new velocities, implicit per group (backward Euler), free elsewhere; each
   // group solved right after its stage 3 and 4, on the same thread, while its contacts are in
   // that thread's cache (groups share no body or contact)
