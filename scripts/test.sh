@@ -62,11 +62,9 @@ if [ "${1:-}" != "--quick" ]; then
 
   echo "== ThreadSanitizer over the loop and device tests and the UDP bridge end to end"
   start_s=$(date +%s)
-  # -O1 -g1: line-number stacks in the reports at about 60% of the -O2 -g compile time. Without
-  # precompiled headers (RIGIDTOUCH_PCH): the library, the CLI and these tests each compile on
-  # their own includes here, so a missing #include fails the test command
+  # -O1 -g1: line-number stacks in the reports at about 60% of the -O2 -g compile time
   cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGIDTOUCH_WERROR=ON \
-    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DRIGIDTOUCH_PCH=OFF \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
     -DRIGIDTOUCH_SANITIZE_THREAD=ON -DRIGIDTOUCH_BUILD_TESTS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
   tsan_targets=$(ls tests/loop/*_test.cc tests/device/*_test.cc tests/cli/bridge_cli_test.cc \
     tests/cli/fake_device_test.cc tests/geometry/worker_test.cc |

@@ -25,7 +25,7 @@ inline int LastCpuOfSeveral() {
 
 /// Path of a scene shipped for the tests (tests/scenes/NAME).
 inline std::string TestScene(const std::string& name) {
-  return std::string(RIGIDTOUCH_SOURCE_DIR "/tests/scenes/") + name;
+  return std::string(RIGIDTOUCH_SOURCE_DIR) + "/tests/scenes/" + name;
 }
 
 /// The test process's temporary directory; removed, with everything in it, when the process

@@ -26,7 +26,7 @@ constexpr double kRateHz = 1000.0;
 
 analysis::TapSetup WallSetup() {
   analysis::TapExperimentConfig c;
-  c.scene_path = RIGIDTOUCH_SOURCE_DIR "/scenes/wall.xml";
+  c.scene_path = std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml";
   c.load.device.coupling = Coupling::kDirect;
   c.rate_hz = kRateHz;
   c.script.taps = 1;
@@ -171,7 +171,7 @@ Model DirectWall(double max_force_N) {
   o.device.coupling = Coupling::kDirect;
   o.device.max_force_N = max_force_N;
   o.timestep_s = 1.0 / kRateHz;
-  return LoadModel(RIGIDTOUCH_SOURCE_DIR "/scenes/wall.xml", o);
+  return LoadModel(std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml", o);
 }
 
 // a handle held 0.5 mm inside the shipped wall (the tool centre touches it at 5 mm), one new
@@ -393,7 +393,7 @@ TEST(HapticLoop, TheTicksWorkerKeepsOffThePinnedLoopsCpu) {
     o.device.coupling = Coupling::kDirect;
     o.timestep_s = 1.0 / kRateHz;
     o.threads = threads;
-    const Model model = LoadModel(RIGIDTOUCH_SOURCE_DIR "/scenes/wall.xml", o);
+    const Model model = LoadModel(std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml", o);
     Data data = MakeData(model);
     FreezingDevice dev(1000, 0, 0.0);
     LoopOptions options = Options(0.02);

@@ -11,7 +11,7 @@ namespace rigidtouch::test {
 namespace {
 
 std::string Squeeze() {
-  return RIGIDTOUCH_SOURCE_DIR "/tests/scenes/squeeze.xml";
+  return std::string(RIGIDTOUCH_SOURCE_DIR) + "/tests/scenes/squeeze.xml";
 }
 
 TEST(NonFiniteReportTest, SimulateReportsTheNonFiniteStateOnStderrAndExitsWithTwo) {
