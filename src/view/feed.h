@@ -105,7 +105,7 @@ class ViewFeed : public loop::TickObserver {
   // period statistics of the current second
   std::chrono::steady_clock::time_point last_tick_{};
   bool have_last_ = false;
-  double window_start_s_ = 0.0, window_elapsed_s_ = 0.0;
+  double window_elapsed_s_ = 0.0;
   std::int64_t window_ticks_ = 0;
   double window_error_max_s_ = 0.0, window_error_sum_s_ = 0.0;
   double rate_hz_ = 0.0, error_max_s_ = 0.0, error_mean_s_ = 0.0;
