@@ -17,7 +17,7 @@ missed; on a machine shared with other work, missed may be the machine (the rati
 `rigidtouch_bench --rigidtouch_large` does not depend on it).
 
 Exit status: 0 every goal met; 1 some goal missed; 3 none missed, some not judgeable;
-2 a run failed (its command and output are printed; nothing is judged).
+2 a run failed (its command and error output are printed; nothing is judged).
 """
 import argparse
 import json
