@@ -105,7 +105,8 @@ def measure(args):
     return rows
 
 
-def print_table(rows):
+def print_table(rows, threads):
+    print(f'the scenes stepped on {threads} thread{"s" if threads > 1 else ""}')
     print(f'{"goal":<40} {"measured [us]":>14} {"fixed job p99.9 [us]":>21}  verdict')
     for r in rows:
         machine = '' if r['machine_us'] is None else f'{r["machine_us"]:.1f}'
@@ -146,9 +147,10 @@ def main(argv=None):
         print(f'scale_goals: {e}', file=sys.stderr)
         return 2
     if args.json:
-        print(json.dumps({'goals': rows, 'status': status(rows)}, indent=1))
+        print(json.dumps({'threads': args.threads, 'goals': rows, 'status': status(rows)},
+                         indent=1))
     else:
-        print_table(rows)
+        print_table(rows, args.threads)
     return status(rows)
 
 

@@ -77,9 +77,10 @@ def run_script(*args):
 
 def test_the_script_runs_both_scenes_and_its_status_follows_its_verdicts():
     proc = run_script("--scenes", os.path.join(ROOT, "scenes"), "--steps", "30", "--warmup", "200",
-                      "--serve-seconds", "0", "--json")
+                      "--serve-seconds", "0", "--threads", "1", "--json")
     assert proc.returncode in (0, 1, 3), proc.stderr
     out = json.loads(proc.stdout)
+    assert out["threads"] == 1
     goals = [r["goal"] for r in out["goals"]]
     assert goals == ["pile1000 median <= 500 us", "pile1000 p99.9 <= 1000 us",
                      "pile2000 median <= 1000 us"]
