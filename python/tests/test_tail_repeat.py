@@ -51,9 +51,9 @@ def test_identical_runs_share_every_slow_step():
 
 
 def run_script(*args):
-    env = dict(os.environ)
+    # the environment, PYTHONPATH with it, is inherited: the script imports rigidtouch
     return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True,
-                          timeout=600, env=env)
+                          timeout=600)
 
 
 def test_the_script_times_two_runs_of_a_scene():
