@@ -82,12 +82,12 @@ if [ "${1:-}" != "--quick" ]; then
   # clang's libFuzzer with ASan + UBSan; -O0: the cold build is the pass's largest cost (390 s
   # on 2 cores against 470 s at -O1 -g1), and ccache, when installed, makes later ones seconds
   # (it does not cache a file compiled against precompiled headers: with it, none are made)
-  launcher=(-DRIGIDTOUCH_PCH=ON)
+  compile_opts=(-DRIGIDTOUCH_PCH=ON)
   if command -v ccache >/dev/null; then
-    launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DRIGIDTOUCH_PCH=OFF)
+    compile_opts=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DRIGIDTOUCH_PCH=OFF)
   fi
   CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O0" -DRIGIDTOUCH_WERROR=ON "${launcher[@]}" \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O0" -DRIGIDTOUCH_WERROR=ON "${compile_opts[@]}" \
     -DRIGIDTOUCH_BUILD_TESTS=OFF -DRIGIDTOUCH_BUILD_FUZZERS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
   fuzz_targets=$(ls tests/fuzz/*_fuzz.cc | xargs -n1 basename | sed 's/\.cc$//')
   # shellcheck disable=SC2086
