@@ -1,7 +1,8 @@
 // Counts the heap allocations of the calling thread by interposing the C allocator (Drake's
 // LimitMalloc idea). Every allocation ends here: operator new, Eigen's dynamic matrices, C code
-// and the standard library alike, which a replaced operator new alone cannot see. Include this
-// header in exactly one translation unit of a test executable.
+// and the standard library alike, which a replaced operator new alone cannot see. The interposed
+// functions are in limit_malloc.cc, linked into every test executable (tests/CMakeLists.txt):
+// they count only while a guard lives on the calling thread.
 //
 //   test::LimitMalloc guard;       // counts this thread's allocations from here
 //   Tick(model, data, input);
@@ -33,6 +34,11 @@ inline void CountAllocation() {
 }
 }  // namespace internal
 
+/// Allocates 64 bytes and frees them, through the counted allocator (defined in limit_malloc.cc,
+/// out of the caller's sight: a compiler may drop a malloc/free pair it can see, so a probe that
+/// checks the counter works must not be written inline).
+void ProbeAllocation();
+
 /// Counts the allocations the calling thread makes while the guard lives (guards may nest; each
 /// reports the count since it was made).
 class LimitMalloc {
@@ -49,42 +55,3 @@ class LimitMalloc {
 };
 
 }  // namespace rigidtouch::test
-
-#if RIGIDTOUCH_MALLOC_COUNTING
-extern "C" {
-void* __libc_malloc(std::size_t) noexcept;
-void* __libc_calloc(std::size_t, std::size_t) noexcept;
-void* __libc_realloc(void*, std::size_t) noexcept;
-void* __libc_memalign(std::size_t, std::size_t) noexcept;
-void __libc_free(void*) noexcept;
-
-void* malloc(std::size_t n) noexcept {
-  rigidtouch::test::internal::CountAllocation();
-  return __libc_malloc(n);
-}
-void* calloc(std::size_t n, std::size_t s) noexcept {
-  rigidtouch::test::internal::CountAllocation();
-  return __libc_calloc(n, s);
-}
-void* realloc(void* p, std::size_t n) noexcept {
-  rigidtouch::test::internal::CountAllocation();
-  return __libc_realloc(p, n);
-}
-void* memalign(std::size_t a, std::size_t n) noexcept {
-  rigidtouch::test::internal::CountAllocation();
-  return __libc_memalign(a, n);
-}
-void* aligned_alloc(std::size_t a, std::size_t n) noexcept {
-  rigidtouch::test::internal::CountAllocation();
-  return __libc_memalign(a, n);
-}
-int posix_memalign(void** p, std::size_t a, std::size_t n) noexcept {
-  rigidtouch::test::internal::CountAllocation();
-  *p = __libc_memalign(a, n);
-  return *p ? 0 : 12;  // ENOMEM
-}
-void free(void* p) noexcept {
-  __libc_free(p);
-}
-}
-#endif

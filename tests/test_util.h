@@ -5,6 +5,7 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -21,6 +22,13 @@ inline int LastCpuOfSeveral() {
     if (CPU_ISSET(c, &allowed)) last = c;
   }
   return last;
+}
+
+/// `x` with every digit a double holds (%.17g), for scenes written from numbers.
+inline std::string ExactNumber(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
 }
 
 /// Path of a scene shipped for the tests (tests/scenes/NAME).

@@ -7,16 +7,10 @@
 
 #include "bench/bullet_engine.h"
 #include "bench/mujoco_engine.h"
+#include "bench_scenes.h"
 
 namespace rigidtouch::bench {
 namespace {
-
-Scene SceneFor(const std::string& file) {
-  Scene scene;
-  scene.name = file;
-  scene.mjcf_path = std::string(RIGIDTOUCH_SCENES) + "/" + file;
-  return scene;
-}
 
 Scene WriteScene(const std::string& name, const std::string& mjcf) {
   Scene scene;
@@ -26,8 +20,6 @@ Scene WriteScene(const std::string& name, const std::string& mjcf) {
   return scene;
 }
 
-constexpr double kH = 0.001;
-constexpr double kToolAcceleration = 9.81 + 2.0 / 0.1;
 // Bullet is built in single precision by default: 1e-7 m is a few float ulps at these heights
 constexpr double kFloatTolerance_m = 1e-7;
 

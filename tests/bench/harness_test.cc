@@ -7,19 +7,10 @@
 #include "bench/bullet_engine.h"
 #include "bench/harness.h"
 #include "bench/mujoco_engine.h"
+#include "bench_scenes.h"
 
 namespace rigidtouch::bench {
 namespace {
-
-Scene SceneFor(const std::string& file) {
-  Scene scene;
-  scene.name = file;
-  scene.mjcf_path = std::string(RIGIDTOUCH_SCENES) + "/" + file;
-  return scene;
-}
-
-constexpr double kH = 0.001;
-constexpr double kToolAcceleration = 9.81 + 2.0 / 0.1;
 
 TEST(StrikeStartHeight, GapIsMeasuredAlongTheUpwardFaceNormal) {
   const Vec3 centre_m(0.3, -0.2, 0.1);

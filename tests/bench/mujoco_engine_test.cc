@@ -3,20 +3,10 @@
 #ifdef RIGIDTOUCH_BENCH_ENABLED
 
 #include "bench/mujoco_engine.h"
+#include "bench_scenes.h"
 
 namespace rigidtouch::bench {
 namespace {
-
-Scene SceneFor(const std::string& file) {
-  Scene scene;
-  scene.name = file;
-  scene.mjcf_path = std::string(RIGIDTOUCH_SCENES) + "/" + file;
-  return scene;
-}
-
-constexpr double kH = 0.001;
-// tool acceleration before contact: gravity plus the 2 N push on 0.1 kg
-constexpr double kToolAcceleration = 9.81 + 2.0 / 0.1;
 
 TEST(MujocoEngine, ToolFallsWithGravityPlusPushBeforeContact) {
   MujocoEngine engine;

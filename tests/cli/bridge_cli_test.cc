@@ -95,7 +95,7 @@ double LargestToolCoordinate(const std::filesystem::path& trace) {
   return largest;
 }
 
-long Count(const nlohmann::json& link, const char* name) {
+long LinkCount(const nlohmann::json& link, const char* name) {
   return link.at(name).get<long>();
 }
 
@@ -180,19 +180,19 @@ TEST(BridgeCliTest, IntruderWithoutTheKeyNeverMovesTheDevice) {
   const auto j = nlohmann::json::parse(ReadAll(dir / "sim.json"));
   const auto& link = j["link"];
   EXPECT_GT(intruder.sent(), 1000u);
-  EXPECT_EQ(Count(link, "accepted"), 0);
-  EXPECT_EQ(Count(link, "handshakes"), 0);
-  EXPECT_EQ(Count(link, "sent"), 0) << "no state of the hand went anywhere";
+  EXPECT_EQ(LinkCount(link, "accepted"), 0);
+  EXPECT_EQ(LinkCount(link, "handshakes"), 0);
+  EXPECT_EQ(LinkCount(link, "sent"), 0) << "no state of the hand went anywhere";
   // every period wrote the zero force, and so did the release at the stop; the simulated hand
   // received no energy
-  EXPECT_EQ(Count(link, "fallback_writes"), j["loop"]["ticks"].get<long>() + 1);
+  EXPECT_EQ(LinkCount(link, "fallback_writes"), j["loop"]["ticks"].get<long>() + 1);
   EXPECT_EQ(j["energy_to_user_J"].get<double>(), 0.0);
   // and each datagram is accounted for as a drop
-  EXPECT_GT(Count(link, "unauthenticated"), 0);
+  EXPECT_GT(LinkCount(link, "unauthenticated"), 0);
   EXPECT_GT(link["malformed"]["wrong_version"].get<long>(), 0);
   EXPECT_GT(link["malformed"]["wrong_type"].get<long>(), 0);
-  EXPECT_EQ(Count(link, "unauthenticated") + link["malformed"]["total"].get<long>(),
-            Count(link, "received"));
+  EXPECT_EQ(LinkCount(link, "unauthenticated") + link["malformed"]["total"].get<long>(),
+            LinkCount(link, "received"));
   std::filesystem::remove_all(dir);
 }
 
@@ -231,22 +231,22 @@ TEST(BridgeCliTest, IntruderWithoutTheKeyReachesNeitherEndOfALiveSession) {
   const auto served = nlohmann::json::parse(ReadAll(dir / "serve.json"));
   const auto& renderer = served["device"]["link"];
   EXPECT_GT(served["impulses"].get<long>(), 0) << "the taps were still rendered";
-  EXPECT_GT(Count(renderer, "accepted"), 1000);
-  EXPECT_GE(Count(renderer, "handshakes"), 1);  // more only if a slow (sanitizer) run tripped
+  EXPECT_GT(LinkCount(renderer, "accepted"), 1000);
+  EXPECT_GE(LinkCount(renderer, "handshakes"), 1);  // more only if a slow (sanitizer) run tripped
   // the intruder reached the renderer's socket, but not from the device's address, to which the
   // renderer is pinned (the stolen-port test below covers datagrams from that address)
-  EXPECT_GT(Count(renderer, "wrong_source"), 1000);
+  EXPECT_GT(LinkCount(renderer, "wrong_source"), 1000);
   EXPECT_TRUE(served["finite"].get<bool>());
   // no state of the intruder's (5 m, 1e300) was ever the tool's position
   EXPECT_LT(LargestToolCoordinate(dir / "trace.csv"), 1.0);
 
   const auto sim_json = nlohmann::json::parse(ReadAll(dir / "sim.json"));
   const auto& device_link = sim_json["link"];
-  EXPECT_EQ(Count(device_link, "handshakes"), Count(renderer, "handshakes"));
-  EXPECT_EQ(Count(device_link, "peer_changes"), 1) << "the session never left the renderer";
-  EXPECT_GT(Count(device_link, "unauthenticated"), 1000);
+  EXPECT_EQ(LinkCount(device_link, "handshakes"), LinkCount(renderer, "handshakes"));
+  EXPECT_EQ(LinkCount(device_link, "peer_changes"), 1) << "the session never left the renderer";
+  EXPECT_GT(LinkCount(device_link, "unauthenticated"), 1000);
   // every command the device took was one the renderer sent
-  EXPECT_LE(Count(device_link, "accepted"), Count(renderer, "sent"));
+  EXPECT_LE(LinkCount(device_link, "accepted"), LinkCount(renderer, "sent"));
   std::filesystem::remove_all(dir);
 }
 

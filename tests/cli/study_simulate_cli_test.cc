@@ -37,7 +37,7 @@ std::map<std::string, std::vector<std::vector<int>>> Answers(const fs::path& dir
   return out;
 }
 
-std::size_t Count(const std::map<std::string, std::vector<std::vector<int>>>& a) {
+std::size_t AnswerCount(const std::map<std::string, std::vector<std::vector<int>>>& a) {
   std::size_t n = 0;
   for (const auto& [k, v] : a) n += v.size();
   return n;
@@ -94,7 +94,7 @@ TEST(StudySimulateCliTest, KilledAndResumedEqualsAnUninterruptedRun) {
   ASSERT_EQ(ref.exit_code, 0) << ref.err;
   const auto expected = Answers(dir / "reference");
   ASSERT_EQ(expected.size(), 3u);
-  ASSERT_EQ(Count(expected), 3u * 40u);  // 2 tests x 20 series each
+  ASSERT_EQ(AnswerCount(expected), 3u * 40u);  // 2 tests x 20 series each
 
   const fs::path crashy = dir / "crashy";
   std::mt19937 rng(4242);
@@ -119,7 +119,7 @@ TEST(StudySimulateCliTest, KilledAndResumedEqualsAnUninterruptedRun) {
         ASSERT_TRUE(finished) << ReadAll(dir / "err.txt");
         break;
       }
-      if (Count(Answers(crashy)) >= target) {
+      if (AnswerCount(Answers(crashy)) >= target) {
         std::this_thread::sleep_for(std::chrono::microseconds(rng() % 2000));
         ::kill(pid, SIGKILL);
         ::waitpid(pid, &status, 0);
@@ -128,7 +128,7 @@ TEST(StudySimulateCliTest, KilledAndResumedEqualsAnUninterruptedRun) {
       }
       std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
-    last = Count(Answers(crashy));
+    last = AnswerCount(Answers(crashy));
   }
   ASSERT_TRUE(finished);
   EXPECT_GE(kills, 3);  // several kill points

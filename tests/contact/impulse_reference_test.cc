@@ -19,7 +19,7 @@ namespace rigidtouch::contact {
 namespace {
 
 // applies p to the example's bodies and returns Jc v afterwards
-Eigen::VectorXd ApplyAndMeasure(ImpulseExample& example, const Eigen::VectorXd& p) {
+Eigen::VectorXd ApplyReferenceAndMeasure(ImpulseExample& example, const Eigen::VectorXd& p) {
   ApplyImpulses(example.bodies, example.rows, std::span<const double>(p.data(), p.size()));
   Eigen::VectorXd w(p.size());
   JcV(example.problem(), w);
@@ -37,7 +37,7 @@ TEST_P(ReferenceRestitution, SphereOnPlaneFollowsNewton) {
   ASSERT_EQ(p.size(), 1);
   // Eq. 5 for one row: p = -(1 + e) m v_n, then v = -e v_n (Eq. 4); tolerance 1e-12 relative
   EXPECT_NEAR(p[0], -(1.0 + e) * mass_kg * v_n_mps, 1e-12 * mass_kg);
-  const Eigen::VectorXd w = ApplyAndMeasure(example, p);
+  const Eigen::VectorXd w = ApplyReferenceAndMeasure(example, p);
   EXPECT_NEAR(w[0], -e * v_n_mps, 1e-12);
   EXPECT_DOUBLE_EQ(example.bodies[0].v_W.x(), 0.2);  // frictionless: tangential untouched
 }
@@ -51,7 +51,7 @@ TEST(ReferenceImpulse, TrainRemovesEqualSharesOfTheApproach) {
   ImpulseExample example = SpherePlane(0.3, 0.01, Vec3(0, 0, v0_mps));
   for (int i = 1; i <= kImpulses; ++i) {
     const Eigen::VectorXd p = ReferenceImpulse(example.problem(), 0.0, kImpulses - i + 1);
-    const Eigen::VectorXd w = ApplyAndMeasure(example, p);
+    const Eigen::VectorXd w = ApplyReferenceAndMeasure(example, p);
     // tolerance: rounding, 1e-12 m/s
     EXPECT_NEAR(w[0], v0_mps * (kImpulses - i) / kImpulses, 1e-12) << "impulse " << i;
   }
@@ -74,7 +74,7 @@ TEST(ReferenceImpulse, BoxLandingFlatStopsEveryCorner) {
     // tolerance: 1e-10 N s, a rank-revealing QR of a rank-3 matrix
     EXPECT_NEAR(p[j], expected, 1e-10) << "corner " << j;
   }
-  const Eigen::VectorXd w = ApplyAndMeasure(box, p);
+  const Eigen::VectorXd w = ApplyReferenceAndMeasure(box, p);
   EXPECT_LT(w.cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_LT(box.bodies[0].w_W.norm(), 1e-9);
   EXPECT_LT(std::abs(box.bodies[0].v_W.z()), 1e-10);
@@ -84,7 +84,7 @@ TEST(ReferenceImpulse, HeadOnPlasticGivesCommonVelocity) {
   const double m_a = 2.0, v_a = -1.0, m_b = 0.5, v_b = 3.0;
   ImpulseExample example = HeadOn(m_a, v_a, m_b, v_b);
   const Eigen::VectorXd p = ReferenceImpulse(example.problem(), 0.0, 1);
-  ApplyAndMeasure(example, p);
+  ApplyReferenceAndMeasure(example, p);
   const double common = (m_a * v_a + m_b * v_b) / (m_a + m_b);
   // tolerance: rounding, 1e-12 m/s
   EXPECT_NEAR(example.bodies[0].v_W.x(), common, 1e-12);
@@ -95,7 +95,7 @@ TEST(ReferenceImpulse, StruckStackStopsEverything) {
   // a tool hits a stack of three boxes on the floor, e = 0: the floor stops the whole stack
   ImpulseExample stack = StackWithTool(3, 0.05, 1.0, 0.5, -2.0);
   const Eigen::VectorXd p = ReferenceImpulse(stack.problem(), 0.0, 1);
-  ApplyAndMeasure(stack, p);
+  ApplyReferenceAndMeasure(stack, p);
   for (const SolverBody& body : stack.bodies) {
     // tolerance: 1e-10 m/s and rad/s against a 2 m/s strike
     EXPECT_LT(body.v_W.norm(), 1e-10);
@@ -136,7 +136,7 @@ TEST(ReferenceImpulse, NeverAddsKineticEnergy) {
       const double ke0 = KineticEnergy(example.bodies);
       Eigen::VectorXd b(p.size());
       JcV(example.problem(), b);
-      ApplyAndMeasure(after, p);
+      ApplyReferenceAndMeasure(after, p);
       const double ke1 = KineticEnergy(after.bodies);
       // tolerance: rounding of velocity changes of order impulse / mass,
       // 1e-12 (KE0 + v_ref sum |p|) (e = 1 conserves energy in exact arithmetic)
@@ -365,8 +365,7 @@ TEST(ReferenceSolver, SolveDoesNotAllocate) {
   {
     // the probe works: an allocation is seen
     test::LimitMalloc probe_guard;
-    void* volatile probe = std::malloc(64);
-    std::free(probe);
+    test::ProbeAllocation();
     ASSERT_EQ(probe_guard.allocations(), 1);
   }
   ImpulseExample bad = examples[0];  // copied outside the count

@@ -45,7 +45,7 @@ std::vector<double> SolveOk(const ImpulseExample& example, double scale, bool ma
 }
 
 // applies p and returns Jc v afterwards
-Eigen::VectorXd ApplyAndMeasure(ImpulseExample& example, const std::vector<double>& p) {
+Eigen::VectorXd ApplySolvedAndMeasure(ImpulseExample& example, const std::vector<double>& p) {
   ApplyImpulses(example.bodies, example.rows, p);
   Eigen::VectorXd w(static_cast<Eigen::Index>(p.size()));
   JcV(example.problem(), w);
@@ -72,7 +72,7 @@ TEST_P(SolverPath, SphereOnPlaneFollowsNewton) {
     const std::vector<double> p = SolveOk(example, 1.0 + e, GetParam());
     // Eq. 5: p = -(1 + e) m v_n, then v = -e v_n; tolerance 1e-12 relative
     EXPECT_NEAR(p[0], -(1.0 + e) * mass_kg * v_n_mps, 1e-12 * mass_kg) << "e " << e;
-    const Eigen::VectorXd w = ApplyAndMeasure(example, p);
+    const Eigen::VectorXd w = ApplySolvedAndMeasure(example, p);
     EXPECT_NEAR(w[0], -e * v_n_mps, 1e-12) << "e " << e;
   }
 }
@@ -88,7 +88,7 @@ TEST_P(SolverPath, TrainRemovesEqualSharesOfTheApproach) {
     const ImpulseSolverStats stats =
         solver.Solve(example.problem(), 1.0 / (kImpulses - i + 1), p, solver.plastic_impulse());
     ASSERT_EQ(stats.error, ImpulseSolverError::kNone);
-    const Eigen::VectorXd w = ApplyAndMeasure(example, p);
+    const Eigen::VectorXd w = ApplySolvedAndMeasure(example, p);
     // tolerance: rounding, 1e-12 m/s
     EXPECT_NEAR(w[0], v0_mps * (kImpulses - i) / kImpulses, 1e-12) << "impulse " << i;
   }
@@ -113,7 +113,7 @@ TEST_P(SolverPath, BoxLandingFlatStopsEveryCornerWithTheMinimumNormImpulse) {
     EXPECT_NEAR(p[j], expected, 1e-10) << "corner " << j;
     EXPECT_NEAR(p[j], reference[j], 1e-10) << "corner " << j;
   }
-  const Eigen::VectorXd w = ApplyAndMeasure(box, p);
+  const Eigen::VectorXd w = ApplySolvedAndMeasure(box, p);
   EXPECT_LT(w.cwiseAbs().maxCoeff(), 1e-10);
   EXPECT_LT(box.bodies[0].w_W.norm(), 1e-9);
 }
@@ -122,7 +122,7 @@ TEST_P(SolverPath, HeadOnPlasticGivesCommonVelocity) {
   const double m_a = 2.0, v_a = -1.0, m_b = 0.5, v_b = 3.0;
   ImpulseExample example = HeadOn(m_a, v_a, m_b, v_b);
   const std::vector<double> p = SolveOk(example, 1.0, GetParam());
-  ApplyAndMeasure(example, p);
+  ApplySolvedAndMeasure(example, p);
   const double common = (m_a * v_a + m_b * v_b) / (m_a + m_b);
   // tolerance: rounding, 1e-12 m/s
   EXPECT_NEAR(example.bodies[0].v_W.x(), common, 1e-12);
@@ -137,7 +137,7 @@ TEST_P(SolverPath, StruckStackStopsEverything) {
     // the reference is positive here, so the two agree; tolerance 1e-9 relative
     EXPECT_NEAR(p[j], reference[j], 1e-9 * reference.cwiseAbs().maxCoeff()) << "row " << j;
   }
-  ApplyAndMeasure(stack, p);
+  ApplySolvedAndMeasure(stack, p);
   for (const SolverBody& body : stack.bodies) {
     // tolerance: 1e-9 m/s and rad/s against a 2 m/s strike
     EXPECT_LT(body.v_W.norm(), 1e-9);
@@ -160,7 +160,7 @@ TEST_P(SolverPath, NeverPullsWhereTheReferenceDoes) {
   // tolerance: rounding, 1e-12 N s
   EXPECT_NEAR(p[0], mass_kg, 1e-12);
   EXPECT_EQ(p[1], 0.0);
-  const Eigen::VectorXd w = ApplyAndMeasure(example, p);
+  const Eigen::VectorXd w = ApplySolvedAndMeasure(example, p);
   EXPECT_NEAR(w[0], 0.0, 1e-12);
   EXPECT_NEAR(w[1], 2.0 / std::sqrt(2.0), 1e-12);  // v+ = (2, 0, 0) still separates the slope
 }
@@ -177,7 +177,7 @@ TEST_P(SolverPath, NeverPullsInAChain) {
   ASSERT_LT(reference.minCoeff(), 0.0);
   ImpulseExample after = stack;
   const std::vector<double> p = SolveOk(after, 1.0, GetParam());
-  const Eigen::VectorXd w = ApplyAndMeasure(after, p);
+  const Eigen::VectorXd w = ApplySolvedAndMeasure(after, p);
   // closed form: only the tool row acts, tool (0.5 kg, -1) and box 1 (1 kg, +3) meet at
   // (0.5 * -1 + 3) / 1.5 = 5/3 m/s; box 1 still separates from box 0 at rest
   for (int j = 0; j < 4; ++j) EXPECT_EQ(p[j], 0.0);
@@ -318,7 +318,7 @@ void CheckRandomGroups(const ImpulseSolverOptions& options, int& min_norm, doubl
           << "trial " << trial << ": " << ToString(stats.error);
       const std::vector<double> p_c(p.begin(), p.begin() + c);
       ImpulseExample after = example;
-      const Eigen::VectorXd w = ApplyAndMeasure(after, p_c);
+      const Eigen::VectorXd w = ApplySolvedAndMeasure(after, p_c);
       double impulse_sum = 0.0;
       for (std::size_t j = 0; j < c; ++j) {
         ASSERT_GE(p[j], 0.0);
@@ -423,7 +423,7 @@ TEST(ImpulseSolver, InteriorPointIsSafeOnRandomGroups) {
 // 1e-9 of the tool's momentum for the impulses
 void ExpectStackHitStopped(const ImpulseExample& stack, const std::vector<double>& p) {
   ImpulseExample after = stack;
-  ApplyAndMeasure(after, p);
+  ApplySolvedAndMeasure(after, p);
   for (const SolverBody& body : after.bodies) {
     EXPECT_LE(body.v_W.norm(), 1e-9);
     EXPECT_LE(body.w_W.norm() * 0.05, 1e-9);
@@ -535,7 +535,7 @@ TEST(ImpulseSolver, LargeGroupMatchesThePlasticConditions) {
   EXPECT_TRUE(stats.converged);
   EXPECT_TRUE(stats.min_norm);
   ImpulseExample after = pile;
-  const Eigen::VectorXd w = ApplyAndMeasure(after, p);
+  const Eigen::VectorXd w = ApplySolvedAndMeasure(after, p);
   double complementarity_J = 0.0;  // sum p_j |w_j|
   for (Eigen::Index j = 0; j < c; ++j) {
     ASSERT_GE(p[j], 0.0);

@@ -25,7 +25,7 @@ std::string Write(const std::string& name, const std::string& text) {
   return path.string();
 }
 
-std::string ErrorOf(const std::string& text) {
+std::string SpecErrorOf(const std::string& text) {
   try {
     ParseDeviceSpec(text);
   } catch (const Error& e) {
@@ -109,18 +109,18 @@ TEST(DeviceSpecTest, BadSpecsNameTheField) {
     ASSERT_NE(at, std::string::npos) << c.from;
     text.replace(at, c.from.size(), c.to);
     const std::string path = Write("bad.json", text);
-    const std::string e = ErrorOf(path);
+    const std::string e = SpecErrorOf(path);
     EXPECT_NE(e.find(path), std::string::npos) << e;
     EXPECT_NE(e.find(c.field), std::string::npos) << c.to << ": " << e;
     EXPECT_NE(e.find(c.says), std::string::npos) << c.to << ": " << e;
     std::filesystem::remove(path);
   }
   // neither a preset nor a .json file: the valid forms are listed
-  const std::string e = ErrorOf("phantom");
+  const std::string e = SpecErrorOf("phantom");
   EXPECT_NE(e.find("'phantom'"), std::string::npos) << e;
   EXPECT_NE(e.find("ideal"), std::string::npos) << e;
   EXPECT_NE(e.find("FILE.json"), std::string::npos) << e;
-  EXPECT_NE(ErrorOf("/no/such/spec.json").find("/no/such/spec.json"), std::string::npos);
+  EXPECT_NE(SpecErrorOf("/no/such/spec.json").find("/no/such/spec.json"), std::string::npos);
 }
 
 }  // namespace

@@ -14,21 +14,12 @@
 #include "draw.h"
 #include "limit_malloc.h"
 #include "loop/test_poll.h"
+#include "udp_test_util.h"
 
 namespace rigidtouch::device {
 namespace {
 
 using testing::PollUntil;
-
-UdpEndpoint Loopback0() {
-  return ParseUdpAddress("udp://127.0.0.1:0", "test");
-}
-
-DeviceKey KeyOf(std::uint8_t fill) {
-  DeviceKey key;
-  key.bytes.fill(fill);
-  return key;
-}
 
 // a device that moves along x one millimetre per read and remembers the last command
 class FakeDevice final : public Device {

@@ -13,6 +13,7 @@
 
 #include "limit_malloc.h"
 #include "loop/test_poll.h"
+#include "udp_test_util.h"
 
 namespace rigidtouch::device {
 namespace {
@@ -21,17 +22,7 @@ using testing::PollUntil;
 
 constexpr std::uint64_t kServerNonce = 0x5e5e5e5e12345678ull;
 
-UdpEndpoint Loopback0() {
-  return ParseUdpAddress("udp://127.0.0.1:0", "test");
-}
-
-DeviceKey KeyOf(std::uint8_t fill) {
-  DeviceKey key;
-  key.bytes.fill(fill);
-  return key;
-}
-
-void Reseal(std::vector<std::uint8_t>& datagram, const DeviceKey& key) {
+void ResealWith(std::vector<std::uint8_t>& datagram, const DeviceKey& key) {
   const std::size_t covered = datagram.size() - kMacBytes;
   crypto_auth_hmacsha256(datagram.data() + covered, datagram.data(), covered, key.bytes.data());
 }
@@ -307,7 +298,7 @@ TEST(UdpDevice, EveryMalformedDatagramIsDroppedAndCountedByReason) {
   bad_magic[3] = 'X';
   std::vector<std::uint8_t> version_1 = good;
   version_1[4] = 1;
-  Reseal(version_1, f.key);
+  ResealWith(version_1, f.key);
   const CommandPacket wrong_type = EncodeCommand(DeviceCommand{}, PacketHeader{}, f.key);
   std::vector<std::uint8_t> one_byte_more = good;
   one_byte_more.push_back(0);
@@ -316,10 +307,10 @@ TEST(UdpDevice, EveryMalformedDatagramIsDroppedAndCountedByReason) {
   std::vector<std::uint8_t> nan_payload = f.StateBytes(201, 1001);
   const auto nan_bits = std::bit_cast<std::uint64_t>(std::numeric_limits<double>::quiet_NaN());
   for (int i = 0; i < 8; ++i) nan_payload[56 + i] = static_cast<std::uint8_t>(nan_bits >> (8 * i));
-  Reseal(nan_payload, f.key);
+  ResealWith(nan_payload, f.key);
   std::vector<std::uint8_t> zero_quaternion = f.StateBytes(202, 1002);
   std::fill(zero_quaternion.begin() + 80, zero_quaternion.begin() + 112, 0);
-  Reseal(zero_quaternion, f.key);
+  ResealWith(zero_quaternion, f.key);
 
   for (const std::span<const std::uint8_t> bytes :
        {std::span<const std::uint8_t>(bad_magic), std::span<const std::uint8_t>(version_1),

@@ -43,7 +43,7 @@ constexpr const char* kVersion1StateHex =
     "a5000000";
 
 constexpr std::uint64_t kClientNonce = 0x1111111111111111ull;
-constexpr std::uint64_t kServerNonce = 0x2222222222222222ull;
+constexpr std::uint64_t kProtocolServerNonce = 0x2222222222222222ull;
 
 DeviceKey TestKey() {
   DeviceKey key;
@@ -94,14 +94,15 @@ void PutF64(std::vector<std::uint8_t>& datagram, std::size_t offset, double valu
 
 std::vector<std::uint8_t> StateBytes() {
   const StatePacket packet = EncodeState(
-      GoldenState(), PacketHeader{PacketType::kState, kClientNonce, kServerNonce, 7}, TestKey());
+      GoldenState(), PacketHeader{PacketType::kState, kClientNonce, kProtocolServerNonce, 7},
+      TestKey());
   return {packet.begin(), packet.end()};
 }
 
 std::vector<std::uint8_t> CommandBytes() {
-  const CommandPacket packet =
-      EncodeCommand(GoldenCommand(),
-                    PacketHeader{PacketType::kCommand, kClientNonce, kServerNonce, 9}, TestKey());
+  const CommandPacket packet = EncodeCommand(
+      GoldenCommand(), PacketHeader{PacketType::kCommand, kClientNonce, kProtocolServerNonce, 9},
+      TestKey());
   return {packet.begin(), packet.end()};
 }
 
@@ -134,8 +135,8 @@ TEST(UdpProtocol, EncodingsMatchGoldenBytes) {
   EXPECT_EQ(CommandBytes().size(), kCommandPacketBytes);
   const HelloPacket hello = EncodeHello(kClientNonce, TestKey());
   EXPECT_EQ(std::vector<std::uint8_t>(hello.begin(), hello.end()), FromHex(kGoldenHelloHex));
-  const HelloReplyPacket reply =
-      EncodeHelloReply(AnnouncedLimits{3.3, 1000.0, 2.5}, kClientNonce, kServerNonce, TestKey());
+  const HelloReplyPacket reply = EncodeHelloReply(AnnouncedLimits{3.3, 1000.0, 2.5}, kClientNonce,
+                                                  kProtocolServerNonce, TestKey());
   EXPECT_EQ(std::vector<std::uint8_t>(reply.begin(), reply.end()), FromHex(kGoldenHelloReplyHex));
 }
 
@@ -146,7 +147,7 @@ TEST(UdpProtocol, HeaderFieldsAreRead) {
       DecodeResult::kOk);
   EXPECT_EQ(header.type, PacketType::kCommand);
   EXPECT_EQ(header.client_nonce, kClientNonce);
-  EXPECT_EQ(header.server_nonce, kServerNonce);
+  EXPECT_EQ(header.server_nonce, kProtocolServerNonce);
   EXPECT_EQ(header.counter, 9u);
   AnnouncedLimits limits;
   const std::vector<std::uint8_t> reply = FromHex(kGoldenHelloReplyHex);
@@ -310,7 +311,8 @@ TEST(UdpProtocol, CommandUnderAnotherKeyIsRejected) {
   DeviceKey other = TestKey();
   other.bytes[31] ^= 0x80;
   const CommandPacket forged = EncodeCommand(
-      GoldenCommand(), PacketHeader{PacketType::kCommand, kClientNonce, kServerNonce, 9}, other);
+      GoldenCommand(), PacketHeader{PacketType::kCommand, kClientNonce, kProtocolServerNonce, 9},
+      other);
   EXPECT_EQ(Framing(forged, PacketType::kHello, PacketType::kCommand), DecodeResult::kOk);
   EXPECT_FALSE(VerifyMac(forged, TestKey()));
   EXPECT_TRUE(VerifyMac(forged, other));

@@ -12,7 +12,7 @@
 namespace rigidtouch::device {
 namespace {
 
-std::string ErrorOf(const std::string& text) {
+std::string AddressErrorOf(const std::string& text) {
   try {
     ParseUdpAddress(text, "--listen");
   } catch (const Error& error) {
@@ -42,7 +42,7 @@ TEST(UdpSocket, MalformedAddressesNameTheTextAndOption) {
        {"127.0.0.1:5000", "udp://127.0.0.1", "udp://127.0.0.1:", "udp://:5000",
         "udp://127.0.0.1:70000", "udp://127.0.0.1:12a", "udp://127.0.0.1:-1", "udp://host:1",
         "udp://256.0.0.1:1", "tcp://127.0.0.1:1", ""}) {
-    const std::string message = ErrorOf(text);
+    const std::string message = AddressErrorOf(text);
     EXPECT_NE(message.find("'" + text + "'"), std::string::npos) << message;
     EXPECT_NE(message.find("--listen"), std::string::npos) << message;
     EXPECT_NE(message.find("[0, 65535]"), std::string::npos) << message;

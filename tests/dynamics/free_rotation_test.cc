@@ -12,9 +12,9 @@
 namespace rigidtouch {
 namespace {
 
-constexpr double kH = 1e-3;    // h [s]
-constexpr int kSteps = 5000;   // 5 s
-constexpr double kTol = 5e-4;  // relative drift of KE and |L| over 5 s
+constexpr double kH = 1e-3;         // h [s]
+constexpr int kSteps = 5000;        // 5 s
+constexpr double kDriftTol = 5e-4;  // relative drift of KE and |L| over 5 s
 
 // One free body with principal inertias I (diaginertia, inertial frame = body frame), no
 // gravity, far from the floor; it is the tool, with no device (coupling none, zero user wrench).
@@ -67,8 +67,8 @@ TEST(FreeRotationTest, IntermediateAxisKeepsEnergyAndMomentum) {
   RecordProperty("momentum_drift", std::to_string(d.momentum));
   std::printf("intermediate axis: |dKE|/KE = %.3e, |d|L||/|L| = %.3e, |dL|/|L| = %.3e\n", d.energy,
               d.momentum, d.direction);
-  EXPECT_LT(d.energy, kTol);
-  EXPECT_LT(d.momentum, kTol);
+  EXPECT_LT(d.energy, kDriftTol);
+  EXPECT_LT(d.momentum, kDriftTol);
 }
 
 TEST(FreeRotationTest, SkewAxisKeepsEnergyAndMomentum) {
@@ -76,8 +76,8 @@ TEST(FreeRotationTest, SkewAxisKeepsEnergyAndMomentum) {
   const Drift d = Fly(model);
   std::printf("skew axis: |dKE|/KE = %.3e, |d|L||/|L| = %.3e, |dL|/|L| = %.3e\n", d.energy,
               d.momentum, d.direction);
-  EXPECT_LT(d.energy, kTol);
-  EXPECT_LT(d.momentum, kTol);
+  EXPECT_LT(d.energy, kDriftTol);
+  EXPECT_LT(d.momentum, kDriftTol);
 }
 
 TEST(FreeRotationTest, SymmetricTopPrecessesAtTheClosedFormRate) {

@@ -19,7 +19,7 @@
 namespace rigidtouch::dynamics {
 namespace {
 
-constexpr double kTol = 1e-9;
+constexpr double kGroupSolveTol = 1e-9;
 
 struct Fixture {
   Model model;
@@ -188,7 +188,7 @@ void ExpectMatchesDense(Fixture& f, std::vector<ImplicitContact> contacts) {
   for (const ImplicitContact& c : contacts) ASSERT_TRUE(c.active);  // none dropped: same system
   const Eigen::VectorXd v = Solved(f);
   EXPECT_LE((v - expected).lpNorm<Eigen::Infinity>(),
-            kTol * std::max(1.0, expected.lpNorm<Eigen::Infinity>()));
+            kGroupSolveTol * std::max(1.0, expected.lpNorm<Eigen::Infinity>()));
 }
 
 TEST(GroupDynamics, ColumnOfFacesMatchesDenseSolve) {
@@ -286,7 +286,7 @@ TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
                                    f.scratch, f.kept));
   EXPECT_LE((Solved(f) - expected).lpNorm<Eigen::Infinity>(),
-            kTol * expected.lpNorm<Eigen::Infinity>());
+            kGroupSolveTol * expected.lpNorm<Eigen::Infinity>());
   for (const ImplicitContact& c : contacts) {
     const bool upper = c.body_b == f.bodies[0];
     EXPECT_EQ(c.active, !upper);
@@ -322,7 +322,7 @@ TEST(GroupDynamics, DroppedContactsBetweenKeptOnesReportNoForce) {
   ASSERT_TRUE(SolveGroupVelocities(f.model, f.data, f.bodies, f.slot, contacts, f.force, f.torque,
                                    f.scratch, f.kept));
   EXPECT_LE((Solved(f) - expected).lpNorm<Eigen::Infinity>(),
-            kTol * expected.lpNorm<Eigen::Infinity>());
+            kGroupSolveTol * expected.lpNorm<Eigen::Infinity>());
   for (const ImplicitContact& c : contacts) {
     ASSERT_EQ(c.active, c.body_b < 0);
     if (!c.active) {

@@ -80,7 +80,7 @@ TEST(CollisionTest, IdentitySurvivesSlidingAndEndsOnSeparation) {
 
 // bitwise equal (so -0 differs from +0), or both NaN: the sign and payload of a NaN depend on
 // the order the compiler gives a commutative operation's operands
-bool SameBits(const double* a, const double* b, int n) {
+bool SameDoubles(const double* a, const double* b, int n) {
   for (int i = 0; i < n; ++i) {
     if (std::memcmp(&a[i], &b[i], sizeof(double)) != 0 && !(std::isnan(a[i]) && std::isnan(b[i]))) {
       return false;
@@ -153,10 +153,10 @@ TEST(CollisionTest, PosesAndChecksFollowTheBodies) {
       for (int g = 0; g < ngeom; ++g) {
         const bool centre_only = m.geoms[g].type == GeomType::kSphere && m.geoms[g].body >= 0 &&
                                  std::string(scene) != "capsule_mesh.xml";
-        EXPECT_TRUE(SameBits(s.poses[g].p_W.data(), expected[g].p_W.data(), 3))
+        EXPECT_TRUE(SameDoubles(s.poses[g].p_W.data(), expected[g].p_W.data(), 3))
             << "geom " << g << " trial " << trial;
         if (!centre_only) {
-          EXPECT_TRUE(SameBits(s.poses[g].R_WG.data(), expected[g].R_WG.data(), 9))
+          EXPECT_TRUE(SameDoubles(s.poses[g].R_WG.data(), expected[g].R_WG.data(), 9))
               << "geom " << g << " trial " << trial;
         }
         const GeomCheck kind = s.geom_kind[g];

@@ -156,7 +156,7 @@ TEST(WorkerTest, TwoEndedRangeHandsOutEachIndexOnce) {
   EXPECT_EQ(range.TakeBack(), -1);
 }
 
-bool SameBits(const Vec3& a, const Vec3& b) {
+bool SameVec3Bits(const Vec3& a, const Vec3& b) {
   return std::memcmp(a.data(), b.data(), 24) == 0;
 }
 
@@ -247,9 +247,10 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
       const Contact& b = d2.contacts[k];
       ASSERT_TRUE(a.id == b.id && a.geom_a == b.geom_a && a.geom_b == b.geom_b &&
                   a.is_new == b.is_new && a.sticking == b.sticking && a.phase == b.phase &&
-                  a.group == b.group && a.pair_points == b.pair_points && SameBits(a.p_W, b.p_W) &&
-                  SameBits(a.n_W, b.n_W) && SameBits(a.anchor_A, b.anchor_A) &&
-                  SameBits(a.anchor_B, b.anchor_B) && std::memcmp(&a.depth_m, &b.depth_m, 8) == 0 &&
+                  a.group == b.group && a.pair_points == b.pair_points &&
+                  SameVec3Bits(a.p_W, b.p_W) && SameVec3Bits(a.n_W, b.n_W) &&
+                  SameVec3Bits(a.anchor_A, b.anchor_A) && SameVec3Bits(a.anchor_B, b.anchor_B) &&
+                  std::memcmp(&a.depth_m, &b.depth_m, 8) == 0 &&
                   std::memcmp(&a.normal_force_N, &b.normal_force_N, 8) == 0)
           << "step " << s << " contact " << k;
       // each contact's group is its dynamic body's (stage 3 writes it with the windows)
@@ -264,7 +265,7 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
   // the contacts were written and matched on the two threads in the steps with enough pairs
   EXPECT_GT(d2.workspace->collision.written_on_two_threads, 100);
   for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
-    EXPECT_TRUE(SameBits(d1.bodies[i].x_W, d2.bodies[i].x_W)) << "body " << i;
+    EXPECT_TRUE(SameVec3Bits(d1.bodies[i].x_W, d2.bodies[i].x_W)) << "body " << i;
   }
   EXPECT_GT(most, 40);  // above the 32 pairs from which the worker takes half
   // and in a step of the pile (36 columns, over 200 contacts) the worker was offered four jobs:
@@ -296,9 +297,9 @@ TEST(WorkerTest, GroupsSolvedOnTwoThreadsKeepTheirFactors) {
     Tick(m1, d1, in);
     Tick(m2, d2, in);
     for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
-      ASSERT_TRUE(SameBits(d1.bodies[i].x_W, d2.bodies[i].x_W) &&
-                  SameBits(d1.bodies[i].v_W, d2.bodies[i].v_W) &&
-                  SameBits(d1.bodies[i].w_W, d2.bodies[i].w_W))
+      ASSERT_TRUE(SameVec3Bits(d1.bodies[i].x_W, d2.bodies[i].x_W) &&
+                  SameVec3Bits(d1.bodies[i].v_W, d2.bodies[i].v_W) &&
+                  SameVec3Bits(d1.bodies[i].w_W, d2.bodies[i].w_W))
           << "step " << s << " body " << i;
     }
     ASSERT_TRUE(SameKeptFactors(d1, d2)) << "step " << s;
@@ -327,12 +328,12 @@ bool SameImpulses(const Data& d1, const Data& d2, std::string* why) {
         std::memcmp(&a.kinetic_energy_before_J, &b.kinetic_energy_before_J, 8) != 0 ||
         std::memcmp(&a.kinetic_energy_after_J, &b.kinetic_energy_after_J, 8) != 0 ||
         std::memcmp(&a.impulse_norm_Ns, &b.impulse_norm_Ns, 8) != 0 ||
-        !SameBits(a.tool_impulse_W, b.tool_impulse_W)) {
+        !SameVec3Bits(a.tool_impulse_W, b.tool_impulse_W)) {
       *why = "event " + std::to_string(k);
       return false;
     }
   }
-  if (!SameBits(d1.tool_impulse_W, d2.tool_impulse_W)) {
+  if (!SameVec3Bits(d1.tool_impulse_W, d2.tool_impulse_W)) {
     *why = "tool impulse";
     return false;
   }
@@ -344,7 +345,7 @@ bool SameImpulses(const Data& d1, const Data& d2, std::string* why) {
   }
   for (std::size_t i = 0; i < d1.bodies.size(); ++i) {
     const BodyState &a = d1.bodies[i], &b = d2.bodies[i];
-    if (!SameBits(a.x_W, b.x_W) || !SameBits(a.v_W, b.v_W) || !SameBits(a.w_W, b.w_W) ||
+    if (!SameVec3Bits(a.x_W, b.x_W) || !SameVec3Bits(a.v_W, b.v_W) || !SameVec3Bits(a.w_W, b.w_W) ||
         d1.window[i].onset_step != d2.window[i].onset_step ||
         d1.window[i].impulses_done != d2.window[i].impulses_done ||
         d1.window[i].interior != d2.window[i].interior) {
@@ -461,8 +462,7 @@ void StopWorkerGuard(void* allocations) {
   guard->~LimitMalloc();
 }
 void Allocate(void*) {
-  void* volatile probe = std::malloc(64);
-  std::free(probe);
+  test::ProbeAllocation();
 }
 
 // runs job(context) on the worker thread itself

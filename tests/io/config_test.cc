@@ -15,7 +15,7 @@ namespace {
 using test::WriteTempFile;
 
 // the error of applying a config file with `text`, or "" if it applied
-std::string ErrorOf(const std::string& text, const std::string& name = "config.json") {
+std::string ConfigErrorOf(const std::string& text, const std::string& name = "config.json") {
   LoadOptions options;
   try {
     ApplyConfigFile(WriteTempFile(name, text), options);
@@ -82,7 +82,7 @@ TEST(ConfigTest, AbsentFieldsKeepTheirValues) {
   EXPECT_EQ(o.render.renderer, RendererKind::kPenalty);
   EXPECT_FALSE(o.timestep_s.has_value());
   EXPECT_EQ(o.tool_name, "tool");
-  EXPECT_EQ(ErrorOf("{}"), "");
+  EXPECT_EQ(ConfigErrorOf("{}"), "");
 }
 
 TEST(ConfigTest, UnknownFieldsAreRejectedListingTheValidOnes) {
@@ -102,7 +102,7 @@ TEST(ConfigTest, UnknownFieldsAreRejectedListingTheValidOnes) {
        "max_force_N"},
   };
   for (const Case& c : cases) {
-    const std::string e = ErrorOf(c.text);
+    const std::string e = ConfigErrorOf(c.text);
     EXPECT_TRUE(Has(e, c.where)) << e;
     EXPECT_TRUE(Has(e, c.field)) << e;
     EXPECT_TRUE(Has(e, std::string("valid fields: ")) && Has(e, c.valid)) << e;
@@ -133,19 +133,19 @@ TEST(ConfigTest, WrongTypesNameTheFieldAndTheValue) {
       {R"([1])", "config.json: expected a config object (a JSON object), got an array"},
   };
   for (const Case& c : cases) {
-    const std::string e = ErrorOf(c.text);
+    const std::string e = ConfigErrorOf(c.text);
     EXPECT_TRUE(Has(e, c.expected)) << e;
   }
 }
 
 TEST(ConfigTest, NonFiniteNumbersNameTheField) {
   // 1e309 overflows a double: an error naming the field, not nlohmann's out_of_range
-  std::string e = ErrorOf(R"({"contact": {"stiffness_N_per_m": 1e309}})");
+  std::string e = ConfigErrorOf(R"({"contact": {"stiffness_N_per_m": 1e309}})");
   EXPECT_TRUE(Has(e, "config.json: contact.stiffness_N_per_m: 1e309 is not a finite number")) << e;
-  e = ErrorOf(R"({"render": {"frequency_hz": -1e400}})");
+  e = ConfigErrorOf(R"({"render": {"frequency_hz": -1e400}})");
   EXPECT_TRUE(Has(e, "config.json: render.frequency_hz: -1e400 is not a finite number")) << e;
   // JSON has no NaN: a syntax error with the position and the field being read
-  e = ErrorOf(R"({"device": {"max_force_N": NaN}})");
+  e = ConfigErrorOf(R"({"device": {"max_force_N": NaN}})");
   EXPECT_TRUE(Has(e, "config.json: not valid JSON at line 1, column 28")) << e;
   EXPECT_TRUE(Has(e, "(reading field device.max_force_N)")) << e;
 }
@@ -158,9 +158,10 @@ TEST(ConfigTest, MissingEmptyAndMalformedFilesNameTheFile) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), "no-such-config.json: cannot open the config file");
   }
-  EXPECT_TRUE(Has(ErrorOf("", "empty.json"), "empty.json: the config file is empty"));
-  EXPECT_TRUE(Has(ErrorOf(" \n\t", "blank.json"), "blank.json: the config file is empty"));
-  const std::string e = ErrorOf("{\n  \"contact\": {\n    \"stiffness_N_per_m\": 10,\n  }\n}");
+  EXPECT_TRUE(Has(ConfigErrorOf("", "empty.json"), "empty.json: the config file is empty"));
+  EXPECT_TRUE(Has(ConfigErrorOf(" \n\t", "blank.json"), "blank.json: the config file is empty"));
+  const std::string e =
+      ConfigErrorOf("{\n  \"contact\": {\n    \"stiffness_N_per_m\": 10,\n  }\n}");
   EXPECT_TRUE(Has(e, "config.json: not valid JSON at line 4, column 3")) << e;
 }
 
@@ -175,12 +176,13 @@ TEST(ConfigTest, AFolderGivenAsTheConfigIsNamed) {
     EXPECT_EQ(std::string(e.what()), dir + ": is a directory, not a config file");
   }
   // a number too large for a double at the top level, too
-  const std::string e = ErrorOf(R"({"timestep_s": 1e309})");
+  const std::string e = ConfigErrorOf(R"({"timestep_s": 1e309})");
   EXPECT_TRUE(Has(e, "config.json: timestep_s: 1e309 is not a finite number")) << e;
 }
 
 TEST(ConfigTest, AFieldGivenTwiceIsAnError) {
-  const std::string e = ErrorOf(R"({"contact": {"damping_Ns_per_m": 1, "damping_Ns_per_m": 2}})");
+  const std::string e =
+      ConfigErrorOf(R"({"contact": {"damping_Ns_per_m": 1, "damping_Ns_per_m": 2}})");
   EXPECT_TRUE(Has(e, "config.json: contact.damping_Ns_per_m: the field is given twice")) << e;
 }
 

@@ -35,7 +35,7 @@ fs::path Dir() {
   return scratch.path;
 }
 
-std::vector<RecordSample> Samples() {
+std::vector<RecordSample> RecordSamples() {
   std::vector<RecordSample> out;
   for (int k = 0; k < 5; ++k) {
     RecordSample r;
@@ -77,7 +77,7 @@ void ExpectSameBits(const Vec3& a, const Vec3& b) {
 
 TEST(DeviceRecord, ReadsBackWhatWasWrittenBitForBit) {
   const std::string path = (Dir() / "rec.csv").string();
-  const std::vector<RecordSample> in = Samples();
+  const std::vector<RecordSample> in = RecordSamples();
   {
     RecordFileWriter w(path, 1234.5);
     w.Append(std::span(in).first(2));
@@ -119,7 +119,7 @@ TEST(DeviceRecord, UncommittedRecordLeavesNoFile) {
   fs::create_directories(dir);
   {
     RecordFileWriter w((dir / "rec.csv").string(), 1000.0);
-    const std::vector<RecordSample> in = Samples();
+    const std::vector<RecordSample> in = RecordSamples();
     w.Append(in);
   }  // e.g. the session failed before Commit
   EXPECT_TRUE(fs::is_empty(dir));
@@ -133,7 +133,7 @@ TEST(DeviceRecord, BadPathIsRefusedBeforeTheSession) {
 std::string Written() {
   const std::string path = (Dir() / "good.csv").string();
   RecordFileWriter w(path, 1000.0);
-  w.Append(Samples());
+  w.Append(RecordSamples());
   w.Commit();
   std::ifstream f(path);
   std::stringstream s;
@@ -141,7 +141,7 @@ std::string Written() {
   return s.str();
 }
 
-std::string ErrorOf(const std::string& text) {
+std::string RecordErrorOf(const std::string& text) {
   const std::string path = (Dir() / "bad.csv").string();
   std::ofstream(path) << text;
   try {
@@ -160,10 +160,10 @@ std::string Replace(std::string s, const std::string& from, const std::string& t
 
 TEST(DeviceRecord, DamagedFilesAreRefusedNamingLineAndColumn) {
   const std::string good = Written();
-  EXPECT_NE(ErrorOf("tick,tap\n").find("line 1: the first line is not"), std::string::npos);
-  EXPECT_NE(ErrorOf(Replace(good, "# rate_hz 1000", "# rate_hz -5")).find("line 2"),
+  EXPECT_NE(RecordErrorOf("tick,tap\n").find("line 1: the first line is not"), std::string::npos);
+  EXPECT_NE(RecordErrorOf(Replace(good, "# rate_hz 1000", "# rate_hz -5")).find("line 2"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(Replace(good, ",fresh,", ",freshness,")).find("line 3: the header row"),
+  EXPECT_NE(RecordErrorOf(Replace(good, ",fresh,", ",freshness,")).find("line 3: the header row"),
             std::string::npos);
   // row of tick 1 (line 5): its valid flag (fifth field) is 1; make it 2
   const std::size_t row = good.find("\n1,3,") + 1;
@@ -172,13 +172,15 @@ TEST(DeviceRecord, DamagedFilesAreRefusedNamingLineAndColumn) {
   std::string bad_flag = good;
   ASSERT_EQ(bad_flag[field], '1');
   bad_flag[field] = '2';
-  EXPECT_NE(ErrorOf(bad_flag).find("line 5, column valid: '2' is not 0 or 1"), std::string::npos)
-      << ErrorOf(bad_flag);
-  EXPECT_NE(ErrorOf(Replace(good, "\n1,3,", "\n7,3,")).find("line 5: tick 7, expected 1"),
+  EXPECT_NE(RecordErrorOf(bad_flag).find("line 5, column valid: '2' is not 0 or 1"),
+            std::string::npos)
+      << RecordErrorOf(bad_flag);
+  EXPECT_NE(RecordErrorOf(Replace(good, "\n1,3,", "\n7,3,")).find("line 5: tick 7, expected 1"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(good + "5,-1,1\n").find("line 9: 3 fields, expected 38"), std::string::npos);
-  EXPECT_NE(ErrorOf(Replace(good, "0.1", "0.1x")).find("is not a number"), std::string::npos);
-  EXPECT_NE(ErrorOf("").find("line 1"), std::string::npos);
+  EXPECT_NE(RecordErrorOf(good + "5,-1,1\n").find("line 9: 3 fields, expected 38"),
+            std::string::npos);
+  EXPECT_NE(RecordErrorOf(Replace(good, "0.1", "0.1x")).find("is not a number"), std::string::npos);
+  EXPECT_NE(RecordErrorOf("").find("line 1"), std::string::npos);
   try {
     ReadRecord((Dir() / "missing.csv").string());
     ADD_FAILURE() << "a missing file was read";

@@ -18,7 +18,7 @@ namespace {
 
 using test::TestScene;
 
-std::string LoadError(const std::string& path) {
+std::string CoverageLoadError(const std::string& path) {
   try {
     LoadModel(path, {});
   } catch (const Error& e) {
@@ -32,7 +32,7 @@ Model LoadXml(const std::string& xml, const std::string& name = "scene.xml") {
 }
 
 std::string XmlError(const std::string& xml) {
-  return LoadError(test::WriteTempFile("refused.xml", xml));
+  return CoverageLoadError(test::WriteTempFile("refused.xml", xml));
 }
 
 void Step(const Model& m, Data& d, double seconds, int* max_contacts = nullptr) {

@@ -18,7 +18,7 @@ using nlohmann::json;
 
 // the message of the Error `f` throws, or "" if it throws none
 template <typename F>
-std::string ErrorOf(F f) {
+std::string ThrownErrorOf(F f) {
   try {
     f();
   } catch (const Error& e) {
@@ -40,11 +40,12 @@ TEST(StrictJsonTest, ParsesValidText) {
 }
 
 TEST(StrictJsonTest, SyntaxErrorsGiveLineColumnAndField) {
-  const std::string line2 = ErrorOf([] { Parse("{\"a\": 1,\n \"b\": tru}"); });
+  const std::string line2 = ThrownErrorOf([] { Parse("{\"a\": 1,\n \"b\": tru}"); });
   EXPECT_NE(line2.find("s.json: not valid JSON at line 2, column 10 (reading field b): "),
             std::string::npos)
       << line2;
-  const std::string e = ErrorOf([] { Parse(R"({"tests": [{"name": "x"}, {"name": nan}]})"); });
+  const std::string e =
+      ThrownErrorOf([] { Parse(R"({"tests": [{"name": "x"}, {"name": nan}]})"); });
   EXPECT_NE(e.find("(reading field tests[1].name)"), std::string::npos) << e;
   EXPECT_NE(e.find("invalid literal"), std::string::npos) << e;
   // no "[json.exception...]" noise in the message
@@ -52,29 +53,29 @@ TEST(StrictJsonTest, SyntaxErrorsGiveLineColumnAndField) {
 }
 
 TEST(StrictJsonTest, OverflowingNumbersNameTheField) {
-  EXPECT_EQ(ErrorOf([] { Parse(R"({"a": {"b": [0, 1e309]}})"); }),
+  EXPECT_EQ(ThrownErrorOf([] { Parse(R"({"a": {"b": [0, 1e309]}})"); }),
             "s.json: a.b[1]: 1e309 is not a finite number");
-  EXPECT_EQ(ErrorOf([] { Parse("-2e308"); }), "s.json: -2e308 is not a finite number");
+  EXPECT_EQ(ThrownErrorOf([] { Parse("-2e308"); }), "s.json: -2e308 is not a finite number");
 }
 
 TEST(StrictJsonTest, DuplicateFieldsAreErrors) {
-  EXPECT_EQ(ErrorOf([] { Parse(R"({"a": {"b": 1, "c": 2, "b": 3}})"); }),
+  EXPECT_EQ(ThrownErrorOf([] { Parse(R"({"a": {"b": 1, "c": 2, "b": 3}})"); }),
             "s.json: a.b: the field is given twice; give it once");
   // the same name in different objects is fine
-  EXPECT_EQ(ErrorOf([] { Parse(R"([{"b": 1}, {"b": 2}])"); }), "");
+  EXPECT_EQ(ThrownErrorOf([] { Parse(R"([{"b": 1}, {"b": 2}])"); }), "");
 }
 
 TEST(StrictJsonTest, ReadJsonFileNamesTheFileAndTheProblem) {
-  EXPECT_EQ(ErrorOf([] { ReadJsonFile("missing.json", "widget file"); }),
+  EXPECT_EQ(ThrownErrorOf([] { ReadJsonFile("missing.json", "widget file"); }),
             "missing.json: cannot open the widget file");
   const std::string empty = test::WriteTempFile("empty.json", "  \n");
-  EXPECT_EQ(ErrorOf([&] { ReadJsonFile(empty, "widget file"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { ReadJsonFile(empty, "widget file"); }),
             empty + ": the widget file is empty");
   const std::string dir = test::TempDir().string();
-  EXPECT_EQ(ErrorOf([&] { ReadJsonFile(dir, "widget file"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { ReadJsonFile(dir, "widget file"); }),
             dir + ": is a directory, not a widget file");
   const std::string bad = test::WriteTempFile("bad.json", "{\"x\": 1e999}");
-  EXPECT_EQ(ErrorOf([&] { ReadJsonFile(bad, "widget file"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { ReadJsonFile(bad, "widget file"); }),
             bad + ": x: 1e999 is not a finite number");
   const std::string good = test::WriteTempFile("good.json", "{\"x\": 2}");
   EXPECT_EQ(ReadJsonFile(good, "widget file")["x"], 2);
@@ -82,12 +83,12 @@ TEST(StrictJsonTest, ReadJsonFileNamesTheFileAndTheProblem) {
 
 TEST(StrictJsonTest, UnknownFieldsListTheValidOnes) {
   const json j = {{"a", 1}, {"z", 2}};
-  EXPECT_EQ(ErrorOf([&] {
+  EXPECT_EQ(ThrownErrorOf([&] {
               StrictObject(kSource, j, "top", {"a", "b"});
             }),
             "s.json: top: unknown field \"z\"; valid fields: a, b");
-  EXPECT_EQ(ErrorOf([&] { StrictObject(kSource, j, "", {"a", "z"}); }), "");
-  EXPECT_EQ(ErrorOf([&] { StrictObject(kSource, json(3), "", {"a"}, "a widget"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { StrictObject(kSource, j, "", {"a", "z"}); }), "");
+  EXPECT_EQ(ThrownErrorOf([&] { StrictObject(kSource, json(3), "", {"a"}, "a widget"); }),
             "s.json: expected a widget (a JSON object), got a number 3");
 }
 
@@ -111,26 +112,27 @@ TEST(StrictJsonTest, GettersCheckTypesAndNameThePath) {
   in.Read("n", d);
   EXPECT_EQ(d, 2.5);
 
-  EXPECT_EQ(ErrorOf([&] { in.Number("s"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.Number("s"); }),
             "s.json: sec.s: expected a number, got a string \"text\"");
-  EXPECT_EQ(ErrorOf([&] { in.String("n"); }), "s.json: sec.n: expected a string, got a number 2.5");
-  EXPECT_EQ(ErrorOf([&] { in.Bool("i"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.String("n"); }),
+            "s.json: sec.n: expected a string, got a number 2.5");
+  EXPECT_EQ(ThrownErrorOf([&] { in.Bool("i"); }),
             "s.json: sec.i: expected true or false, got a number 7");
-  EXPECT_EQ(ErrorOf([&] { in.Integer("n", 0, 1, 10); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.Integer("n", 0, 1, 10); }),
             "s.json: sec.n: expected an integer, got 2.5; valid: integers 1 to 10");
-  EXPECT_EQ(ErrorOf([&] { in.Integer("i", 0, 1, 5); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.Integer("i", 0, 1, 5); }),
             "s.json: sec.i: 7 is out of range; valid: integers 1 to 5");
-  EXPECT_EQ(ErrorOf([&] { in.Integer("big", 0, 1, 5); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.Integer("big", 0, 1, 5); }),
             "s.json: sec.big: 18446744073709551615 is out of range; valid: integers 1 to 5");
-  EXPECT_EQ(ErrorOf([&] { in.Unsigned("neg"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.Unsigned("neg"); }),
             "s.json: sec.neg: expected a non-negative integer below 2^64, got -3");
-  EXPECT_EQ(ErrorOf([&] { in.RequiredString("absent"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.RequiredString("absent"); }),
             "s.json: sec: missing required field \"absent\"");
-  EXPECT_EQ(ErrorOf([&] {
+  EXPECT_EQ(ThrownErrorOf([&] {
               in.OneOf("s", {"a", "b"}, "mode");
             }),
             "s.json: sec.s: unknown mode \"text\"; valid modes: a, b");
-  EXPECT_EQ(ErrorOf([&] { in.Object("o", {"q"}, "an o"); }),
+  EXPECT_EQ(ThrownErrorOf([&] { in.Object("o", {"q"}, "an o"); }),
             "s.json: sec.o: unknown field \"k\"; valid fields: q");
 }
 
@@ -138,8 +140,8 @@ TEST(StrictJsonTest, NonFiniteNumbersBuiltInCodeAreRejected) {
   const json j = {{"x", std::numeric_limits<double>::quiet_NaN()},
                   {"y", std::numeric_limits<double>::infinity()}};
   const StrictObject in(kSource, j, "", {"x", "y"});
-  EXPECT_EQ(ErrorOf([&] { in.Number("x"); }), "s.json: x: nan is not a finite number");
-  EXPECT_EQ(ErrorOf([&] { in.Number("y"); }), "s.json: y: inf is not a finite number");
+  EXPECT_EQ(ThrownErrorOf([&] { in.Number("x"); }), "s.json: x: nan is not a finite number");
+  EXPECT_EQ(ThrownErrorOf([&] { in.Number("y"); }), "s.json: y: inf is not a finite number");
 }
 
 TEST(TextTest, QuoteLowerTrimJoinFormat) {

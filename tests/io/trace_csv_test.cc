@@ -40,7 +40,7 @@ class TraceCsvTest : public ::testing::Test {
   fs::path dir_;
 };
 
-std::vector<TraceSample> Samples() {
+std::vector<TraceSample> TraceSamples() {
   std::vector<TraceSample> samples(5);
   for (int k = 0; k < 5; ++k) {
     TraceSample& s = samples[static_cast<std::size_t>(k)];
@@ -66,7 +66,7 @@ std::vector<TraceSample> Samples() {
 
 TEST_F(TraceCsvTest, RoundTripIsExact) {
   const std::string path = (dir_ / "trace.csv").string();
-  const std::vector<TraceSample> written = Samples();
+  const std::vector<TraceSample> written = TraceSamples();
   WriteTraceCsv(path, written);
   const std::vector<TraceSample> read = ReadTraceCsv(path);
   ASSERT_EQ(read.size(), written.size());
@@ -95,7 +95,7 @@ TEST_F(TraceCsvTest, RoundTripIsExact) {
 
 TEST_F(TraceCsvTest, HeaderNamesColumnsWithUnits) {
   const std::string path = (dir_ / "trace.csv").string();
-  WriteTraceCsv(path, Samples());
+  WriteTraceCsv(path, TraceSamples());
   std::ifstream in(path);
   std::string header;
   std::getline(in, header);
@@ -113,7 +113,7 @@ TEST_F(TraceCsvTest, HeaderNamesColumnsWithUnits) {
 
 TEST_F(TraceCsvTest, OverwritesAnExistingTrace) {
   const std::string path = (dir_ / "trace.csv").string();
-  WriteTraceCsv(path, Samples());
+  WriteTraceCsv(path, TraceSamples());
   WriteTraceCsv(path, std::vector<TraceSample>(2));
   EXPECT_EQ(ReadTraceCsv(path).size(), 2u);
 }
@@ -122,7 +122,7 @@ TEST_F(TraceCsvTest, MissingDirectoryNamesThePathAndLeavesNothing) {
   const fs::path missing_dir = dir_ / "no_such_dir";
   const std::string path = (missing_dir / "trace.csv").string();
   try {
-    WriteTraceCsv(path, Samples());
+    WriteTraceCsv(path, TraceSamples());
     FAIL() << "expected rigidtouch::Error";
   } catch (const Error& e) {
     const std::string message = e.what();
@@ -139,7 +139,7 @@ TEST_F(TraceCsvTest, FailedRenameRemovesTheTemporaryFile) {
   const fs::path target = dir_ / "occupied";
   fs::create_directories(target / "child");
   try {
-    WriteTraceCsv(target.string(), Samples());
+    WriteTraceCsv(target.string(), TraceSamples());
     FAIL() << "expected rigidtouch::Error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(target.string()), std::string::npos) << e.what();
@@ -158,7 +158,7 @@ TEST_F(TraceCsvTest, ReadErrorsNameFileLineAndColumn) {
   }
 
   const std::string path = (dir_ / "bad.csv").string();
-  WriteTraceCsv(path, Samples());
+  WriteTraceCsv(path, TraceSamples());
   std::string text;
   {
     std::ifstream in(path);

@@ -20,12 +20,6 @@ constexpr double kG = 9.81;
 constexpr double kMu = 0.45;  // static = kinetic
 constexpr double kMass = 0.2;
 
-std::string Num(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
 // a box on a plane tilted by theta about y (normal (sin, 0, cos); downhill +x), its centre
 // `lift` above the resting height along the normal
 std::string BoxXml(double theta_rad, double lift_m) {
@@ -33,9 +27,11 @@ std::string BoxXml(double theta_rad, double lift_m) {
   const double r = 0.025 + lift_m;
   return "<mujoco model=\"friction\"><option timestep=\"0.001\" gravity=\"0 0 -9.81\"/>"
          "<worldbody><geom name=\"floor\" type=\"plane\" size=\"2 2 0.1\" euler=\"0 " +
-         Num(deg) + " 0\"/><body name=\"box\" pos=\"" + Num(r * std::sin(theta_rad)) + " 0 " +
-         Num(r * std::cos(theta_rad)) + "\" euler=\"0 " + Num(deg) +
-         " 0\"><freejoint/><geom type=\"box\" size=\"0.025 0.025 0.025\" mass=\"" + Num(kMass) +
+         test::ExactNumber(deg) + " 0\"/><body name=\"box\" pos=\"" +
+         test::ExactNumber(r * std::sin(theta_rad)) + " 0 " +
+         test::ExactNumber(r * std::cos(theta_rad)) + "\" euler=\"0 " + test::ExactNumber(deg) +
+         " 0\"><freejoint/><geom type=\"box\" size=\"0.025 0.025 0.025\" mass=\"" +
+         test::ExactNumber(kMass) +
          "\"/></body><body name=\"tool\" pos=\"0 1.5 0.5\"><freejoint/>"
          "<geom type=\"sphere\" size=\"0.005\" mass=\"0.1\"/></body></worldbody></mujoco>";
 }
@@ -67,7 +63,7 @@ BoxContact BoxContacts(const Data& d, int box) {
   return out;
 }
 
-void Simulate(const Model& m, Data& d, double seconds) {
+void SimulateSeconds(const Model& m, Data& d, double seconds) {
   const long steps = std::lround(seconds / m.timestep_s);
   for (long s = 0; s < steps; ++s) Tick(m, d, TickInput{});
 }
@@ -84,7 +80,7 @@ TEST(FrictionSlipTest, SlidingBoxDeceleratesAtMuGFromTheFirstStep) {
   Data d = MakeData(m);
   const int box = 0;
   const double h = m.timestep_s;
-  Simulate(m, d, 0.5);  // settle at rest
+  SimulateSeconds(m, d, 0.5);  // settle at rest
   ASSERT_LT(d.bodies[box].v_W.norm(), 1e-9);
   constexpr double kV = 0.8;
   const Vec3 start = d.bodies[box].x_W;
@@ -107,7 +103,7 @@ TEST(FrictionSlipTest, SlidingBoxDeceleratesAtMuGFromTheFirstStep) {
     const BoxContact bc = BoxContacts(d, box);
     if (bc.normal_N > 0.0) worst_ratio = std::max(worst_ratio, bc.friction_W.norm() / bc.normal_N);
   }
-  Simulate(m, d, 0.2);  // at rest: the anchors hold it
+  SimulateSeconds(m, d, 0.2);  // at rest: the anchors hold it
   const double decel = (v_20ms - v_120ms) / (100 * h);
   const double distance = d.bodies[box].x_W.x() - start.x();
   const double expected = kV * kV / (2.0 * kMu * kG);
@@ -159,7 +155,7 @@ TEST(FrictionSlipTest, BoxLandingWhileSlidingIsCoulombBounded) {
   ASSERT_GE(landing, 0) << "never landed";
   const double v1 = d.bodies[box].v_W.x();  // (200 - landing) ms after landing, > 50 ms
   ASSERT_GT(200 - landing, 50);
-  Simulate(m, d, 0.1);
+  SimulateSeconds(m, d, 0.1);
   const double v2 = d.bodies[box].v_W.x();
   ASSERT_GT(v2, 0.0);
   const double decel = (v1 - v2) / 0.1;
@@ -180,14 +176,15 @@ double SlideDistance(bool explicit_law, double* first_loss) {
   const Model m = LoadModel(test::WriteTempFile("law.xml", BoxXml(0.0, 0.0)), o);
   Data d = MakeData(m);
   const int box = 0;
-  Simulate(m, d, 3.0);  // settle at rest (the explicit law is lightly damped: 0.05 of critical)
+  SimulateSeconds(m, d,
+                  3.0);  // settle at rest (the explicit law is lightly damped: 0.05 of critical)
   constexpr double kV = 0.8;
   const double x0 = d.bodies[box].x_W.x();
   d.bodies[box].v_W.x() = kV;
   Tick(m, d, TickInput{});
   *first_loss = kV - d.bodies[box].v_W.x();
   for (int step = 0; step < 2000 && d.bodies[box].v_W.x() > 0.0; ++step) Tick(m, d, TickInput{});
-  Simulate(m, d, 0.2);
+  SimulateSeconds(m, d, 0.2);
   return d.bodies[box].x_W.x() - x0;
 }
 
@@ -217,9 +214,9 @@ TEST(FrictionSlipTest, InclineJustBelowTheFrictionAngleSticks) {
   const double theta = std::atan(0.44);
   const Model m = LoadBox("incline_stick", theta, 0.0);
   Data d = MakeData(m);
-  Simulate(m, d, 0.2);
+  SimulateSeconds(m, d, 0.2);
   const Vec3 settled = d.bodies[0].x_W;
-  Simulate(m, d, 1.0);
+  SimulateSeconds(m, d, 1.0);
   const double drift = (d.bodies[0].x_W - settled).norm();
   std::printf("tan 0.44: drift over 1 s %.3g m\n", drift);
   EXPECT_LT(drift, 1e-4);
@@ -233,11 +230,11 @@ TEST(FrictionSlipTest, InclineJustBelowTheFrictionAngleSticks) {
   for (int step = 0; step < 2000 && d.bodies[0].v_W.dot(downhill) > 0.0; ++step) {
     Tick(m, d, TickInput{});
   }
-  Simulate(m, d, 0.1);
+  SimulateSeconds(m, d, 0.1);
   const Vec3 stopped = d.bodies[0].x_W;
   const double distance = (stopped - launch).dot(downhill);
   const double expected = kV * kV / (2.0 * decel);
-  Simulate(m, d, 1.0);
+  SimulateSeconds(m, d, 1.0);
   const double creep = (d.bodies[0].x_W - stopped).norm();
   std::printf(
       "tan 0.44, launched at 0.05 m/s: stopped after %.6g m (v^2 / (2 a) %.6g), then moved "
@@ -252,9 +249,9 @@ TEST(FrictionSlipTest, InclineJustAboveTheFrictionAngleSlidesAtCoulombAccelerati
   const Vec3 downhill(std::cos(theta), 0.0, -std::sin(theta));
   const Model m = LoadBox("incline_slide", theta, 0.0);
   Data d = MakeData(m);
-  Simulate(m, d, 0.2);
+  SimulateSeconds(m, d, 0.2);
   const double v1 = d.bodies[0].v_W.dot(downhill);
-  Simulate(m, d, 1.0);
+  SimulateSeconds(m, d, 1.0);
   const double v2 = d.bodies[0].v_W.dot(downhill);
   const double a = v2 - v1;
   const double expected = kG * (std::sin(theta) - kMu * std::cos(theta));
@@ -265,14 +262,14 @@ TEST(FrictionSlipTest, InclineJustAboveTheFrictionAngleSlidesAtCoulombAccelerati
   // builds up); launched, it slides with mu_k
   const Model m_rest = LoadBox("incline_rest", theta, 0.0, 0.5, 0.5);
   Data rest = MakeData(m_rest);
-  Simulate(m_rest, rest, 0.2);
+  SimulateSeconds(m_rest, rest, 0.2);
   ASSERT_LT(rest.bodies[0].v_W.norm(), 1e-9);
   const Model m_s = LoadBox("incline_launch", theta, 0.0, 0.5);
   Data launched = MakeData(m_s);
   launched.bodies = rest.bodies;
   launched.bodies[0].v_W += 0.2 * downhill;
   const double v0 = launched.bodies[0].v_W.dot(downhill);
-  Simulate(m_s, launched, 0.5);
+  SimulateSeconds(m_s, launched, 0.5);
   const double a_launched = (launched.bodies[0].v_W.dot(downhill) - v0) / 0.5;
   std::printf("tan 0.46, launched at 0.2 m/s: acceleration %.6g\n", a_launched);
   EXPECT_NEAR(a_launched, expected, 0.02 * expected);

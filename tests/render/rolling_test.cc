@@ -18,13 +18,7 @@
 namespace rigidtouch {
 namespace {
 
-constexpr double kG = 9.81;
-
-std::string Num(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
+constexpr double kGravity = 9.81;
 
 // a floor, a ball of radius `ball_r` and mass `ball_m` resting on it (body 0), and the tool
 // sphere (5 mm, 0.1 kg, body 1) at `tool_pos`
@@ -32,8 +26,9 @@ std::string BallXml(double ball_r, double ball_m, const std::string& tool_pos) {
   return "<mujoco model=\"rolling\"><option timestep=\"0.001\" gravity=\"0 0 -9.81\"/>"
          "<worldbody><geom name=\"floor\" type=\"plane\" size=\"5 5 0.1\"/>"
          "<body name=\"ball\" pos=\"0 0 " +
-         Num(ball_r) + "\"><freejoint/><geom type=\"sphere\" size=\"" + Num(ball_r) + "\" mass=\"" +
-         Num(ball_m) + "\"/></body><body name=\"tool\" pos=\"" + tool_pos +
+         test::ExactNumber(ball_r) + "\"><freejoint/><geom type=\"sphere\" size=\"" +
+         test::ExactNumber(ball_r) + "\" mass=\"" + test::ExactNumber(ball_m) +
+         "\"/></body><body name=\"tool\" pos=\"" + tool_pos +
          "\"><freejoint/><geom name=\"tool\" type=\"sphere\" size=\"0.005\" mass=\"0.1\"/>"
          "</body></worldbody></mujoco>";
 }
@@ -80,11 +75,11 @@ TEST(RollingTest, SlidingBallRollsAtFiveSeventhsOfItsSpeedWithoutGainingEnergy) 
   data.bodies[0].v_W = Vec3(kV0, 0.0, 0.0);
   data.bodies[0].w_W.setZero();
 
-  const double t_roll = 2.0 * kV0 / (7.0 * kMu * kG);  // 29 ms
+  const double t_roll = 2.0 * kV0 / (7.0 * kMu * kGravity);  // 29 ms
   double energy = SphereEnergy(data.bodies[0], kM, kR);
   double lowest = energy;
   const double kt = model.contact.tangential_ratio * model.contact.scene_stiffness_N_per_m;
-  const double spring_max = std::pow(kMu * kM * kG, 2) / (2.0 * kt);
+  const double spring_max = std::pow(kMu * kM * kGravity, 2) / (2.0 * kt);
   int first_rolling_tick = -1;
   for (int k = 1; k <= 1000; ++k) {
     Tick(model, data, in);
@@ -101,14 +96,14 @@ TEST(RollingTest, SlidingBallRollsAtFiveSeventhsOfItsSpeedWithoutGainingEnergy) 
     // centre; c.r_W also holds this tick's motion, as the point is found before the bodies move)
     const double slip = (s.v_W + s.w_W.cross(Vec3(0.0, 0.0, c.r_W.z()))).norm();
     if (first_rolling_tick < 0 && slip < 1e-3 * kV0) first_rolling_tick = k;
-    EXPECT_LE(c.friction_W.norm(), kMu * kM * kG * (1.0 + 1e-9)) << "tick " << k;
+    EXPECT_LE(c.friction_W.norm(), kMu * kM * kGravity * (1.0 + 1e-9)) << "tick " << k;
     if (first_rolling_tick > 0) {
       // rolling: no slip from here on, and once the anchor spring has let go of the stretch it
       // had at the slip limit (10 ms: its period on the ball is 2.4 ms, damping ratio 0.66),
       // no friction either, in every tick (it used to flip between +-mu m g every tick)
       EXPECT_LT(slip, 1e-3 * kV0) << "tick " << k;
       if (k >= first_rolling_tick + 10) {
-        EXPECT_LT(c.friction_W.norm(), 1e-3 * kMu * kM * kG) << "tick " << k;
+        EXPECT_LT(c.friction_W.norm(), 1e-3 * kMu * kM * kGravity) << "tick " << k;
       }
     }
   }
@@ -134,7 +129,8 @@ TEST(RollingTest, SlidingBallRollsAtFiveSeventhsOfItsSpeedWithoutGainingEnergy) 
 TEST(RollingTest, SpinningToolSphereRollsOffWithItsAngularMomentumAboutTheContact) {
   constexpr double kR = 0.005, kM = 0.1, kW0 = 100.0;
   const Model model = LoadModel(
-      test::WriteTempFile("tool.xml", BallXml(0.02, 0.1, "0.5 0 " + Num(kR))), LoadOptions{});
+      test::WriteTempFile("tool.xml", BallXml(0.02, 0.1, "0.5 0 " + test::ExactNumber(kR))),
+      LoadOptions{});
   Data data = MakeData(model);
   TickInput in;
   in.tool_wrench.force_N = Vec3(0.0, 0.0, -2.0);

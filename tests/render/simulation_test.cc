@@ -12,7 +12,7 @@ namespace {
 
 using test::TestScene;
 
-void Simulate(const Model& m, Data& d, double seconds, const Vec3& tool_force = Vec3::Zero()) {
+void SimulateFor(const Model& m, Data& d, double seconds, const Vec3& tool_force = Vec3::Zero()) {
   TickInput in;
   in.tool_wrench.force_N = tool_force;
   const long steps = std::lround(seconds / m.timestep_s);
@@ -32,7 +32,7 @@ TEST(SimulationTest, BoxRestingOnPlaneDriftsLessThanATenthOfAMillimetre) {
   const Model m = LoadModel(TestScene("box_plane.xml"), {});
   Data d = MakeData(m);
   const Vec3 start = m.initial[0].x_W;
-  Simulate(m, d, 10.0);
+  SimulateFor(m, d, 10.0);
   EXPECT_LT((d.bodies[0].x_W - start).norm(), 1e-4);
   EXPECT_LT(d.bodies[0].w_W.norm(), 1e-3);  // no spurious spin
   // it rests flat: orientation within 0.1 degree of the initial one
@@ -46,7 +46,7 @@ TEST(SimulationTest, StackOfTenStandsForTenSeconds) {
   Data d = MakeData(m);
   const int top = BodyIndex(m, "box_9");
   const Vec3 start = m.initial[top].x_W;
-  Simulate(m, d, 10.0, Vec3(0.0, 0.0, -2.0));
+  SimulateFor(m, d, 10.0, Vec3(0.0, 0.0, -2.0));
   EXPECT_LT((d.bodies[top].x_W - start).norm(), 1e-3);
   for (const BodyState& s : d.bodies) EXPECT_TRUE(s.x_W.allFinite());
 }
@@ -139,7 +139,7 @@ TEST(SimulationTest, PressedSphereSettlesAtForceOverStiffness) {
     Model m = LoadModel(TestScene("sphere_plane.xml"), o);
     m.gravity_W.setZero();
     Data d = MakeData(m);
-    Simulate(m, d, 3.0, Vec3(0.0, 0.0, -2.0));
+    SimulateFor(m, d, 3.0, Vec3(0.0, 0.0, -2.0));
     const double expected = 2.0 / m.contact.stiffness_N_per_m;
     EXPECT_NEAR(d.tool_penetration_m, expected, 0.01 * expected);
     // and the device is shown the force that holds it: 2 N up
@@ -158,9 +158,9 @@ TEST(SimulationTest, InclineStickAndSlide) {
     o.contact.friction_static = o.contact.friction_kinetic = 0.5;
     const Model m = LoadModel(TestScene("incline.xml"), o);
     Data d = MakeData(m);
-    Simulate(m, d, 0.2);
+    SimulateFor(m, d, 0.2);
     const Vec3 settled = d.bodies[0].x_W;
-    Simulate(m, d, 2.0);
+    SimulateFor(m, d, 2.0);
     EXPECT_LT((d.bodies[0].x_W - settled).norm(), 1e-4) << "the box crept with friction 0.5";
   }
   {
@@ -168,9 +168,9 @@ TEST(SimulationTest, InclineStickAndSlide) {
     o.contact.friction_static = o.contact.friction_kinetic = 0.2;
     const Model m = LoadModel(TestScene("incline.xml"), o);
     Data d = MakeData(m);
-    Simulate(m, d, 0.2);
+    SimulateFor(m, d, 0.2);
     const double v1 = d.bodies[0].v_W.dot(downhill);
-    Simulate(m, d, 0.5);
+    SimulateFor(m, d, 0.5);
     const double v2 = d.bodies[0].v_W.dot(downhill);
     const double a = (v2 - v1) / 0.5;
     const double expected = 9.81 * (std::sin(theta) - 0.2 * std::cos(theta));

@@ -25,8 +25,7 @@ TEST(TickAllocTest, NoHeapAllocationInTickOfAHundredBoxPile) {
     {
       // the probe works: an allocation is seen
       test::LimitMalloc probe_guard;
-      void* volatile probe = std::malloc(64);
-      std::free(probe);
+      test::ProbeAllocation();
       ASSERT_EQ(probe_guard.allocations(), 1);
     }
     for (int s = 0; s < 10; ++s) Tick(m, d, in);  // warm-up

@@ -20,13 +20,13 @@ json Start() {
   return {{"type", "session_start"}, {"format", kLogFormat}, {"format_version", kLogFormatVersion}};
 }
 
-std::string Lines(std::initializer_list<json> records) {
+std::string RecordLines(std::initializer_list<json> records) {
   std::string out;
   for (const json& r : records) out += RecordLine(r);
   return out;
 }
 
-std::string ErrorOf(const std::string& bytes) {
+std::string LogErrorOf(const std::string& bytes) {
   try {
     ParseLog(bytes, "log.jsonl");
   } catch (const Error& e) {
@@ -36,7 +36,7 @@ std::string ErrorOf(const std::string& bytes) {
 }
 
 TEST(LogTest, ParsesCompleteLines) {
-  const std::string bytes = Lines({Start(), {{"type", "answer"}, {"step", 2}}});
+  const std::string bytes = RecordLines({Start(), {{"type", "answer"}, {"step", 2}}});
   const LogContents c = ParseLog(bytes, "log.jsonl");
   ASSERT_EQ(c.records.size(), 2u);
   EXPECT_EQ(c.records[1]["step"], 2);
@@ -46,7 +46,7 @@ TEST(LogTest, ParsesCompleteLines) {
 }
 
 TEST(LogTest, UnterminatedRecordAfterCompleteOnesIsATornTail) {
-  const std::string whole = Lines({Start(), {{"type", "series"}}});
+  const std::string whole = RecordLines({Start(), {{"type", "series"}}});
   const std::string torn = R"({"type":"answer","st)";
   const LogContents c = ParseLog(whole + torn, "log.jsonl");
   EXPECT_EQ(c.records.size(), 2u);
@@ -55,18 +55,22 @@ TEST(LogTest, UnterminatedRecordAfterCompleteOnesIsATornTail) {
 }
 
 TEST(LogTest, RefusesWhatIsNotAStudyLog) {
-  EXPECT_NE(ErrorOf("hello world\n").find("line 1 is not JSON"), std::string::npos);
-  EXPECT_NE(ErrorOf(Lines({Start()}) + "not json\n").find("line 2 is not JSON"), std::string::npos);
-  EXPECT_NE(ErrorOf(Lines({Start()}) + "[1,2]\n").find("line 2 is not a study record"),
+  EXPECT_NE(LogErrorOf("hello world\n").find("line 1 is not JSON"), std::string::npos);
+  EXPECT_NE(LogErrorOf(RecordLines({Start()}) + "not json\n").find("line 2 is not JSON"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(Lines({{{"type", "answer"}}})).find("line 1 is not the session_start"),
+  EXPECT_NE(LogErrorOf(RecordLines({Start()}) + "[1,2]\n").find("line 2 is not a study record"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("no line end at all").find("no complete line"), std::string::npos);
-  EXPECT_NE(ErrorOf(Lines({Start()}) + "garbage").find("neither a record"), std::string::npos);
+  EXPECT_NE(LogErrorOf(RecordLines({{{"type", "answer"}}})).find("line 1 is not the session_start"),
+            std::string::npos);
+  EXPECT_NE(LogErrorOf("no line end at all").find("no complete line"), std::string::npos);
+  EXPECT_NE(LogErrorOf(RecordLines({Start()}) + "garbage").find("neither a record"),
+            std::string::npos);
   json future = Start();
   future["format_version"] = 99;
-  EXPECT_NE(ErrorOf(Lines({future})).find("version 99 is not supported"), std::string::npos);
-  EXPECT_NE(ErrorOf(Lines({Start()}) + "\n").find("line 2 is not JSON"), std::string::npos);
+  EXPECT_NE(LogErrorOf(RecordLines({future})).find("version 99 is not supported"),
+            std::string::npos);
+  EXPECT_NE(LogErrorOf(RecordLines({Start()}) + "\n").find("line 2 is not JSON"),
+            std::string::npos);
 }
 
 // a field of the wrong type in the first record (found by the study_log fuzzer: a "format" that is
@@ -75,17 +79,18 @@ TEST(LogTest, FirstRecordFieldsOfTheWrongTypeAreRefused) {
   for (const char* key : {"format", "type"}) {
     json odd = Start();
     odd[key] = json{{"a", 1}};
-    const std::string bytes = Lines({odd});
+    const std::string bytes = RecordLines({odd});
     EXPECT_THROW(ParseLog(bytes, "log.jsonl"), Error) << key;
-    EXPECT_NE(ErrorOf(bytes).find("log.jsonl: line 1 is not"), std::string::npos) << key;
+    EXPECT_NE(LogErrorOf(bytes).find("log.jsonl: line 1 is not"), std::string::npos) << key;
   }
   // a number beyond a double's range threw nlohmann's out_of_range out of ParseLog
-  EXPECT_NE(ErrorOf(Lines({Start()}) + R"({"type":"answer","step":1e999})" + "\n")
+  EXPECT_NE(LogErrorOf(RecordLines({Start()}) + R"({"type":"answer","step":1e999})" + "\n")
                 .find("log.jsonl: line 2 is not a study record"),
             std::string::npos);
   json huge = Start();
   huge["format_version"] = 4294967297LL;  // truncates to 1 as an int
-  EXPECT_NE(ErrorOf(Lines({huge})).find("version 4294967297 is not supported"), std::string::npos);
+  EXPECT_NE(LogErrorOf(RecordLines({huge})).find("version 4294967297 is not supported"),
+            std::string::npos);
 }
 
 TEST(LogTest, AppendedRecordsReadBackInOrder) {
@@ -102,15 +107,16 @@ TEST(LogTest, AppendedRecordsReadBackInOrder) {
   ASSERT_EQ(c.records.size(), 3u);
   EXPECT_EQ(c.records[2]["step"], 2);
   EXPECT_EQ(c.records[2]["text"], "caf\xc3\xa9");
-  EXPECT_EQ(ReadFile(path), Lines({Start(),
-                                   {{"type", "answer"}, {"step", 1}},
-                                   {{"type", "answer"}, {"step", 2}, {"text", "caf\xc3\xa9"}}}));
+  EXPECT_EQ(ReadFile(path),
+            RecordLines({Start(),
+                         {{"type", "answer"}, {"step", 1}},
+                         {{"type", "answer"}, {"step", 2}, {"text", "caf\xc3\xa9"}}}));
 }
 
 TEST(LogTest, DropTornTailTruncatesExactlyTheTornBytes) {
   ScratchDir dir;
   const std::string path = dir.File("torn.jsonl");
-  const std::string whole = Lines({Start(), {{"type", "answer"}, {"step", 1}}});
+  const std::string whole = RecordLines({Start(), {{"type", "answer"}, {"step", 1}}});
   WriteFile(path, whole + R"({"type":"ans)");
   auto log = LogFile::Open(path);
   EXPECT_EQ(log->contents().torn_tail_bytes, 12u);

@@ -76,7 +76,7 @@ TEST(PlanTest, BalancedOrderHasHalfOfEach) {
   }
 }
 
-Protocol ThreeWayProtocol(int series, const char* series_order = "balanced") {
+Protocol ThreeWayPlanProtocol(int series, const char* series_order = "balanced") {
   json d = json::parse(R"({
     "name": "three",
     "familiarization_taps": 2,
@@ -96,7 +96,7 @@ TEST(PlanTest, BalancedOrderSpreadsSeriesOverThreeConditions) {
   std::vector<std::vector<int>> orders;
   std::vector<int> extra(3, 0);  // how often each condition got one of 31's remainder
   for (std::uint64_t seed = 0; seed < 60; ++seed) {
-    const std::vector<Step> plan = MakePlan(ThreeWayProtocol(30), seed);
+    const std::vector<Step> plan = MakePlan(ThreeWayPlanProtocol(30), seed);
     // a familiarization of each of the three, in the test's order, then the series
     ASSERT_EQ(plan.size(), 3u + 30u);
     for (int c = 0; c < 3; ++c) {
@@ -107,7 +107,7 @@ TEST(PlanTest, BalancedOrderSpreadsSeriesOverThreeConditions) {
     for (int c = 0; c < 3; ++c) EXPECT_EQ(std::count(order.begin(), order.end(), c), 10) << c;
     orders.push_back(order);
     // 31 = 3 x 10 + 1: one condition gets 11, the others 10
-    const auto odd = SeriesConditions(MakePlan(ThreeWayProtocol(31), seed), 0);
+    const auto odd = SeriesConditions(MakePlan(ThreeWayPlanProtocol(31), seed), 0);
     std::vector<long> counts(3);
     for (int c = 0; c < 3; ++c) counts[c] = std::count(odd.begin(), odd.end(), c);
     std::sort(counts.begin(), counts.end());
@@ -122,7 +122,7 @@ TEST(PlanTest, BalancedOrderSpreadsSeriesOverThreeConditions) {
 }
 
 TEST(PlanTest, IndependentOrderDrawsAmongThreeConditions) {
-  const auto c = SeriesConditions(MakePlan(ThreeWayProtocol(300, "independent"), 3), 0);
+  const auto c = SeriesConditions(MakePlan(ThreeWayPlanProtocol(300, "independent"), 3), 0);
   // Binomial(300, 1/3) per condition: mean 100, SD 8.2; a 5 SD band
   for (int k = 0; k < 3; ++k) {
     const auto n = std::count(c.begin(), c.end(), k);

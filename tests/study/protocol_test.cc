@@ -14,8 +14,7 @@ namespace rigidtouch::study {
 namespace {
 
 using nlohmann::json;
-
-const std::string kWalls = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
+using testing::kWalls;
 
 json Minimal() {
   return json::parse(R"({
@@ -29,7 +28,7 @@ json Minimal() {
 }
 
 // the error message of parsing `document`, or "" if it parsed
-std::string ErrorOf(const json& document) {
+std::string ProtocolErrorOf(const json& document) {
   try {
     ParseProtocol(document, "p.json");
   } catch (const Error& e) {
@@ -129,7 +128,7 @@ TEST(ProtocolTest, WallsStudyHashIsUnchanged) {
 TEST(ProtocolTest, EventRendererWithoutAMaterialIsRefusedWithTheReason) {
   json d = Minimal();
   d["conditions"]["b"] = {{"renderer", "event"}};
-  const std::string e = ErrorOf(d);
+  const std::string e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("p.json: conditions[\"b\"]"), std::string::npos) << e;
   EXPECT_NE(e.find("missing required field \"material\" for renderer event"), std::string::npos)
       << e;
@@ -177,7 +176,7 @@ TEST(ProtocolTest, MaterialAndPassivityErrorsNameTheField) {
   const auto with = [](const json& condition) {
     json d = Minimal();
     d["conditions"]["b"] = condition;
-    return ErrorOf(d);
+    return ProtocolErrorOf(d);
   };
   std::string e = with({{"renderer", "impulse"}, {"material", "wood"}});
   EXPECT_NE(e.find("conditions[\"b\"]: parameter \"material\" does not apply to renderer impulse"),
@@ -247,7 +246,7 @@ TEST(ProtocolTest, MaterialFileIsReadAsTheCliReadsIt) {
   EXPECT_EQ(q.conditions[1].ToRenderParams().material.amplitude_Ns_per_m, 20.0);
 }
 
-json ThreeWay() {
+json ThreeWayJson() {
   return json::parse(R"({
     "name": "three",
     "conditions": {
@@ -261,7 +260,7 @@ json ThreeWay() {
 }
 
 TEST(ProtocolTest, TestOfThreeConditionsRoundTrips) {
-  const Protocol p = ParseProtocol(ThreeWay(), "three.json");
+  const Protocol p = ParseProtocol(ThreeWayJson(), "three.json");
   ASSERT_EQ(p.tests.size(), 1u);
   ASSERT_EQ(p.tests[0].conditions.size(), 3u);
   // conditions are stored by label order (a JSON object); the test keeps its own order
@@ -277,54 +276,54 @@ TEST(ProtocolTest, TestOfThreeConditionsRoundTrips) {
   EXPECT_EQ(q.tests[0].keys, p.tests[0].keys);
   EXPECT_EQ(ProtocolHash(p), ProtocolHash(q));
   // default keys: one per condition
-  json d = ThreeWay();
+  json d = ThreeWayJson();
   d["tests"][0].erase("keys");
   EXPECT_EQ(ParseProtocol(d, "d.json").tests[0].keys, (std::vector<std::string>{"1", "2", "3"}));
   // the order of the conditions is part of the test (keys follow it): another hash
-  d = ThreeWay();
+  d = ThreeWayJson();
   d["tests"][0]["conditions"] = {"wood", "rubber", "aluminium"};
   EXPECT_NE(ProtocolHash(p), ProtocolHash(ParseProtocol(d, "d.json")));
 }
 
 TEST(ProtocolTest, TestsOfMoreConditionsAreCheckedAsTwo) {
-  json d = ThreeWay();
+  json d = ThreeWayJson();
   d["tests"][0]["conditions"] = {"rubber", "wood", "rubber"};
-  std::string e = ErrorOf(d);
+  std::string e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("tests[0].conditions: condition \"rubber\" is listed twice"), std::string::npos)
       << e;
-  d = ThreeWay();
+  d = ThreeWayJson();
   d["tests"][0]["keys"] = {"r", "w"};
-  e = ErrorOf(d);
+  e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("tests[0].keys: expected an array of 3 answer keys"), std::string::npos) << e;
-  d = ThreeWay();
+  d = ThreeWayJson();
   d["tests"][0]["keys"] = {"r", "w", "R"};
-  e = ErrorOf(d);
+  e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("tests[0].keys: keys \"r\" and \"R\" must differ"), std::string::npos) << e;
-  d = ThreeWay();
+  d = ThreeWayJson();
   d["tests"][0]["keys"] = {"wood", "w", "a"};
-  e = ErrorOf(d);
+  e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("tests[0].keys[0]: key \"wood\" is the label of another condition"),
             std::string::npos)
       << e;
-  d = ThreeWay();
+  d = ThreeWayJson();
   for (const char* label : {"c0", "c1", "c2", "c3", "c4", "c5", "c6", "c7", "c8"}) {
     d["conditions"][label] = {{"renderer", "penalty"}};
     d["tests"][0]["conditions"].push_back(label);
   }
   d["tests"][0].erase("keys");
-  e = ErrorOf(d);
+  e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("tests[0].conditions: expected an array of 2 to 8 condition labels"),
             std::string::npos)
       << e;
   // eight is the most
   d["tests"][0]["conditions"] = {"rubber", "wood", "aluminium", "c0", "c1", "c2", "c3", "c4"};
-  EXPECT_EQ(ErrorOf(d), "");
+  EXPECT_EQ(ProtocolErrorOf(d), "");
 }
 
 TEST(ProtocolTest, UnknownRendererListsTheValidOnes) {
   json d = Minimal();
   d["conditions"]["b"]["renderer"] = "trian";
-  const std::string e = ErrorOf(d);
+  const std::string e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("p.json"), std::string::npos) << e;
   EXPECT_NE(e.find("conditions[\"b\"].renderer"), std::string::npos) << e;
   EXPECT_NE(e.find("\"trian\""), std::string::npos) << e;
@@ -334,7 +333,7 @@ TEST(ProtocolTest, UnknownRendererListsTheValidOnes) {
 TEST(ProtocolTest, UnknownParameterListsTheValidOnes) {
   json d = Minimal();
   d["conditions"]["b"]["freq_hz"] = 250;
-  const std::string e = ErrorOf(d);
+  const std::string e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("unknown parameter \"freq_hz\""), std::string::npos) << e;
   EXPECT_NE(e.find("frequency_hz"), std::string::npos) << e;
   EXPECT_NE(e.find("t_collision_s"), std::string::npos) << e;
@@ -343,7 +342,7 @@ TEST(ProtocolTest, UnknownParameterListsTheValidOnes) {
 TEST(ProtocolTest, ParameterOfAnotherRendererIsAnError) {
   json d = Minimal();
   d["conditions"]["a"]["frequency_hz"] = 250;
-  const std::string e = ErrorOf(d);
+  const std::string e = ProtocolErrorOf(d);
   EXPECT_NE(e.find("does not apply to renderer impulse"), std::string::npos) << e;
   EXPECT_NE(e.find("restitution"), std::string::npos) << e;
 }
@@ -368,7 +367,7 @@ TEST(ProtocolTest, OutOfRangeValuesNameFieldAndRange) {
   for (const Case& c : cases) {
     json d = Minimal();
     d["conditions"][c.condition][c.field] = c.value;
-    const std::string e = ErrorOf(d);
+    const std::string e = ProtocolErrorOf(d);
     EXPECT_NE(e.find(std::string("conditions[\"") + c.condition + "\"]." + c.field),
               std::string::npos)
         << e;
@@ -380,53 +379,55 @@ TEST(ProtocolTest, MalformedStructureNamesTheField) {
   {
     json d = Minimal();
     d["serie"] = 20;
-    const std::string e = ErrorOf(d);
+    const std::string e = ProtocolErrorOf(d);
     EXPECT_NE(e.find("unknown field \"serie\""), std::string::npos) << e;
     EXPECT_NE(e.find("taps_per_series"), std::string::npos) << e;
   }
   {
     json d = Minimal();
     d["series"] = 0;
-    EXPECT_NE(ErrorOf(d).find("series: 0 is out of range; valid: integers 1 to 1000"),
+    EXPECT_NE(ProtocolErrorOf(d).find("series: 0 is out of range; valid: integers 1 to 1000"),
               std::string::npos)
-        << ErrorOf(d);
+        << ProtocolErrorOf(d);
   }
   {
     json d = Minimal();
     d["tests"][0]["familiarization_taps"] = 2.5;
-    EXPECT_NE(ErrorOf(d).find("tests[0].familiarization_taps: expected an integer"),
+    EXPECT_NE(ProtocolErrorOf(d).find("tests[0].familiarization_taps: expected an integer"),
               std::string::npos)
-        << ErrorOf(d);
+        << ProtocolErrorOf(d);
   }
   {
     json d = Minimal();
     d["tests"][0]["conditions"] = {"a", "c"};
-    const std::string e = ErrorOf(d);
+    const std::string e = ProtocolErrorOf(d);
     EXPECT_NE(e.find("tests[0].conditions[1]: unknown condition \"c\""), std::string::npos) << e;
     EXPECT_NE(e.find("\"a\", \"b\""), std::string::npos) << e;
   }
   {
     json d = Minimal();
     d["tests"][0]["conditions"] = {"a"};
-    EXPECT_NE(ErrorOf(d).find("tests[0].conditions: expected an array of 2 to 8 condition labels"),
+    EXPECT_NE(ProtocolErrorOf(d).find(
+                  "tests[0].conditions: expected an array of 2 to 8 condition labels"),
               std::string::npos)
-        << ErrorOf(d);
+        << ProtocolErrorOf(d);
   }
   {
     json d = Minimal();
     d["tests"][0]["keys"] = {"x", "X"};
-    EXPECT_NE(ErrorOf(d).find("tests[0].keys: the two keys must differ"), std::string::npos)
-        << ErrorOf(d);
+    EXPECT_NE(ProtocolErrorOf(d).find("tests[0].keys: the two keys must differ"), std::string::npos)
+        << ProtocolErrorOf(d);
   }
   {
     json d = Minimal();
     d["tests"][0]["keys"] = {"b", "2"};
-    EXPECT_NE(ErrorOf(d).find("label of the other condition"), std::string::npos) << ErrorOf(d);
+    EXPECT_NE(ProtocolErrorOf(d).find("label of the other condition"), std::string::npos)
+        << ProtocolErrorOf(d);
   }
   {
     json d = Minimal();
     d["randomization"] = {{"series_order", "random"}};
-    const std::string e = ErrorOf(d);
+    const std::string e = ProtocolErrorOf(d);
     EXPECT_NE(e.find("randomization.series_order"), std::string::npos) << e;
     EXPECT_NE(e.find("unknown series order \"random\"; valid series orders: balanced, independent"),
               std::string::npos)
@@ -435,22 +436,23 @@ TEST(ProtocolTest, MalformedStructureNamesTheField) {
   {
     json d = Minimal();
     d.erase("name");
-    EXPECT_NE(ErrorOf(d).find("missing required field \"name\""), std::string::npos);
+    EXPECT_NE(ProtocolErrorOf(d).find("missing required field \"name\""), std::string::npos);
   }
   {
     json d = Minimal();
     d["conditions"]["B"] = {{"renderer", "penalty"}};
-    EXPECT_NE(ErrorOf(d).find("only in case"), std::string::npos) << ErrorOf(d);
+    EXPECT_NE(ProtocolErrorOf(d).find("only in case"), std::string::npos) << ProtocolErrorOf(d);
   }
   {
     json d = Minimal();
     d["conditions"]["Quit"] = {{"renderer", "penalty"}};
-    EXPECT_NE(ErrorOf(d).find("reserved"), std::string::npos) << ErrorOf(d);
+    EXPECT_NE(ProtocolErrorOf(d).find("reserved"), std::string::npos) << ProtocolErrorOf(d);
   }
   {
     json d = Minimal();
     d["conditions"]["b"].erase("frequency_hz");
-    EXPECT_NE(ErrorOf(d).find("missing required field \"frequency_hz\""), std::string::npos);
+    EXPECT_NE(ProtocolErrorOf(d).find("missing required field \"frequency_hz\""),
+              std::string::npos);
   }
 }
 
@@ -499,13 +501,14 @@ TEST(ProtocolTest, RenderLimitsAreTheEngines) {
   // the protocol accepts exactly the window the engine accepts
   json d = Minimal();
   d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s;
-  EXPECT_EQ(ErrorOf(d), "");
+  EXPECT_EQ(ProtocolErrorOf(d), "");
   d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s * 1.001;
-  EXPECT_NE(ErrorOf(d).find("valid: > 0 and <= 0.1 s"), std::string::npos) << ErrorOf(d);
+  EXPECT_NE(ProtocolErrorOf(d).find("valid: > 0 and <= 0.1 s"), std::string::npos)
+      << ProtocolErrorOf(d);
   d = Minimal();
   d["conditions"]["b"]["t_collision_s"] = 0.1;
   d["conditions"]["b"]["frequency_hz"] = 10;  // f t_c = 1 up to rounding: one impulse
-  EXPECT_EQ(ErrorOf(d), "");
+  EXPECT_EQ(ProtocolErrorOf(d), "");
 }
 
 }  // namespace

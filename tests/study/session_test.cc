@@ -81,7 +81,7 @@ std::vector<json> OfType(const std::vector<json>& records, const std::string& ty
 }
 
 // the deterministic content of the answers: step, test, series, condition, answer
-std::vector<std::vector<int>> AnswerKeys(const std::vector<json>& records) {
+std::vector<std::vector<int>> AnswerKeysOf(const std::vector<json>& records) {
   std::vector<std::vector<int>> out;
   for (const json& a : OfType(records, "answer")) {
     out.push_back({a["step"].get<int>(), a["test"].get<int>(), a["series"].get<int>(),
@@ -169,7 +169,7 @@ TEST(SessionTest, StopThenResumeGivesTheUninterruptedAnswers) {
     EXPECT_TRUE(b.resumed);
     EXPECT_EQ(b.answers_before, static_cast<int>(stop_after));
     EXPECT_EQ(b.answers_recorded, static_cast<int>(12 - stop_after));
-    EXPECT_EQ(AnswerKeys(sink.records), AnswerKeys(reference.records)) << stop_after;
+    EXPECT_EQ(AnswerKeysOf(sink.records), AnswerKeysOf(reference.records)) << stop_after;
     // the series that was shown but not answered is shown again, marked as a repeat
     const auto series = OfType(sink.records, "series");
     EXPECT_EQ(series.size(), 13u);
@@ -373,7 +373,7 @@ TEST(AnswerTest, TerminalAsksAgainAfterATypoAndStopsAtEndOfInput) {
 // `study run --resume` and `study analyze` make the one check (ValidateLog): a log one accepts
 // the other accepts, and a damaged log is refused by both with the same message
 // a test of three conditions after one of two: 2 + 6 then 3 + 6 steps
-Protocol ThreeWayProtocol() {
+Protocol ThreeWaySessionProtocol() {
   json d = json::parse(R"({
     "name": "three",
     "familiarization_taps": 2,
@@ -390,7 +390,7 @@ Protocol ThreeWayProtocol() {
 }
 
 TEST(SessionTest, ThreeConditionTestIsLoggedAndResumes) {
-  const Protocol p = ThreeWayProtocol();
+  const Protocol p = ThreeWaySessionProtocol();
   // answers of the second test use all three conditions
   const std::vector<int> script = {0, 1, 1, 0, 1, 0, 2, 0, 1, 2, 2, 1};
   MemorySink reference;
@@ -431,7 +431,7 @@ TEST(SessionTest, ThreeConditionTestIsLoggedAndResumes) {
     const SessionOutcome b = RunSession(p, resume, existing, "mem", sink, presenter, rest);
     EXPECT_EQ(b.status, SessionStatus::kComplete);
     EXPECT_EQ(b.answers_before, static_cast<int>(stop_after));
-    EXPECT_EQ(AnswerKeys(sink.records), AnswerKeys(reference.records)) << stop_after;
+    EXPECT_EQ(AnswerKeysOf(sink.records), AnswerKeysOf(reference.records)) << stop_after;
   }
   // answer 2 is valid in the three-condition test only; 3 in neither
   std::vector<json> damaged = reference.records;
@@ -453,7 +453,7 @@ TEST(SessionTest, ThreeConditionTestIsLoggedAndResumes) {
 }
 
 TEST(AnswerTest, ThreeKeysAndLabels) {
-  const Protocol p = ThreeWayProtocol();
+  const Protocol p = ThreeWaySessionProtocol();
   const StudyTest& t = p.tests[1];
   EXPECT_EQ(ParseAnswer(p, t, "w"), 1);
   EXPECT_EQ(ParseAnswer(p, t, " TIN "), 2);

@@ -81,7 +81,7 @@ TEST(SimulateTest, IdenticalWallsGiveChanceWithinTheBinomialInterval) {
   EXPECT_NEAR(t.percent_correct.mean, 100.0 * t.pooled_correct / 4000.0, 1e-9);
 }
 
-Protocol ThreeWay(const json& a, const json& b, const json& c, int series = 30) {
+Protocol ThreeWayOf(const json& a, const json& b, const json& c, int series = 30) {
   json d = {{"name", "three"},
             {"series", series},
             {"conditions", {{"a", a}, {"b", b}, {"c", c}}},
@@ -111,7 +111,7 @@ std::pair<double, double> ThirdInterval(int n) {
 
 TEST(SimulateTest, ThreeIdenticalWallsGiveChanceOfOneThird) {
   // three labels, one configuration: 100 participants x 30 series = 3000 answers
-  const TestResult t = RunThreeWay(ThreeWay(kTrain250, kTrain250, kTrain250), 100, {}, 321);
+  const TestResult t = RunThreeWay(ThreeWayOf(kTrain250, kTrain250, kTrain250), 100, {}, 321);
   EXPECT_EQ(t.chance, 1.0 / 3.0);
   ASSERT_EQ(t.pooled_answers, 3000);
   const auto [lo, hi] = ThirdInterval(3000);  // 31.6% to 35.0%
@@ -127,7 +127,7 @@ TEST(SimulateTest, ThreeIdenticalWallsGiveChanceOfOneThird) {
 }
 
 TEST(SimulateTest, ThreeDifferentWallsAreIdentifiedAboveChance) {
-  const TestResult t = RunThreeWay(ThreeWay(kTrain250, kTrain100, kPenalty1000), 20, {}, 5);
+  const TestResult t = RunThreeWay(ThreeWayOf(kTrain250, kTrain100, kPenalty1000), 20, {}, 5);
   ASSERT_EQ(t.pooled_answers, 600);
   EXPECT_GT(t.percent_correct.mean, 75.0);
   EXPECT_LT(t.pooled.p_greater, 1e-6);  // against 1/3
@@ -145,7 +145,7 @@ TEST(SimulateTest, ThreeDifferentWallsAreIdentifiedAboveChance) {
 // coded memory far noisier than the walls' differences gives labels at random, so chance; the
 // same with an exact coded memory gives the labels back
 TEST(SimulateTest, ThreeWallsLabelsRederivedFromTheCodedMemory) {
-  const Protocol protocol = ThreeWay(kTrain250, kTrain100, kPenalty1000);
+  const Protocol protocol = ThreeWayOf(kTrain250, kTrain100, kPenalty1000);
   ObserverParams lost;
   lost.label_loss_per_series = 1.0;
   lost.label_code_sd_jnd = 1e4;
@@ -162,7 +162,8 @@ TEST(SimulateTest, ThreeWallsLabelsRederivedFromTheCodedMemory) {
 TEST(SimulateTest, LapsesGuessAmongAllThree) {
   ObserverParams guessing;
   guessing.lapse_rate = 1.0;
-  const TestResult t = RunThreeWay(ThreeWay(kTrain250, kTrain100, kPenalty1000), 100, guessing, 4);
+  const TestResult t =
+      RunThreeWay(ThreeWayOf(kTrain250, kTrain100, kPenalty1000), 100, guessing, 4);
   for (int named = 0; named < 3; ++named) {
     int n = 0;
     for (int presented = 0; presented < 3; ++presented) n += t.confusion[presented][named];

@@ -27,12 +27,12 @@ namespace {
 
 using nlohmann::json;
 using testing::AppendFile;
+using testing::kWalls;
 using testing::ReadFile;
 using testing::ScratchDir;
 using testing::WriteFile;
 
 const std::string kCli = RIGIDTOUCH_CLI;
-const std::string kWalls = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
 
 // a running CLI process with a pipe to its stdin
 struct Child {
@@ -123,7 +123,7 @@ std::string WriteProtocol(const ScratchDir& dir, const std::string& name = "e2e"
 const std::vector<std::string> kAnswers = {"a",    "b", "B", "soft", "a", "click",
                                            "buzz", "1", "2", "2",    "1", "CLICK"};
 
-std::string Lines(std::size_t from, std::size_t to) {
+std::string LogLines(std::size_t from, std::size_t to) {
   std::string s;
   for (std::size_t i = from; i < to && i < kAnswers.size(); ++i) s += kAnswers[i] + "\n";
   return s;
@@ -138,7 +138,7 @@ std::vector<json> Records(const std::string& log, const std::string& type) {
 }
 
 // step, test, series, condition, answer of every answer in a log
-std::vector<std::vector<int>> AnswerKeys(const std::string& log) {
+std::vector<std::vector<int>> LoggedAnswerKeys(const std::string& log) {
   std::vector<std::vector<int>> out;
   for (const json& a : Records(log, "answer")) {
     out.push_back({a["step"].get<int>(), a["test"].get<int>(), a["series"].get<int>(),
@@ -157,7 +157,7 @@ TEST(StudyCliTest, ScriptedSessionRecordsEveryAnswer) {
   ScratchDir dir;
   const std::string protocol = WriteProtocol(dir);
   const std::string log = dir.File("p01.jsonl");
-  const Result r = RunCli(dir, RunArgs(protocol, log), Lines(0, 12));
+  const Result r = RunCli(dir, RunArgs(protocol, log), LogLines(0, 12));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("rendering soft (penalty) for 3 taps"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("Session complete"), std::string::npos) << r.out;
@@ -192,14 +192,14 @@ TEST(StudyCliTest, APersonsSessionNeedsADeviceAndADryRunIsLoggedAsOne) {
        {std::vector<std::string>{}, std::vector<std::string>{"--device", "omega3"}}) {
     std::vector<std::string> args = device_run;
     args.insert(args.end(), extra.begin(), extra.end());
-    const Result r = RunCli(dir, args, Lines(0, 12));
+    const Result r = RunCli(dir, args, LogLines(0, 12));
     EXPECT_EQ(r.exit_code, 2) << r.err;
     EXPECT_NE(r.err.find("a participant's session needs a device"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(log));
   }
   std::vector<std::string> sim = device_run;
   sim.insert(sim.end(), {"--device", "sim", "--preset", "omega3"});
-  const Result r = RunCli(dir, sim, Lines(0, 12));
+  const Result r = RunCli(dir, sim, LogLines(0, 12));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json start = ReadLog(log).records.at(0);
   EXPECT_EQ(start["dry_run"], true);
@@ -208,7 +208,7 @@ TEST(StudyCliTest, APersonsSessionNeedsADeviceAndADryRunIsLoggedAsOne) {
   EXPECT_EQ(Records(log, "answer").size(), 12u);
 
   const std::string text_log = dir.File("p02.jsonl");
-  ASSERT_EQ(RunCli(dir, RunArgs(protocol, text_log, "P02"), Lines(0, 12)).exit_code, 0);
+  ASSERT_EQ(RunCli(dir, RunArgs(protocol, text_log, "P02"), LogLines(0, 12)).exit_code, 0);
   EXPECT_EQ(ReadLog(text_log).records.at(0)["dry_run"], true);
 }
 
@@ -216,8 +216,8 @@ TEST(StudyCliTest, KilledAtRandomPointsThenResumedEqualsAnUninterruptedRun) {
   ScratchDir dir;
   const std::string protocol = WriteProtocol(dir);
   const std::string reference = dir.File("reference.jsonl");
-  ASSERT_EQ(RunCli(dir, RunArgs(protocol, reference), Lines(0, 12)).exit_code, 0);
-  const auto expected = AnswerKeys(reference);
+  ASSERT_EQ(RunCli(dir, RunArgs(protocol, reference), LogLines(0, 12)).exit_code, 0);
+  const auto expected = LoggedAnswerKeys(reference);
   ASSERT_EQ(expected.size(), 12u);
 
   const std::string log = dir.File("crashy.jsonl");
@@ -226,8 +226,8 @@ TEST(StudyCliTest, KilledAtRandomPointsThenResumedEqualsAnUninterruptedRun) {
   Rng rng(31337);
   std::set<std::size_t> kill_points;
   bool torn_written = false;
-  for (int attempt = 0; attempt < 40 && AnswerKeys(log).size() < 12; ++attempt) {
-    const std::size_t recorded = std::filesystem::exists(log) ? AnswerKeys(log).size() : 0;
+  for (int attempt = 0; attempt < 40 && LoggedAnswerKeys(log).size() < 12; ++attempt) {
+    const std::size_t recorded = std::filesystem::exists(log) ? LoggedAnswerKeys(log).size() : 0;
     if (!torn_written && recorded > 0) {
       // a crash in the middle of a write leaves a torn last line
       AppendFile(log, R"({"answer":1,"condition":0,"correct":fal)");
@@ -236,13 +236,13 @@ TEST(StudyCliTest, KilledAtRandomPointsThenResumedEqualsAnUninterruptedRun) {
     const Child child = Spawn(args, dir.File("crashy.out"), dir.File("crashy.err"));
     // feed a few of the remaining answers, wait for some of them, then kill at a random moment
     const std::size_t fed = std::min<std::size_t>(12, recorded + rng.Below(4));
-    Feed(child, Lines(recorded, fed));
+    Feed(child, LogLines(recorded, fed));
     const std::size_t wait_for = recorded + rng.Below(fed - recorded + 1);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
     int status = 0;
     bool exited = false;
     // the log appears once the child has started; then its answers are counted
-    while ((!std::filesystem::exists(log) || AnswerKeys(log).size() < wait_for) &&
+    while ((!std::filesystem::exists(log) || LoggedAnswerKeys(log).size() < wait_for) &&
            std::chrono::steady_clock::now() < deadline) {
       if (waitpid(child.pid, &status, WNOHANG) == child.pid) {
         exited = true;
@@ -258,14 +258,14 @@ TEST(StudyCliTest, KilledAtRandomPointsThenResumedEqualsAnUninterruptedRun) {
     close(child.stdin_fd);
     ASSERT_TRUE(WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) == 0))
         << ReadFile(dir.File("crashy.err"));
-    if (std::filesystem::exists(log)) kill_points.insert(AnswerKeys(log).size());
+    if (std::filesystem::exists(log)) kill_points.insert(LoggedAnswerKeys(log).size());
   }
   // finish: the remaining answers, then end of input
-  const std::size_t recorded = AnswerKeys(log).size();
-  const Result last = RunCli(dir, args, Lines(recorded, 12));
+  const std::size_t recorded = LoggedAnswerKeys(log).size();
+  const Result last = RunCli(dir, args, LogLines(recorded, 12));
   EXPECT_EQ(last.exit_code, 0) << last.err;
 
-  EXPECT_EQ(AnswerKeys(log), expected) << "answers lost, duplicated or reordered";
+  EXPECT_EQ(LoggedAnswerKeys(log), expected) << "answers lost, duplicated or reordered";
   const LogContents contents = ReadLog(log);
   EXPECT_EQ(contents.torn_tail_bytes, 0u);
   EXPECT_EQ(contents.records.back()["type"], "session_end");
@@ -282,7 +282,7 @@ TEST(StudyCliTest, EndOfInputStopsCleanlyAndResumeFinishes) {
   ScratchDir dir;
   const std::string protocol = WriteProtocol(dir);
   const std::string log = dir.File("p01.jsonl");
-  const Result first = RunCli(dir, RunArgs(protocol, log), Lines(0, 5));
+  const Result first = RunCli(dir, RunArgs(protocol, log), LogLines(0, 5));
   EXPECT_EQ(first.exit_code, 0) << first.err;
   EXPECT_NE(first.out.find("Session stopped after 5 of 12 answers"), std::string::npos)
       << first.out;
@@ -292,7 +292,7 @@ TEST(StudyCliTest, EndOfInputStopsCleanlyAndResumeFinishes) {
   std::vector<std::string> resume = RunArgs(protocol, log);
   resume.push_back("--resume");
   resume.push_back("--json");
-  const Result second = RunCli(dir, resume, Lines(5, 12));
+  const Result second = RunCli(dir, resume, LogLines(5, 12));
   EXPECT_EQ(second.exit_code, 0) << second.err;
   const json summary = json::parse(second.out);  // --json: exactly one object on stdout
   EXPECT_EQ(summary["status"], "complete");
@@ -308,7 +308,7 @@ TEST(StudyCliTest, TypoAsksAgain) {
   ScratchDir dir;
   const std::string protocol = WriteProtocol(dir);
   const std::string log = dir.File("p01.jsonl");
-  const Result r = RunCli(dir, RunArgs(protocol, log), "zz\n\nwall 9\n" + Lines(0, 12));
+  const Result r = RunCli(dir, RunArgs(protocol, log), "zz\n\nwall 9\n" + LogLines(0, 12));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("\"zz\" is not an answer: type a or b"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"wall 9\" is not an answer"), std::string::npos) << r.out;
@@ -352,24 +352,24 @@ TEST(StudyCliTest, RefusedLogsAreLeftByteIdentical) {
   ScratchDir dir;
   const std::string protocol = WriteProtocol(dir);
   const std::string log = dir.File("p01.jsonl");
-  ASSERT_EQ(RunCli(dir, RunArgs(protocol, log), Lines(0, 3)).exit_code, 0);
+  ASSERT_EQ(RunCli(dir, RunArgs(protocol, log), LogLines(0, 3)).exit_code, 0);
   const std::string bytes = ReadFile(log);
 
   std::vector<std::string> other = RunArgs(protocol, log, "P02");
   other.push_back("--resume");
-  Result r = RunCli(dir, other, Lines(3, 12));
+  Result r = RunCli(dir, other, LogLines(3, 12));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("belongs to participant \"P01\", not \"P02\""), std::string::npos) << r.err;
   EXPECT_EQ(ReadFile(log), bytes);
 
   std::vector<std::string> changed = RunArgs(WriteProtocol(dir, "changed"), log);
   changed.push_back("--resume");
-  r = RunCli(dir, changed, Lines(3, 12));
+  r = RunCli(dir, changed, LogLines(3, 12));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("written for protocol \"e2e\""), std::string::npos) << r.err;
   EXPECT_EQ(ReadFile(log), bytes);
 
-  r = RunCli(dir, RunArgs(protocol, log), Lines(3, 12));  // no --resume
+  r = RunCli(dir, RunArgs(protocol, log), LogLines(3, 12));  // no --resume
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("pass --resume"), std::string::npos) << r.err;
   EXPECT_EQ(ReadFile(log), bytes);
@@ -379,7 +379,7 @@ TEST(StudyCliTest, RefusedLogsAreLeftByteIdentical) {
   WriteFile(notes, text);
   std::vector<std::string> on_notes = RunArgs(protocol, notes);
   on_notes.push_back("--resume");
-  r = RunCli(dir, on_notes, Lines(0, 12));
+  r = RunCli(dir, on_notes, LogLines(0, 12));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("line 1 is not JSON"), std::string::npos) << r.err;
   EXPECT_EQ(ReadFile(notes), text);

@@ -11,6 +11,9 @@
 
 namespace rigidtouch::study::testing {
 
+/// The method's study protocol, as shipped (studies/walls.json).
+inline const std::string kWalls = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
+
 /// A fresh directory under GoogleTest's temporary directory, deleted with its contents.
 class ScratchDir {
  public:
