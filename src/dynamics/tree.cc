@@ -5,8 +5,10 @@
 // origin. In one fixed frame the composite inertias are plain sums and no transforms are needed.
 #include "dynamics/tree.h"
 
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <string>
+#include <utility>
 
 namespace rigidtouch::dynamics {
 namespace {

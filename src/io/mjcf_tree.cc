@@ -2,6 +2,7 @@
 #include "io/mjcf_tree.h"
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rigidtouch::io {
