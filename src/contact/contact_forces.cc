@@ -157,8 +157,8 @@ constexpr int kMinContactsForTwoThreads = 64;
 }  // namespace
 
 bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
-                       dynamics::VelocityScratch& forces, geometry::Worker* worker,
-                       geometry::Task alongside, geometry::ItemTask after_group) {
+                       dynamics::VelocityScratch& forces, parallel::Worker* worker,
+                       parallel::Task alongside, parallel::ItemTask after_group) {
   const int n = data.ncontact;
   const bool two = worker != nullptr && n >= kMinContactsForTwoThreads;
   // by groups when there is no worker, or when last tick had groups enough to share (the choice
@@ -182,7 +182,7 @@ bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
     }
   }
   const bool shared = two && G.ngroup >= 2;
-  geometry::ShareRangeSides(
+  parallel::ShareRangeSides(
       shared ? worker : nullptr, G.ngroup,
       [&model, &data, &scratch, &forces, by_groups, after_group](int g, int side) {
         if (by_groups) {

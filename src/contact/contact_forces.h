@@ -42,7 +42,7 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
 /// 1 the worker's): the tick solves the group there (stage 5, dynamics::SolveGroup) while its
 /// contacts are in that thread's cache. Returns whether the groups were shared by the threads.
 bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
-                       dynamics::VelocityScratch& forces, geometry::Worker* worker = nullptr,
-                       geometry::Task alongside = {}, geometry::ItemTask after_group = {});
+                       dynamics::VelocityScratch& forces, parallel::Worker* worker = nullptr,
+                       parallel::Task alongside = {}, parallel::ItemTask after_group = {});
 
 }  // namespace rigidtouch::contact

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "render/limits.h"
+#include "base/limits.h"
 #include "rigidtouch/types.h"
 #include "study/test_files.h"
 
@@ -498,9 +498,9 @@ TEST(ProtocolTest, FileProblemsNameTheFileAndTheField) {
 TEST(ProtocolTest, RenderLimitsAreTheEngines) {
   // the protocol accepts exactly the window the engine accepts
   json d = Minimal();
-  d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s;
+  d["conditions"]["b"]["t_collision_s"] = limits::kMaxCollisionWindow_s;
   EXPECT_EQ(ErrorOf(d), "");
-  d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s * 1.001;
+  d["conditions"]["b"]["t_collision_s"] = limits::kMaxCollisionWindow_s * 1.001;
   EXPECT_NE(ErrorOf(d).find("valid: > 0 and <= 0.1 s"), std::string::npos) << ErrorOf(d);
   d = Minimal();
   d["conditions"]["b"]["t_collision_s"] = 0.1;

@@ -5,11 +5,11 @@
 #include "contact/phases.h"
 #include "dynamics/kinematics.h"
 #include "dynamics/velocities.h"
+#include "engine/workspace.h"
 #include "geometry/collision.h"
 #include "render/coupling.h"
 #include "render/output.h"
 #include "render/passivity.h"
-#include "render/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -46,7 +46,9 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   // group solved right after its stage 3 and 4, on the same thread, while its contacts are in
   // that thread's cache (groups share no body or contact)
   dynamics::FreeMotionForces free{model, data, coupling.user, ws.velocity};
-  dynamics::GroupSolves solves{model, data, ws.contact.groups, ws.velocity};
+  const contact::Groups& groups = ws.contact.groups;
+  dynamics::GroupSolves solves{
+      model, data, {groups.body_start, groups.bodies, groups.slot}, ws.velocity};
   dynamics::BeginVelocities(ws.velocity);
   const bool shared = contact::ClassifyAndForces(model, data, ws.contact, ws.velocity,
                                                  ws.worker.get(), free.AsTask(), solves.AsTask());
@@ -64,10 +66,10 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
 
   // 8. render: penalty (or coupling) + Eq. 9, the device's force limit, the passivity
   // controller, the safety guards
-  DeviceCommand out = render::DeviceWrench(model, data, input.device.sequence);
+  DeviceCommand out = render::DeviceWrench(model, data, ws.contact, input.device.sequence);
   // the passivity observer and controller at the port, over whatever the renderer asked for
   render::PassivityControl(model, data, input.device, coupling.device_ok, out);
-  render::Safeguard(model, data, coupling.device_ok, out);
+  if (!render::Safeguard(data, coupling.device_ok, out)) ResetState(model, data);
 
   ++data.step;
   data.time_s = static_cast<double>(data.step) * model.timestep_s;
