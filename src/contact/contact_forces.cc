@@ -197,4 +197,20 @@ bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
   return shared;
 }
 
+void GroupsAndVelocities(const Model& model, Data& data, ContactScratch& scratch,
+                         dynamics::VelocityScratch& velocity, const Wrench& user, bool onsets,
+                         parallel::Worker* worker) {
+  if (!onsets) {
+    for (int ci = 0; ci < data.ncontact; ++ci) data.contacts[ci].is_new = false;
+  }
+  dynamics::FreeMotionForces free{model, data, user, velocity};
+  const Groups& groups = scratch.groups;
+  dynamics::GroupSolves solves{
+      model, data, {groups.body_start, groups.bodies, groups.slot}, velocity};
+  dynamics::BeginVelocities(velocity);
+  const bool shared =
+      ClassifyAndForces(model, data, scratch, velocity, worker, free.AsTask(), solves.AsTask());
+  dynamics::EndVelocities(model, data, velocity, shared);
+}
+
 }  // namespace rigidtouch::contact

@@ -45,4 +45,14 @@ bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
                        dynamics::VelocityScratch& forces, parallel::Worker* worker = nullptr,
                        parallel::Task alongside = {}, parallel::ItemTask after_group = {});
 
+/// Stage 4, groups and velocities, in one call (docs/architecture.md): stage 3's contacts lose
+/// their onsets when `onsets` is false (render::CouplingResult::new_motion); then, with the
+/// free-motion forces (dynamics::AddFreeMotionForces) alongside the building of the groups,
+/// ClassifyAndForces gives each group its laws, window, phase and forces and solves it right
+/// after on the same thread (dynamics::SolveGroup); the bodies in no group move freely
+/// (dynamics::EndVelocities). The threads' interleaving stays inside this call.
+void GroupsAndVelocities(const Model& model, Data& data, ContactScratch& scratch,
+                         dynamics::VelocityScratch& velocity, const Wrench& user, bool onsets,
+                         parallel::Worker* worker);
+
 }  // namespace rigidtouch::contact

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "render/event.h"
+#include "render/passivity.h"
 
 namespace rigidtouch::render {
 namespace {
@@ -148,6 +149,17 @@ bool Safeguard(Data& data, bool device_ok, DeviceCommand& out) {
     out.safe_fallback = true;
   }
   return state_ok;
+}
+
+DeviceCommand DeviceOutput(const Model& model, Data& data, const contact::ContactScratch& contact,
+                           const DeviceState& device, const CouplingResult& coupling,
+                           bool& state_ok) {
+  HoldTool(model, data, coupling);
+  DeviceCommand out = DeviceWrench(model, data, contact, device.sequence);
+  // the passivity observer and controller at the port, over whatever the renderer asked for
+  PassivityControl(model, data, device, coupling.device_ok, out);
+  state_ok = Safeguard(data, coupling.device_ok, out);
+  return out;
 }
 
 }  // namespace rigidtouch::render

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "contact/phases.h"
+#include "render/coupling.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::render {
@@ -33,5 +34,13 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, const contact::Contac
 /// (DeviceCommand::safe_fallback). Returns false when the state was non-finite: the caller (the
 /// tick) puts it back to initial (ResetState, which the engine owns).
 bool Safeguard(Data& data, bool device_ok, DeviceCommand& out);
+
+/// Stage 7, render, in one call: the held tool put back (HoldTool), the command (DeviceWrench,
+/// with the event transient), the passivity controller (PassivityControl) and the safety guards
+/// (Safeguard). `state_ok` becomes false when the state went non-finite: the tick then puts it
+/// back to initial (ResetState, which the engine owns).
+DeviceCommand DeviceOutput(const Model& model, Data& data, const contact::ContactScratch& contact,
+                           const DeviceState& device, const CouplingResult& coupling,
+                           bool& state_ok);
 
 }  // namespace rigidtouch::render
