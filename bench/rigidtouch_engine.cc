@@ -109,7 +109,7 @@ class RigidtouchEngine final : public Engine {
   std::string Configuration() const override {
     std::ostringstream s;
     const Model& m = *model_;
-    s << "rigidtouch: renderer " << io::RendererName(m.render.renderer) << " (f "
+    s << "rigidtouch: renderer " << text::RendererName(m.render.renderer) << " (f "
       << m.render.frequency_hz << " Hz, t_c " << m.render.t_collision_s << " s), h " << m.timestep_s
       << " s, tool contact k " << m.contact.stiffness_N_per_m << " N/m b "
       << m.contact.damping_Ns_per_m << " N s/m (explicit), scene contact k "

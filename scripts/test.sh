@@ -31,6 +31,8 @@ echo "== format, function-length and layering checks"
 files=$(git ls-files '*.h' '*.cc' 2>/dev/null || true)
 if [ -n "$files" ]; then clang-format --dry-run --Werror $files; fi
 bash scripts/check-function-length.sh  # no function over 120 lines in src/, apps/, python/
+python3 scripts/check-layers.py         # no include from a lower floor of src/ to a higher one
+python3 scripts/check-unity-names.py    # no internal name defined twice in one unity batch
 
 echo "== release build, -Wall -Wextra -Werror"
 start_s=$(date +%s)
@@ -98,7 +100,7 @@ start_s=$(date +%s)
 # clang at -O1 -g1 (line-number stacks in the reports) with its precompiled headers; only the
 # test files that start threads are built
 tsan_files="loop/*_test.cc;device/*_test.cc;cli/bridge_cli_test.cc;cli/fake_device_test.cc"
-tsan_files+=";geometry/worker_test.cc"
+tsan_files+=";parallel/worker_test.cc"
 CC=clang CXX=clang++ cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGIDTOUCH_WERROR=ON \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DRIGIDTOUCH_SANITIZE_THREAD=ON \
   -DRIGIDTOUCH_BUILD_TESTS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF \

@@ -6,8 +6,8 @@
 #include <iostream>
 
 #include "command.h"
+#include "engine/workspace.h"
 #include "loop/reference_job.h"
-#include "render/workspace.h"
 #include "scene_flags.h"
 
 namespace rigidtouch::cli {

@@ -8,13 +8,13 @@
 #include <limits>
 #include <system_error>
 
+#include "base/limits.h"
+#include "base/text.h"
 #include "io/config.h"
+#include "io/materials.h"
 #include "io/output_file.h"
 #include "io/resources.h"
-#include "io/text.h"
 #include "loop/loop_json.h"
-#include "render/limits.h"
-#include "render/materials.h"
 
 namespace rigidtouch::cli {
 
@@ -54,8 +54,9 @@ std::string Where(const Settings& s, const std::string& field) {
 
 CLI::Validator InRange(double lo, double hi, const std::string& unit) {
   const std::string valid =
-      std::isinf(hi) ? "valid " + io::FormatNumber(lo) + " " + unit + " or more"
-                     : "valid " + io::FormatNumber(lo) + " to " + io::FormatNumber(hi) + " " + unit;
+      std::isinf(hi)
+          ? "valid " + text::FormatNumber(lo) + " " + unit + " or more"
+          : "valid " + text::FormatNumber(lo) + " to " + text::FormatNumber(hi) + " " + unit;
   return CLI::Validator(
       [lo, hi, valid](std::string& text) -> std::string {
         double value = 0.0;
@@ -63,7 +64,8 @@ CLI::Validator InRange(double lo, double hi, const std::string& unit) {
         if (!(value >= lo && value <= hi)) return text + " is out of range: " + valid;
         return "";
       },
-      "[" + io::FormatNumber(lo) + ", " + (std::isinf(hi) ? "inf" : io::FormatNumber(hi)) + "]");
+      "[" + text::FormatNumber(lo) + ", " + (std::isinf(hi) ? "inf" : text::FormatNumber(hi)) +
+          "]");
 }
 
 CLI::Validator SeedRange() {
@@ -92,8 +94,8 @@ CLI::Validator SeedRange() {
 Vec3 ToolForce(const std::vector<double>& xyz) {
   const Vec3 force(xyz.at(0), xyz.at(1), xyz.at(2));
   if (!force.allFinite()) {
-    throw Error("--tool-force must be finite, got " + io::FormatNumber(xyz[0]) + " " +
-                io::FormatNumber(xyz[1]) + " " + io::FormatNumber(xyz[2]));
+    throw Error("--tool-force must be finite, got " + text::FormatNumber(xyz[0]) + " " +
+                text::FormatNumber(xyz[1]) + " " + text::FormatNumber(xyz[2]));
   }
   return force;
 }
@@ -101,7 +103,7 @@ Vec3 ToolForce(const std::vector<double>& xyz) {
 void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description) {
   app->add_option("--rate", rate_hz, description)
       ->capture_default_str()
-      ->check(InRange(render::kMinRate_hz, render::kMaxRate_hz, "Hz"));
+      ->check(InRange(limits::kMinRate_hz, limits::kMaxRate_hz, "Hz"));
 }
 
 void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
@@ -114,7 +116,7 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
                   "name of the free body that is the tool (default: the config's, else tool)");
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");
   app->add_option("--renderer", f.renderer, "penalty | impulse | train | event")
-      ->check(CLI::IsMember(io::RendererNames()));
+      ->check(CLI::IsMember(text::RendererNames()));
   app->add_option("--material", f.material,
                   "the event renderer's material: rubber | wood | aluminium | FILE.json "
                   "(docs/renderers.md)");
@@ -171,7 +173,7 @@ Settings ResolveSettings(const SceneFlags& f) {
     s.origin["render.reference_solver"] = "--reference-solver";
   }
   if (f.material) {
-    o.render.material = render::ParseMaterial(*f.material);
+    o.render.material = io::ParseMaterial(*f.material);
     s.origin["render.material"] = "--material";
   }
   if (f.material && o.render.renderer == RendererKind::kTrain) {
@@ -183,7 +185,7 @@ Settings ResolveSettings(const SceneFlags& f) {
                     "the material (docs/renderers.md): give one");
       }
     }
-    render::ApplyMaterial(o.render, o.render.material);
+    io::ApplyMaterial(o.render, o.render.material);
   }
   if (f.passivity_control) {
     o.render.passivity_control = true;
@@ -201,8 +203,8 @@ void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double r
   const double h = 1.0 / rate_hz;
   if (s.Given("timestep_s") && o.timestep_s && *o.timestep_s != h) {
     throw Error(
-        "timestep_s = " + io::FormatNumber(*o.timestep_s) + " s (" + Where(s, "timestep_s") +
-        ") differs from the haptic period 1 / rate = " + io::FormatNumber(h) +
+        "timestep_s = " + text::FormatNumber(*o.timestep_s) + " s (" + Where(s, "timestep_s") +
+        ") differs from the haptic period 1 / rate = " + text::FormatNumber(h) +
         " s: here the time step is the device's period; drop it " + "or set the rate instead");
   }
   o.timestep_s = h;
@@ -216,9 +218,9 @@ void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double r
   if (s.Given("device.max_force_N")) {
     const double mine = o.device.max_force_N;  // 0: no limit of the user's own
     if (preset.max_force_N > 0.0 && (mine == 0.0 || mine > preset.max_force_N)) {
-      throw Error("device.max_force_N = " + io::FormatNumber(mine) + " N (" +
+      throw Error("device.max_force_N = " + text::FormatNumber(mine) + " N (" +
                   Where(s, "device.max_force_N") + ") is above the " + preset.name +
-                  " preset's force limit, " + io::FormatNumber(preset.max_force_N) +
+                  " preset's force limit, " + text::FormatNumber(preset.max_force_N) +
                   " N: the device cannot display it; give at most that, or choose another "
                   "device preset");
     }
@@ -245,7 +247,7 @@ std::string RendererList(std::vector<RendererKind> kinds, const std::string& con
   std::string list = "the ";
   for (std::size_t i = 0; i < kinds.size(); ++i) {
     if (i > 0) list += i + 1 == kinds.size() ? " " + conjunction + " " : ", ";
-    list += io::RendererName(kinds[i]);
+    list += text::RendererName(kinds[i]);
   }
   return list + (kinds.size() == 1 ? " renderer" : " renderers");
 }

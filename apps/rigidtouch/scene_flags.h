@@ -53,7 +53,7 @@ CLI::Validator SeedRange();
 /// The constant tool force of --tool-force FX FY FZ (simulate, bench); refused unless finite.
 Vec3 ToolForce(const std::vector<double>& xyz);
 
-/// Adds --rate with the one range every subcommand takes (render::kMinRate_hz to kMaxRate_hz).
+/// Adds --rate with the one range every subcommand takes (limits::kMinRate_hz to kMaxRate_hz).
 void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description);
 
 /// Adds --scene (required unless `scene_required` is false), --config, --tool, --timestep,

@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "analysis/tap_experiment.h"
+#include "base/limits.h"
 #include "command.h"
 #include "device/presets.h"
 #include "device/replay_device.h"
@@ -22,7 +23,6 @@
 #include "loop/haptic_loop.h"
 #include "loop/loop_json.h"
 #include "loop/stop_signal.h"
-#include "render/limits.h"
 #include "scene_flags.h"
 
 namespace rigidtouch::cli {

@@ -66,7 +66,7 @@ void Run(const SimulateFlags& f) {
                                  {"steps", f.steps},
                                  {"timestep_s", model.timestep_s},
                                  {"time_s", data.time_s},
-                                 {"renderer", io::RendererName(model.render.renderer)},
+                                 {"renderer", text::RendererName(model.render.renderer)},
                                  {"schedule",
                                   {{"window_steps", model.schedule.window_steps},
                                    {"interval_steps", model.schedule.interval_steps},
@@ -82,8 +82,8 @@ void Run(const SimulateFlags& f) {
     return;
   }
   std::cout << "simulated " << f.steps << " steps of " << model.timestep_s << " s (" << data.time_s
-            << " s) of " << model.source << " with the " << io::RendererName(model.render.renderer)
-            << " renderer\n";
+            << " s) of " << model.source << " with the "
+            << text::RendererName(model.render.renderer) << " renderer\n";
   std::cout << "impulses applied: " << impulses.size()
             << ", most contacts in a step: " << max_contacts << "\n";
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {

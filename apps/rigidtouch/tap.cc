@@ -14,13 +14,13 @@
 #include "analysis/figures.h"
 #include "analysis/renderer_spec.h"
 #include "analysis/tap_experiment.h"
+#include "base/text.h"
 #include "command.h"
 #include "io/config.h"
+#include "io/materials.h"
 #include "io/output_file.h"
 #include "io/resources.h"
-#include "io/text.h"
 #include "io/trace_csv.h"
-#include "render/materials.h"
 #include "scene_flags.h"
 #include "simulate_nonfinite.h"
 #include "tap_run.h"
@@ -83,7 +83,7 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
         RefuseUnused(ResolveSettings(f.scene), {"render.t_collision_s", "render.frequency_hz"},
                      "a material train takes f and t_c from its material (docs/renderers.md)");
       }
-      render::ApplyMaterial(c.load.render, *spec->material);
+      io::ApplyMaterial(c.load.render, *spec->material);
     }
   }
   if (wall_params) {
@@ -171,7 +171,7 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
   const bool displayable =
       within(k, run.device.max_stiffness_N_per_m) && within(b, run.device.max_damping_Ns_per_m);
   return {
-      {"renderer", io::RendererName(m.render.renderer)},
+      {"renderer", text::RendererName(m.render.renderer)},
       {"restitution", m.render.restitution},
       {"frequency_hz", train ? nlohmann::json(m.render.frequency_hz) : nlohmann::json(nullptr)},
       {"t_collision_s", train ? nlohmann::json(m.render.t_collision_s) : nlohmann::json(nullptr)},
@@ -353,7 +353,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     traces.push_back(trace);
     labels.push_back(spec.label);
     max_force_N = run.device.max_force_N;
-    coupling = io::CouplingName(run.model.device.coupling);
+    coupling = text::CouplingName(run.model.device.coupling);
     nlohmann::json entry = {{"name", spec.name}, {"label", spec.label}};
     entry.update(RunJson(run, coupling.c_str()));
     entry["trace"] = trace;
@@ -377,13 +377,13 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   std::vector<std::string> args = traces;
   args.push_back("--labels");
   args.insert(args.end(), labels.begin(), labels.end());
-  args.insert(args.end(), {"--limit", io::FormatNumber(max_force_N), "--out", fig});
+  args.insert(args.end(), {"--limit", text::FormatNumber(max_force_N), "--out", fig});
   Plot("python/plot_walls.py", args, f.json);
   std::vector<std::string> figures = {fig};
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const std::string tap_fig = OutPath(f, FileStem(specs[i]) + "_tap.png");
     Plot("python/plot_tap.py",
-         {traces[i], "--out", tap_fig, "--limit", io::FormatNumber(max_force_N), "--title",
+         {traces[i], "--out", tap_fig, "--limit", text::FormatNumber(max_force_N), "--title",
           specs[i].label + ", tap 0"},
          f.json);
     figures.push_back(tap_fig);
@@ -458,8 +458,8 @@ void Run(const TapFlags& f) {
     std::error_code ignored;
     try {
       Plot("python/plot_tap.py",
-           {trace, "--out", f.plot, "--limit", io::FormatNumber(run.device.max_force_N), "--title",
-            std::string(io::RendererName(run.model.render.renderer)) + ", tap 0"},
+           {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N),
+            "--title", std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
            f.json);
     } catch (...) {
       if (temporary) std::filesystem::remove(trace, ignored);
@@ -467,7 +467,7 @@ void Run(const TapFlags& f) {
     }
     if (temporary) std::filesystem::remove(trace, ignored);
   }
-  nlohmann::json result = RunJson(run, io::CouplingName(run.model.device.coupling));
+  nlohmann::json result = RunJson(run, text::CouplingName(run.model.device.coupling));
   if (!f.trace.empty()) result["trace"] = f.trace;
   if (f.json) {
     std::cout << result.dump() << "\n";
@@ -580,7 +580,7 @@ TapOutcome RunTapFlags(const std::vector<std::string>& args) {
   return WithOrigins(ResolveSettings(f->scene), [&] {
     TapOutcome out;
     out.run = analysis::RunTapExperiment(MakeConfig(*f, f->wall));
-    out.result = RunJson(out.run, io::CouplingName(out.run.model.device.coupling));
+    out.result = RunJson(out.run, text::CouplingName(out.run.model.device.coupling));
     return out;
   });
 }

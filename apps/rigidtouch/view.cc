@@ -194,7 +194,7 @@ void PrintViewResult(const ViewFlags& f, const Model& model, const Data& data,
   result["ticks"] = totals.ticks;
   result["renderer_switches"] = vr.renderer_switches;
   result["renderer_switch_wait_frames"] = vr.switch_wait_frames;
-  result["renderer"] = io::RendererName(model.render.renderer);
+  result["renderer"] = text::RendererName(model.render.renderer);
   result["frames"] = vr.frames;
   result["display_rate_hz"] = vr.elapsed_s > 0.0 ? vr.frames / vr.elapsed_s : 0.0;
   result["impulses"] = totals.impulses;

@@ -103,7 +103,7 @@ struct WarningStat {
   std::int64_t last_step = -1;  // the last of them; -1: never
 };
 
-struct Workspace;  // solver scratch, defined in src/render/workspace.h
+struct Workspace;  // solver scratch, defined in src/engine/workspace.h
 /// Deleter so Data can own a Workspace without exposing it.
 struct WorkspaceDeleter {
   void operator()(Workspace* w) const;

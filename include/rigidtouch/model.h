@@ -29,7 +29,7 @@ enum class RendererKind {
 
 /// A material's contact transient, the decaying sinusoid A v_in e^(-B t) sin(2 pi f t) along the
 /// contact normal (Okamura, Cutkosky and Dennerlein 2001), v_in the approach speed at onset.
-/// Presets and JSON files: src/render/materials.h, docs/renderers.md.
+/// Presets and JSON files: src/io/materials.h, docs/renderers.md.
 struct Material {
   std::string name;                 // empty: none given
   double amplitude_Ns_per_m = 0.0;  // A: force per approach speed [N/(m/s)]

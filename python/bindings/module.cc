@@ -239,7 +239,7 @@ void DefineParams(py::module_& m) {
       .def(py::init<>())
       .def_property(
           "renderer",
-          [](const RenderParams& r) { return std::string(io::RendererName(r.renderer)); },
+          [](const RenderParams& r) { return std::string(text::RendererName(r.renderer)); },
           [](RenderParams& r, const std::string& name) { r.renderer = io::ParseRenderer(name); },
           "renderer name, as the CLI's --renderer takes it")
       .def_readwrite("restitution", &RenderParams::restitution, "restitution e in [0, 1]")
@@ -254,7 +254,7 @@ void DefineParams(py::module_& m) {
       .def(py::init<>())
       .def_property(
           "coupling",
-          [](const DeviceParams& d) { return std::string(io::CouplingName(d.coupling)); },
+          [](const DeviceParams& d) { return std::string(text::CouplingName(d.coupling)); },
           [](DeviceParams& d, const std::string& name) { d.coupling = io::ParseCoupling(name); },
           "none | direct | virtual")
       .def_readwrite("max_force_N", &DeviceParams::max_force_N, "force limit [N]; 0: none")

@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "analysis/tap_experiment.h"
-#include "render/materials.h"
+#include "io/materials.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::analysis {
@@ -51,7 +51,7 @@ RendererSpec ParseRendererSpec(std::string_view spec) {
       throw Error("a material goes with event or train, not with " + Quote(name) + " in " +
                   Quote(spec));
     }
-    r.material = render::ParseMaterial(spec.substr(colon + 1));
+    r.material = io::ParseMaterial(spec.substr(colon + 1));
     r.label =
         (r.renderer == RendererKind::kEvent ? "event-based transient: " : "material train: ") +
         r.material->name;

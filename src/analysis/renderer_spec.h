@@ -19,7 +19,7 @@ struct RendererSpec {
   /// Set when the spec fixes every render parameter (the method's walls: e, t_c and f); unset,
   /// the entry takes them from the flags, the config or the defaults like `--renderer` does.
   std::optional<RenderParams> render;
-  /// The material after the colon (event:wood, train:wood; render::ParseMaterial): the event
+  /// The material after the colon (event:wood, train:wood; io::ParseMaterial): the event
   /// renderer's transient, or a passive material train's frequency, window and shares.
   std::optional<Material> material;
 };

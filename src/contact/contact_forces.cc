@@ -157,8 +157,8 @@ constexpr int kMinContactsForTwoThreads = 64;
 }  // namespace
 
 bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
-                       dynamics::VelocityScratch& forces, geometry::Worker* worker,
-                       geometry::Task alongside, geometry::ItemTask after_group) {
+                       dynamics::VelocityScratch& forces, parallel::Worker* worker,
+                       parallel::Task alongside, parallel::ItemTask after_group) {
   const int n = data.ncontact;
   const bool two = worker != nullptr && n >= kMinContactsForTwoThreads;
   // by groups when there is no worker, or when last tick had groups enough to share (the choice
@@ -182,7 +182,7 @@ bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
     }
   }
   const bool shared = two && G.ngroup >= 2;
-  geometry::ShareRangeSides(
+  parallel::ShareRangeSides(
       shared ? worker : nullptr, G.ngroup,
       [&model, &data, &scratch, &forces, by_groups, after_group](int g, int side) {
         if (by_groups) {
@@ -195,6 +195,22 @@ bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
       },
       [] {});
   return shared;
+}
+
+void GroupsAndVelocities(const Model& model, Data& data, ContactScratch& scratch,
+                         dynamics::VelocityScratch& velocity, const Wrench& user, bool onsets,
+                         parallel::Worker* worker) {
+  if (!onsets) {
+    for (int ci = 0; ci < data.ncontact; ++ci) data.contacts[ci].is_new = false;
+  }
+  dynamics::FreeMotionForces free{model, data, user, velocity};
+  const Groups& groups = scratch.groups;
+  dynamics::GroupSolves solves{
+      model, data, {groups.body_start, groups.bodies, groups.slot}, velocity};
+  dynamics::BeginVelocities(velocity);
+  const bool shared =
+      ClassifyAndForces(model, data, scratch, velocity, worker, free.AsTask(), solves.AsTask());
+  dynamics::EndVelocities(model, data, velocity, shared);
 }
 
 }  // namespace rigidtouch::contact

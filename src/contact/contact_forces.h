@@ -42,7 +42,17 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
 /// 1 the worker's): the tick solves the group there (stage 5, dynamics::SolveGroup) while its
 /// contacts are in that thread's cache. Returns whether the groups were shared by the threads.
 bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
-                       dynamics::VelocityScratch& forces, geometry::Worker* worker = nullptr,
-                       geometry::Task alongside = {}, geometry::ItemTask after_group = {});
+                       dynamics::VelocityScratch& forces, parallel::Worker* worker = nullptr,
+                       parallel::Task alongside = {}, parallel::ItemTask after_group = {});
+
+/// Stage 4, groups and velocities, in one call (docs/architecture.md): stage 3's contacts lose
+/// their onsets when `onsets` is false (render::CouplingResult::new_motion); then, with the
+/// free-motion forces (dynamics::AddFreeMotionForces) alongside the building of the groups,
+/// ClassifyAndForces gives each group its laws, window, phase and forces and solves it right
+/// after on the same thread (dynamics::SolveGroup); the bodies in no group move freely
+/// (dynamics::EndVelocities). The threads' interleaving stays inside this call.
+void GroupsAndVelocities(const Model& model, Data& data, ContactScratch& scratch,
+                         dynamics::VelocityScratch& velocity, const Wrench& user, bool onsets,
+                         parallel::Worker* worker);
 
 }  // namespace rigidtouch::contact

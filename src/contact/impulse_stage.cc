@@ -185,7 +185,7 @@ void ImpulseScratch::Reserve(const Model& model, int worker_rows) {
 }
 
 void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseScratch& scratch,
-                       geometry::Worker* worker) {
+                       parallel::Worker* worker) {
   // penalty and event-based transients apply no impulses (the event renderer's window only
   // marks the onset its transient starts from)
   if (model.render.renderer == RendererKind::kPenalty ||

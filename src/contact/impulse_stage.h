@@ -13,7 +13,7 @@
 #include "contact/impulse.h"
 #include "contact/impulse_reference.h"
 #include "contact/impulse_solver.h"
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -58,7 +58,7 @@ struct ImpulseScratch {
   std::unique_ptr<ReferenceSolver> reference;  // only when RenderParams::reference_solver
   std::vector<Due> due;                        // (nbody) the groups with an impulse due, in order
   int ndue = 0;
-  geometry::TwoEndedRange shared;  // places in `due` the two threads take
+  parallel::TwoEndedRange shared;  // places in `due` the two threads take
   Job job;
   long shared_steps = 0;      // steps whose impulses were shared between the threads
   long solved_on_worker = 0;  // groups the worker solved
@@ -74,6 +74,6 @@ struct ImpulseScratch {
 /// data.tool_impulse_W, and the group's window advanced. With a worker, the groups with an
 /// impulse due are shared with it when there are enough of them.
 void CollisionImpulses(const Model& model, Data& data, const Groups& groups,
-                       ImpulseScratch& scratch, geometry::Worker* worker = nullptr);
+                       ImpulseScratch& scratch, parallel::Worker* worker = nullptr);
 
 }  // namespace rigidtouch::contact

@@ -131,13 +131,13 @@ void ClassifyGroup(const Model& model, Data& data, ContactScratch& scratch, int 
 }
 
 void ClassifyByPairs(const Model& model, Data& data, ContactScratch& scratch,
-                     geometry::Worker* worker, geometry::Task alongside) {
+                     parallel::Worker* worker, parallel::Task alongside) {
   // the pairs are independent: blocks of contacts, each taking the pairs that start in it. The
   // groups, whose building only reads the contacts' bodies and which no pair's work reads, are
   // built first on this thread while the worker starts on the pairs
   const int n = data.ncontact;
   const int nblock = (n + kContactBlock - 1) / kContactBlock;
-  geometry::ShareRange(
+  parallel::ShareRange(
       n >= kMinContactsForTwoThreads ? worker : nullptr, nblock,
       [&model, &data, &scratch, n](int k) {
         ClassifyPairs(model, data, scratch, k * kContactBlock,

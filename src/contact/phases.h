@@ -7,7 +7,7 @@
 
 #include "contact/groups.h"
 #include "contact/penalty.h"
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -39,7 +39,7 @@ struct ContactScratch {
 /// with a worker (threads 2) when there are enough contacts (each geom pair's on one thread);
 /// then UpdateGroupWindow for every group.
 void ClassifyByPairs(const Model& model, Data& data, ContactScratch& scratch,
-                     geometry::Worker* worker = nullptr, geometry::Task alongside = {});
+                     parallel::Worker* worker = nullptr, parallel::Task alongside = {});
 /// Group g's window and phase, once its contacts are classified.
 void UpdateGroupWindow(const Model& model, Data& data, ContactScratch& scratch, int g);
 /// By groups, once BuildGroups has run: group g's geom pairs classified, then its window and

@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <sstream>
 
+#include "base/text.h"
 #include "device/presets.h"
 #include "io/strict_json.h"
-#include "io/text.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::device {
@@ -22,8 +22,8 @@ double Required(const io::StrictObject& o, const std::string& key, double lo, do
   const std::optional<double> value = o.Number(key);
   if (!value) o.FailAt(key, "missing; a device spec gives every field (" + unit + ")");
   if (!(*value >= lo && *value <= hi)) {
-    o.FailAt(key, io::FormatNumber(*value) + " is out of range: valid " + io::FormatNumber(lo) +
-                      " to " + io::FormatNumber(hi) + " " + unit);
+    o.FailAt(key, text::FormatNumber(*value) + " is out of range: valid " + text::FormatNumber(lo) +
+                      " to " + text::FormatNumber(hi) + " " + unit);
   }
   return *value;
 }

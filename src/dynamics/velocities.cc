@@ -54,7 +54,7 @@ void AddFreeMotionForces(const Model& model, const Data& data, const Wrench& use
   scratch.torque_W[model.tool] += user.torque_Nm;
 }
 
-geometry::Task FreeMotionForces::AsTask() {
+parallel::Task FreeMotionForces::AsTask() {
   return {[](void* context) {
             const auto& f = *static_cast<const FreeMotionForces*>(context);
             AddFreeMotionForces(f.model, f.data, f.user, f.scratch);
@@ -67,8 +67,8 @@ void BeginVelocities(VelocityScratch& scratch) {
   scratch.failed_solves = {0, 0};
 }
 
-void SolveGroup(const Model& model, Data& data, const contact::Groups& groups,
-                VelocityScratch& scratch, int g, int side) {
+void SolveGroup(const Model& model, Data& data, const GroupBodies& groups, VelocityScratch& scratch,
+                int g, int side) {
   const int nb = groups.body_start[g + 1] - groups.body_start[g];
   const std::span<const int> bodies(groups.bodies.data() + groups.body_start[g], nb);
   const int begin = scratch.implicit_start[g], end = scratch.implicit_end[g];
@@ -94,7 +94,7 @@ void SolveGroup(const Model& model, Data& data, const contact::Groups& groups,
   }
 }
 
-geometry::ItemTask GroupSolves::AsTask() {
+parallel::ItemTask GroupSolves::AsTask() {
   return {[](void* context, int g, int side) {
             const auto& s = *static_cast<const GroupSolves*>(context);
             SolveGroup(s.model, s.data, s.groups, s.scratch, g, side);

@@ -6,9 +6,8 @@
 #include <span>
 #include <vector>
 
-#include "contact/groups.h"
 #include "dynamics/group_dynamics.h"
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -73,12 +72,22 @@ struct FreeMotionForces {
   const Wrench& user;
   VelocityScratch& scratch;
   /// A task that calls AddFreeMotionForces with these arguments (this object must outlive it).
-  geometry::Task AsTask();
+  parallel::Task AsTask();
 };
 
 /// Stage 5's start, before stage 3 (ClassifyAndForces) solves the groups: the worker's solver
 /// takes the tick's settings, and no solve has failed yet.
 void BeginVelocities(VelocityScratch& scratch);
+
+/// The contact groups as the group solve reads them: group g's bodies are
+/// bodies[body_start[g] .. body_start[g + 1]), and slot[i] is body i's place in its group. Spans
+/// over the lists stage 3 builds (contact::Groups, sized once), so dynamics needs nothing of
+/// contact's.
+struct GroupBodies {
+  std::span<const int> body_start;  // (ngroup + 1)
+  std::span<const int> bodies;      // (nbody)
+  std::span<const int> slot;        // (nbody)
+};
 
 /// Stage 5 for group g, run by stage 3-4's shared range right after the group's forces (as
 /// GroupSolves::AsTask), while its implicit contacts are in the cache of the thread that wrote
@@ -89,17 +98,17 @@ void BeginVelocities(VelocityScratch& scratch);
 /// velocities back into data.contacts. Groups share no body or contact, and each group's kept
 /// factor is stored with its bodies, whichever side solved it, so every result is the same bit
 /// for bit on one thread or two.
-void SolveGroup(const Model& model, Data& data, const contact::Groups& groups,
-                VelocityScratch& scratch, int g, int side);
+void SolveGroup(const Model& model, Data& data, const GroupBodies& groups, VelocityScratch& scratch,
+                int g, int side);
 
 /// SolveGroup's arguments, for running it as the stage 3-4 range's task after each group.
 struct GroupSolves {
   const Model& model;
   Data& data;
-  const contact::Groups& groups;
+  GroupBodies groups;
   VelocityScratch& scratch;
   /// A task that calls SolveGroup with these arguments (this object must outlive it).
-  geometry::ItemTask AsTask();
+  parallel::ItemTask AsTask();
 };
 
 /// Stage 5's end: every body in no group moves freely under its explicit force, and the failed

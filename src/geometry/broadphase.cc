@@ -335,7 +335,8 @@ void EndSharedSweep(const Model& model, std::span<const GeomPose> poses, Broadph
   // every block is taken now; those the worker took are done when it has counted them
   const auto target = bp.back_done_before + static_cast<std::uint32_t>(nblock - front);
   for (std::uint32_t now = bp.back_blocks_done.Load(); now != target;) {
-    now = bp.back_blocks_done.AwaitChange(now, Worker::kDefaultSpins, Worker::kTickSleepLimitNs);
+    now = bp.back_blocks_done.AwaitChange(now, parallel::Worker::kDefaultSpins,
+                                          parallel::Worker::kTickSleepLimitNs);
   }
   bool overflowed = false;
   for (int b = front; b < nblock; ++b)
@@ -357,7 +358,7 @@ void EndSharedSweep(const Model& model, std::span<const GeomPose> poses, Broadph
 }
 
 void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp,
-               Worker* worker) {
+               parallel::Worker* worker) {
   PreparePairs(model, poses, bp);
   // with a worker, the threads take blocks of places from both ends: the front's pairs go to
   // bp.pairs in order, the back's to bp.upper_pairs block by block (the last block first)

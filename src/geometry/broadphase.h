@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "geometry/narrow_phase.h"
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 #include "rigidtouch/model.h"
 
 namespace rigidtouch::geometry {
@@ -49,10 +49,11 @@ struct Broadphase {
   std::vector<std::pair<int, int>> upper_pairs;
   // with a worker: the blocks of places the two threads take (from the front and the back), and
   // where each of the worker's blocks begins in upper_pairs and how many pairs it has
-  TwoEndedRange place_blocks;
+  parallel::TwoEndedRange place_blocks;
   std::vector<int> block_begin, block_count;  // (places / block + 1)
   bool shared = false;                        // this tick's sweep is shared (BeginSharedSweep)
-  WakeCounter back_blocks_done;  // the worker's blocks swept since the start, each once recorded
+  parallel::WakeCounter
+      back_blocks_done;  // the worker's blocks swept since the start, each once recorded
   std::uint32_t back_done_before = 0;  // its value when this tick's sweep began
   long resweeps = 0;  // ticks whose worker's blocks did not fit upper_pairs and were swept again
   int npair = 0;
@@ -76,7 +77,7 @@ inline constexpr int kMinBoxesForTwoThreads = 256;
 /// a worker (threads 2) and enough boxes the two threads share the sweep in blocks of places, taken
 /// from both ends: the same pairs in the same order.
 void FindPairs(const Model& model, std::span<const GeomPose> poses, Broadphase& bp,
-               Worker* worker = nullptr);
+               parallel::Worker* worker = nullptr);
 
 /// FindPairs in parts, for a caller whose worker is already running a job of the caller's (the
 /// collision stage's first job): on this thread PreparePairs (this tick's boxes, sweep axis and

@@ -441,7 +441,8 @@ void NarrowBlocks(const Model& model, CollisionScratch& s, int t) {
 // returns once the tick's thread has raised s.progress by `steps` from `before`
 void AwaitProgress(const CollisionScratch& s, std::uint32_t before, std::uint32_t steps) {
   for (std::uint32_t now = s.progress.Load(); now - before < steps;) {
-    now = s.progress.AwaitChange(now, Worker::kDefaultSpins, Worker::kTickSleepLimitNs);
+    now = s.progress.AwaitChange(now, parallel::Worker::kDefaultSpins,
+                                 parallel::Worker::kTickSleepLimitNs);
   }
 }
 
@@ -519,7 +520,8 @@ constexpr int kMinPairsForTwoThreads = 32;
 // the worker's first job posted (RunRememberAndNarrowJob); finds the pairs and then shares the
 // narrow phase with the worker (blocks of the pair list taken from both ends) if there are enough
 // pairs; returns when the worker's job is done (last tick's contacts indexed)
-bool FindPairsAndNarrow(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
+bool FindPairsAndNarrow(const Model& model, Data& data, CollisionScratch& s,
+                        parallel::Worker& worker) {
   const std::uint32_t before = s.progress.Load();
   s.job = {&model, &s, &data, before};
   worker.Post(&RunRememberAndNarrowJob, &s.job);
@@ -542,7 +544,8 @@ bool FindPairsAndNarrow(const Model& model, Data& data, CollisionScratch& s, Wor
 // threads again when every pair's count is known and fits, each pair at the place one thread
 // would give it and the new contacts numbered afterwards in contact order; otherwise on the
 // tick's thread. Either way the same contacts, bit for bit, as CollidePair's and MatchAndNumber's
-void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s, Worker& worker) {
+void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s,
+                       parallel::Worker& worker) {
   const int npair = s.broadphase.npair;
   const int nblock = (npair + kPairBlock - 1) / kPairBlock;
   int total = 0, nruns = 0;
@@ -590,7 +593,7 @@ bool RunsIndexList(const Data& data) {
   return next == data.ncontact;
 }
 
-void DetectContacts(const Model& model, Data& data, CollisionScratch& s, Worker* worker) {
+void DetectContacts(const Model& model, Data& data, CollisionScratch& s, parallel::Worker* worker) {
   if (worker != nullptr) {
     const bool shared = FindPairsAndNarrow(model, data, s, *worker);
     if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);

@@ -14,7 +14,7 @@
 
 #include "geometry/broadphase.h"
 #include "geometry/narrow_phase.h"
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -69,7 +69,7 @@ struct CollisionScratch {
   std::vector<PairPoints> pair_points;                     // (pair capacity)
   std::array<std::vector<ContactPoint>, 2> thread_points;  // (max contacts + kMaxPairContacts)
   std::array<int, 2> thread_used{};                        // points in each buffer this tick
-  TwoEndedRange pair_blocks;                               // blocks of kPairBlock pairs
+  parallel::TwoEndedRange pair_blocks;                     // blocks of kPairBlock pairs
   // when the two threads also write the contacts (every pair's count known, and all fit): each
   // pair's first contact and its run in the list (data.runs; a pair without points has none), and
   // whether it has a new one (numbered afterwards)
@@ -88,7 +88,7 @@ struct CollisionScratch {
   // raised by the tick's thread once this tick's sweep may be shared (by 1) and once the pairs
   // are found (by 2): the worker, which indexes last tick's contacts first, then takes blocks of
   // the sweep and then of the narrow phase
-  WakeCounter progress;
+  parallel::WakeCounter progress;
 
   /// Sizes every buffer for `model`; allocates MuJoCo's data. Throws Error if that fails.
   void Reserve(const Model& model);
@@ -116,7 +116,7 @@ bool RunsIndexList(const Data& data);
 /// (Model::threads 2, buffers sized by ReserveTwoThreads) the two threads share the narrow phase;
 /// the contacts are the same, bit for bit.
 void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch,
-                    Worker* worker = nullptr);
+                    parallel::Worker* worker = nullptr);
 
 /// Distance within which a contact point (in the first body's frame) is the same contact as one
 /// of last tick on the same geom pair.

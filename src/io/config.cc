@@ -4,19 +4,12 @@
 #include <utility>
 #include <vector>
 
+#include "base/names.h"
+#include "base/text.h"
 #include "io/strict_json.h"
-#include "io/text.h"
 
 namespace rigidtouch::io {
 namespace {
-
-// in enum order: the index of a name is its enumerator
-const std::vector<std::string> kRendererNames = {"penalty", "impulse", "train", "event"};
-const std::vector<std::string> kCouplingNames = {"none", "direct", "virtual"};
-
-const char* NameOf(const std::vector<std::string>& names, int index) {
-  return index >= 0 && index < static_cast<int>(names.size()) ? names[index].c_str() : "unknown";
-}
 
 using NumberFields = std::vector<std::pair<std::string, double*>>;
 
@@ -40,31 +33,21 @@ void ReadSection(const StrictObject& top, const std::string& name, const NumberF
 }  // namespace
 
 RendererKind ParseRenderer(const std::string& name) {
-  const int i = IndexOf(kRendererNames, name);
+  const int i = text::IndexOf(text::RendererNames(), name);
   if (i < 0) {
-    throw Error("unknown renderer " + Quote(name) + "; valid renderers: " + Join(kRendererNames));
+    throw Error("unknown renderer " + text::Quote(name) +
+                "; valid renderers: " + text::Join(text::RendererNames()));
   }
   return static_cast<RendererKind>(i);
 }
 
-const std::vector<std::string>& RendererNames() {
-  return kRendererNames;
-}
-
-const char* RendererName(RendererKind kind) {
-  return NameOf(kRendererNames, static_cast<int>(kind));
-}
-
 Coupling ParseCoupling(const std::string& name) {
-  const int i = IndexOf(kCouplingNames, name);
+  const int i = text::IndexOf(text::CouplingNames(), name);
   if (i < 0) {
-    throw Error("unknown coupling " + Quote(name) + "; valid couplings: " + Join(kCouplingNames));
+    throw Error("unknown coupling " + text::Quote(name) +
+                "; valid couplings: " + text::Join(text::CouplingNames()));
   }
   return static_cast<Coupling>(i);
-}
-
-const char* CouplingName(Coupling coupling) {
-  return NameOf(kCouplingNames, static_cast<int>(coupling));
 }
 
 std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options) {
@@ -101,7 +84,7 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
                {"frequency_hz", &r.frequency_hz}},
               given, {"renderer", "reference_solver", "passivity_control"},
               [&r](const StrictObject& in) {
-                if (auto name = in.OneOf("renderer", kRendererNames, "renderer")) {
+                if (auto name = in.OneOf("renderer", text::RendererNames(), "renderer")) {
                   r.renderer = ParseRenderer(*name);
                 }
                 in.Read("reference_solver", r.reference_solver);
@@ -114,7 +97,7 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
                {"coupling_stiffness_N_per_m", &d.coupling_stiffness_N_per_m},
                {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m}},
               given, {"coupling"}, [&d](const StrictObject& in) {
-                if (auto name = in.OneOf("coupling", kCouplingNames, "coupling")) {
+                if (auto name = in.OneOf("coupling", text::CouplingNames(), "coupling")) {
                   d.coupling = ParseCoupling(*name);
                 }
               });

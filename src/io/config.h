@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "base/names.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::io {
@@ -19,19 +20,10 @@ namespace rigidtouch::io {
 /// can tell a value the user wrote from a default.
 std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options);
 
-/// Parses a renderer name: "penalty", "impulse" or "train"; throws Error listing them.
+/// Parses a renderer name (text::RendererNames); throws Error listing them.
 RendererKind ParseRenderer(const std::string& name);
 
-/// The renderer names ParseRenderer accepts, in enum order.
-const std::vector<std::string>& RendererNames();
-
-/// The name of a renderer.
-const char* RendererName(RendererKind kind);
-
-/// Parses a coupling name: "none", "direct" or "virtual"; throws Error listing them.
+/// Parses a coupling name (text::CouplingNames); throws Error listing them.
 Coupling ParseCoupling(const std::string& name);
-
-/// The name of a coupling.
-const char* CouplingName(Coupling coupling);
 
 }  // namespace rigidtouch::io

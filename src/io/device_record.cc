@@ -12,8 +12,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "base/text.h"
 #include "io/output_file.h"
-#include "io/text.h"
 
 namespace rigidtouch::io {
 namespace {
@@ -60,13 +60,13 @@ constexpr std::array<std::string_view, 38> kColumns = {"tick",
 constexpr std::string_view kWhat = "record file";
 
 void Put(std::string& line, double v) {
-  io::AppendShortest(line, v);
+  text::AppendShortest(line, v);
   line.push_back(',');
 }
 
 template <typename Int>
 void PutInt(std::string& line, Int v) {
-  io::AppendInteger(line, v);
+  text::AppendInteger(line, v);
   line.push_back(',');
 }
 

@@ -14,12 +14,12 @@
 #include <string>
 #include <vector>
 
+#include "base/limits.h"
 #include "dynamics/kinematics.h"
 #include "geometry/capacity.h"
 #include "geometry/collision.h"
 #include "io/mjcf_checks.h"
 #include "io/mjcf_compile.h"
-#include "render/limits.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -521,10 +521,10 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   // the scene's own step, named where it was written (Configure's message would name only the
   // parameter); a step given by the caller is checked, and named, there
   const double h = m->opt.timestep;
-  if (!options.timestep_s && !(h >= render::kMinTimestep_s && h <= render::kMaxTimestep_s)) {
+  if (!options.timestep_s && !(h >= limits::kMinTimestep_s && h <= limits::kMaxTimestep_s)) {
     throw Error("scene file '" + path + "': <option timestep=\"" + Num(h) +
-                "\"> is out of range: valid " + Num(render::kMinTimestep_s) + " to " +
-                Num(render::kMaxTimestep_s) + " s (or give the time step in the config or a flag)");
+                "\"> is out of range: valid " + Num(limits::kMinTimestep_s) + " to " +
+                Num(limits::kMaxTimestep_s) + " s (or give the time step in the config or a flag)");
   }
   model.gravity_W = Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
   if (!model.gravity_W.allFinite() || model.gravity_W.norm() > kMaxGravity) {

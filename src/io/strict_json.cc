@@ -7,7 +7,7 @@
 #include <set>
 #include <sstream>
 
-#include "io/text.h"
+#include "base/text.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::io {
@@ -164,7 +164,7 @@ nlohmann::json ReadJsonFile(const std::string& path, std::string_view what) {
   buffer << file.rdbuf();
   if (file.bad()) throw Error(path + ": cannot read the " + kind);
   const std::string text = buffer.str();
-  if (Trim(text).empty()) throw Error(path + ": the " + kind + " is empty");
+  if (text::Trim(text).empty()) throw Error(path + ": the " + kind + " is empty");
   return ParseJsonText(text, JsonSource(path));
 }
 
@@ -188,14 +188,14 @@ StrictObject::StrictObject(const JsonSource& source, const nlohmann::json& value
   }
   for (const auto& [key, unused] : value_.items()) {
     if (std::find(valid_fields_.begin(), valid_fields_.end(), key) == valid_fields_.end()) {
-      Fail("unknown field " + Quote(key) + "; valid fields: " + Join(valid_fields_));
+      Fail("unknown field " + text::Quote(key) + "; valid fields: " + text::Join(valid_fields_));
     }
   }
 }
 
 StrictObject StrictObject::Object(const std::string& key, std::vector<std::string> valid_fields,
                                   std::string_view what) const {
-  if (!Has(key)) Fail("missing required field " + Quote(key));
+  if (!Has(key)) Fail("missing required field " + text::Quote(key));
   return StrictObject(source_, Get(key), Path(key), std::move(valid_fields), what);
 }
 
@@ -220,7 +220,7 @@ std::optional<std::string> StrictObject::String(const std::string& key) const {
 
 std::string StrictObject::RequiredString(const std::string& key) const {
   std::optional<std::string> s = String(key);
-  if (!s) Fail("missing required field " + Quote(key));
+  if (!s) Fail("missing required field " + text::Quote(key));
   if (s->empty()) FailAt(key, "must not be empty");
   return *s;
 }
@@ -231,7 +231,8 @@ std::optional<std::string> StrictObject::OneOf(const std::string& key,
   std::optional<std::string> s = String(key);
   if (s && std::find(valid.begin(), valid.end(), *s) == valid.end()) {
     const std::string n(noun);
-    FailAt(key, "unknown " + n + " " + Quote(*s) + "; valid " + n + "s: " + Join(valid));
+    FailAt(key,
+           "unknown " + n + " " + text::Quote(*s) + "; valid " + n + "s: " + text::Join(valid));
   }
   return s;
 }
@@ -249,7 +250,7 @@ std::optional<double> StrictObject::Number(const std::string& key) const {
   if (!v.is_number()) FailAt(key, "expected a number, got " + Shown(v));
   const double d = v.get<double>();
   // only a document built in code can hold one: parsing rejects 1e309, and JSON has no NaN
-  if (!std::isfinite(d)) FailAt(key, FormatNumber(d) + " is not a finite number");
+  if (!std::isfinite(d)) FailAt(key, text::FormatNumber(d) + " is not a finite number");
   return d;
 }
 

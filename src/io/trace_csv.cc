@@ -8,8 +8,8 @@
 #include <string>
 #include <system_error>
 
+#include "base/text.h"
 #include "io/output_file.h"
-#include "io/text.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::io {
@@ -61,12 +61,12 @@ std::string SystemReason(int error_number) {
 void AppendVec(std::string& out, const Vec3& v) {
   for (int i = 0; i < 3; ++i) {
     out += ',';
-    io::AppendShortest(out, v[i]);
+    text::AppendShortest(out, v[i]);
   }
 }
 
 void AppendRow(std::string& out, const TraceSample& s) {
-  io::AppendShortest(out, s.time_s);
+  text::AppendShortest(out, s.time_s);
   AppendVec(out, s.tool_position_m);
   AppendVec(out, s.tool_velocity_mps);
   AppendVec(out, s.penalty_force_N);
@@ -75,21 +75,21 @@ void AppendRow(std::string& out, const TraceSample& s) {
   AppendVec(out, s.hand_force_N);
   AppendVec(out, s.wall_normal);
   out += ',';
-  io::AppendShortest(out, s.penetration_m);
+  text::AppendShortest(out, s.penetration_m);
   out += ',';
-  io::AppendInteger(out, s.tool_contacts);
+  text::AppendInteger(out, s.tool_contacts);
   out += ',';
-  io::AppendInteger(out, s.impulses);
+  text::AppendInteger(out, s.impulses);
   out += ',';
-  io::AppendShortest(out, s.kinetic_energy_before_J);
+  text::AppendShortest(out, s.kinetic_energy_before_J);
   out += ',';
-  io::AppendShortest(out, s.kinetic_energy_after_J);
+  text::AppendShortest(out, s.kinetic_energy_after_J);
   out += ',';
   out += s.clipped ? '1' : '0';
   out += ',';
-  io::AppendInteger(out, s.tap);
+  text::AppendInteger(out, s.tap);
   out += ',';
-  io::AppendInteger(out, s.step);
+  text::AppendInteger(out, s.step);
   out += '\n';
 }
 

@@ -33,9 +33,7 @@ CouplingResult StartHold(const Model& model, Data& data, CouplingResult r) {
   return r;
 }
 
-}  // namespace
-
-CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& input) {
+CouplingResult Couple(const Model& model, Data& data, const TickInput& input) {
   CouplingResult r;
   const DeviceState& dev = input.device;
   if (model.device.coupling == Coupling::kNone) {
@@ -73,6 +71,15 @@ CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& inp
     data.Warn(Warning::kBadDeviceState);
     return StartHold(model, data, r);
   }
+  return r;
+}
+
+}  // namespace
+
+CouplingResult CoupleDevice(const Model& model, Data& data, const TickInput& input) {
+  CouplingResult r = Couple(model, data, input);
+  const bool repeated = model.device.coupling != Coupling::kNone && !input.device.fresh;
+  r.new_motion = !repeated && !r.hold_tool;
   return r;
 }
 

@@ -4,18 +4,16 @@
 #include <cmath>
 #include <numbers>
 
-#include "render/workspace.h"
-
 namespace rigidtouch::render {
 
-Vec3 EventTransient(const Model& model, Data& data) {
+Vec3 EventTransient(const Model& model, Data& data, std::span<const double> normal_velocity) {
   if (model.render.renderer != RendererKind::kEvent) return Vec3::Zero();
   EventState& e = data.event;
   const int tool = model.tool;
   if (data.window[tool].onset_step == data.step && data.tool_contacts > 0) {
     // a collision onset of the tool's group this tick (GroupWindow): the approach speed of its
     // new contacts, as phases measured it before the dynamics
-    const std::vector<double>& vn = data.workspace->contact.normal_velocity;
+    const std::span<const double> vn = normal_velocity;
     double v_in = 0.0;
     for (int ci = 0; ci < data.ncontact; ++ci) {
       const Contact& c = data.contacts[ci];

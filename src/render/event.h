@@ -3,6 +3,8 @@
 // (IEEE/ASME T-Mech 2001), superimposed on penalty feedback at contact onset.
 #pragma once
 
+#include <span>
+
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::render {
@@ -17,7 +19,8 @@ inline constexpr double kEventEnvelopeEnd = 1e-3;
 /// (the midpoint of the tick the force is held over), while the tool stays in contact and until
 /// e^(-B t) < kEventEnvelopeEnd. Open loop: it does not depend on the motion after onset, so it can
 /// give the user energy (docs/renderers.md). Reads the tool's contacts as DeviceWrench summed
-/// them. Never allocates or throws.
-Vec3 EventTransient(const Model& model, Data& data);
+/// them; `normal_velocity` is each contact's approach speed as stage 3 measured it before the
+/// dynamics (contact::ContactScratch::normal_velocity). Never allocates or throws.
+Vec3 EventTransient(const Model& model, Data& data, std::span<const double> normal_velocity);
 
 }  // namespace rigidtouch::render

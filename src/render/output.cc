@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "render/event.h"
-#include "render/workspace.h"
+#include "render/passivity.h"
 
 namespace rigidtouch::render {
 namespace {
@@ -79,7 +79,8 @@ bool LimitTorque(double max_torque_Nm, Vec3& torque_Nm) {
   return LimitForce(max_torque_Nm, torque_Nm, none);
 }
 
-DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequence) {
+DeviceCommand DeviceWrench(const Model& model, Data& data, const contact::ContactScratch& contact,
+                           std::uint64_t sequence) {
   const int tool = model.tool;
   DeviceCommand out;
   out.sequence = sequence;
@@ -88,7 +89,7 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequenc
   data.tool_contacts = 0;
   Vec3 tool_torque = Vec3::Zero();
   // the tool's contacts are among its group's (this tick's groups, stage 3), in contact order
-  const contact::Groups& G = data.workspace->contact.groups;
+  const contact::Groups& G = contact.groups;
   const int group = data.ncontact > 0 ? data.body_group[tool] : -1;
   const int begin = group >= 0 ? G.contact_start[group] : 0;
   const int end = group >= 0 ? G.contact_start[group + 1] : 0;
@@ -112,7 +113,8 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequenc
     out.torque_Nm = tool_torque;
   }
   // Eq. 9, or the event renderer's open-loop transient (no impulses there)
-  out.impulsive_force_N = data.tool_impulse_W / model.timestep_s + EventTransient(model, data);
+  out.impulsive_force_N =
+      data.tool_impulse_W / model.timestep_s + EventTransient(model, data, contact.normal_velocity);
   out.force_N = out.penalty_force_N + out.impulsive_force_N;
   const double max_force_N = model.device.max_force_N;
   if (out.force_N.allFinite()) {
@@ -135,10 +137,10 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequenc
   return out;
 }
 
-void Safeguard(const Model& model, Data& data, bool device_ok, DeviceCommand& out) {
-  if (!StateFinite(data)) {
+bool Safeguard(Data& data, bool device_ok, DeviceCommand& out) {
+  const bool state_ok = StateFinite(data);
+  if (!state_ok) {
     data.Warn(Warning::kNonFiniteState);
-    ResetState(model, data);
     device_ok = false;
   }
   if (!device_ok || !out.force_N.allFinite() || !out.torque_Nm.allFinite()) {
@@ -146,6 +148,18 @@ void Safeguard(const Model& model, Data& data, bool device_ok, DeviceCommand& ou
     out.torque_Nm.setZero();
     out.safe_fallback = true;
   }
+  return state_ok;
+}
+
+DeviceCommand DeviceOutput(const Model& model, Data& data, const contact::ContactScratch& contact,
+                           const DeviceState& device, const CouplingResult& coupling,
+                           bool& state_ok) {
+  HoldTool(model, data, coupling);
+  DeviceCommand out = DeviceWrench(model, data, contact, device.sequence);
+  // the passivity observer and controller at the port, over whatever the renderer asked for
+  PassivityControl(model, data, device, coupling.device_ok, out);
+  state_ok = Safeguard(data, coupling.device_ok, out);
+  return out;
 }
 
 }  // namespace rigidtouch::render

@@ -3,6 +3,8 @@
 // safety guards that replace it with zero when the state or the input went bad.
 #pragma once
 
+#include "contact/phases.h"
+#include "render/coupling.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::render {
@@ -22,12 +24,23 @@ bool LimitTorque(double max_torque_Nm, Vec3& torque_Nm);
 /// command: penalty (or coupling) + Eq. 9 impulsive force, clipped to
 /// DeviceParams::max_force_N (Warning::kForceClipped, and kImpulseClipped when it held an
 /// impulsive part). Where the impulse over h or the sum overflows, the parts are added in units
-/// of the larger one, so a finite clipped answer is still found.
-DeviceCommand DeviceWrench(const Model& model, Data& data, std::uint64_t sequence);
+/// of the larger one, so a finite clipped answer is still found. `contact` is stage 3's scratch:
+/// the groups and the approach speeds (for the event renderer's transient).
+DeviceCommand DeviceWrench(const Model& model, Data& data, const contact::ContactScratch& contact,
+                           std::uint64_t sequence);
 
-/// The safety guards: a non-finite body state counts Warning::kNonFiniteState and puts the state
-/// back to initial (ResetState); then a bad input or state, or a non-finite command, makes the
-/// command the safe zero wrench (DeviceCommand::safe_fallback).
-void Safeguard(const Model& model, Data& data, bool device_ok, DeviceCommand& out);
+/// The safety guards: a non-finite body state counts Warning::kNonFiniteState; then a bad input or
+/// state, or a non-finite command, makes the command the safe zero wrench
+/// (DeviceCommand::safe_fallback). Returns false when the state was non-finite: the caller (the
+/// tick) puts it back to initial (ResetState, which the engine owns).
+bool Safeguard(Data& data, bool device_ok, DeviceCommand& out);
+
+/// Stage 7, render, in one call: the held tool put back (HoldTool), the command (DeviceWrench,
+/// with the event transient), the passivity controller (PassivityControl) and the safety guards
+/// (Safeguard). `state_ok` becomes false when the state went non-finite: the tick then puts it
+/// back to initial (ResetState, which the engine owns).
+DeviceCommand DeviceOutput(const Model& model, Data& data, const contact::ContactScratch& contact,
+                           const DeviceState& device, const CouplingResult& coupling,
+                           bool& state_ok);
 
 }  // namespace rigidtouch::render

@@ -11,8 +11,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "base/text.h"
 #include "io/output_file.h"
-#include "io/text.h"
 #include "rigidtouch/types.h"
 #include "study/session.h"
 
@@ -102,7 +102,7 @@ ValidLog Validate(const std::vector<json>& records, const std::string& src) {
   const std::string recorded_hash = TextField(start, "protocol_hash");
   if (recorded_hash != log.protocol_hash) {
     throw Error(src + ": the embedded protocol does not match its hash " +
-                io::Quote(recorded_hash));
+                text::Quote(recorded_hash));
   }
   log.participant = TextField(start, "participant");
   try {
@@ -112,7 +112,7 @@ ValidLog Validate(const std::vector<json>& records, const std::string& src) {
   }
   log.mode = TextField(start, "mode");
   if (log.mode != "person" && log.mode != "simulated") {
-    throw Error(src + ": the session_start record's mode " + io::Quote(log.mode) +
+    throw Error(src + ": the session_start record's mode " + text::Quote(log.mode) +
                 " is neither \"person\" nor \"simulated\"");
   }
   if (!start.contains("seed") || !start["seed"].is_number_unsigned()) {

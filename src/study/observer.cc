@@ -6,8 +6,8 @@
 #include <numbers>
 #include <numeric>
 
+#include "base/text.h"
 #include "io/strict_json.h"
-#include "io/text.h"
 #include "rigidtouch/types.h"
 #include "study/random.h"
 #include "study/statistics.h"
@@ -16,8 +16,8 @@ namespace rigidtouch::study {
 
 namespace {
 
-using io::FormatNumber;
 using nlohmann::json;
+using text::FormatNumber;
 
 // stream tags: every random decision of a participant has its own derived seed
 enum Stream : std::uint64_t {
@@ -123,8 +123,8 @@ const ParamSpec kParamSpecs[] = {
 
 std::string RangeText(const ParamSpec& spec) {
   std::string text = spec.lo_open ? "> " : ">= ";
-  text += FormatNumber(spec.lo);
-  if (std::isfinite(spec.hi)) text += " and <= " + FormatNumber(spec.hi);
+  text += text::FormatNumber(spec.lo);
+  if (std::isfinite(spec.hi)) text += " and <= " + text::FormatNumber(spec.hi);
   return text;
 }
 
@@ -158,14 +158,15 @@ ObserverParams ParseObserverParams(const nlohmann::json& document, std::string_v
     const std::optional<double> v = in.Number(spec.name);  // finite
     if (!v) continue;
     if (!((spec.lo_open ? *v > spec.lo : *v >= spec.lo) && *v <= spec.hi)) {
-      in.FailAt(spec.name, FormatNumber(*v) + " is out of range; valid: " + RangeText(spec));
+      in.FailAt(spec.name, text::FormatNumber(*v) + " is out of range; valid: " + RangeText(spec));
     }
     params.*(spec.member) = *v;
   }
   if (params.non_pacinian_corner_hz >= params.pacinian_best_frequency_hz) {
-    in.FailAt("non_pacinian_corner_hz", FormatNumber(params.non_pacinian_corner_hz) +
+    in.FailAt("non_pacinian_corner_hz", text::FormatNumber(params.non_pacinian_corner_hz) +
                                             " must be below pacinian_best_frequency_hz (" +
-                                            FormatNumber(params.pacinian_best_frequency_hz) + ")");
+                                            text::FormatNumber(params.pacinian_best_frequency_hz) +
+                                            ")");
   }
   return params;
 }

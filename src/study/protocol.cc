@@ -4,25 +4,25 @@
 #include <cctype>
 #include <cstdio>
 
+#include "base/limits.h"
+#include "base/text.h"
 #include "io/config.h"
+#include "io/materials.h"
 #include "io/strict_json.h"
-#include "io/text.h"
-#include "render/limits.h"
-#include "render/materials.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::study {
 
 namespace {
 
-using io::FormatNumber;
-using io::IndexOf;
-using io::Join;
 using io::JsonSource;
-using io::Lower;
-using io::Quote;
 using io::StrictObject;
 using nlohmann::json;
+using text::FormatNumber;
+using text::IndexOf;
+using text::Join;
+using text::Lower;
+using text::Quote;
 
 constexpr std::string_view kFormat = "rigidtouch-study-protocol";
 constexpr int kFormatVersion = 1;
@@ -76,19 +76,20 @@ bool IsCleanText(std::string_view s) {
 
 RendererKind ParseConditionRenderer(const JsonSource& ctx, const json& value,
                                     const std::string& path) {
-  const std::vector<std::string>& renderers = io::RendererNames();
+  const std::vector<std::string>& renderers = text::RendererNames();
   if (!value.contains("renderer")) {
-    ctx.Fail(path, "missing required field \"renderer\"; valid renderers: " + Join(renderers));
+    ctx.Fail(path,
+             "missing required field \"renderer\"; valid renderers: " + text::Join(renderers));
   }
   const json& r = value.at("renderer");
   if (!r.is_string()) {
     ctx.Fail(path + ".renderer", "expected a string, got " + io::JsonTypeName(r) +
-                                     "; valid renderers: " + Join(renderers));
+                                     "; valid renderers: " + text::Join(renderers));
   }
   const std::string name = r.get<std::string>();
   if (std::find(renderers.begin(), renderers.end(), name) == renderers.end()) {
-    ctx.Fail(path + ".renderer",
-             "unknown renderer " + Quote(name) + "; valid renderers: " + Join(renderers));
+    ctx.Fail(path + ".renderer", "unknown renderer " + text::Quote(name) +
+                                     "; valid renderers: " + text::Join(renderers));
   }
   // parameters of another renderer are errors rather than silently ignored settings
   const RendererKind renderer = io::ParseRenderer(name);
@@ -97,15 +98,15 @@ RendererKind ParseConditionRenderer(const JsonSource& ctx, const json& value,
     if (std::find(valid.begin(), valid.end(), key) != valid.end()) continue;
     const bool known = std::find(kAllConditionKeys.begin(), kAllConditionKeys.end(), key) !=
                        kAllConditionKeys.end();
-    ctx.Fail(path, (known ? "parameter " + Quote(key) + " does not apply to renderer " + name
-                          : "unknown parameter " + Quote(key)) +
-                       "; valid parameters for renderer " + name + ": " + Join(valid));
+    ctx.Fail(path, (known ? "parameter " + text::Quote(key) + " does not apply to renderer " + name
+                          : "unknown parameter " + text::Quote(key)) +
+                       "; valid parameters for renderer " + name + ": " + text::Join(valid));
   }
   return renderer;
 }
 
-// the material as --material reads it (render::ParseMaterial: a preset or a JSON file), or its
-// fields inline (render::ReadMaterialJson, the file reader), refused here rather than at the first
+// the material as --material reads it (io::ParseMaterial: a preset or a JSON file), or its
+// fields inline (io::ReadMaterialJson, the file reader), refused here rather than at the first
 // tap; a material train takes f and t_c from it, as `tap --renderer train --material`
 void ParseConditionMaterial(const JsonSource& ctx, const StrictObject& in, const std::string& path,
                             Condition& c) {
@@ -120,10 +121,10 @@ void ParseConditionMaterial(const JsonSource& ctx, const StrictObject& in, const
   }
   const json& value = in.Get("material");
   if (value.is_object()) {
-    c.material = render::ReadMaterialJson(ctx, value, in.Path("material"), "");
+    c.material = io::ReadMaterialJson(ctx, value, in.Path("material"), "");
   } else if (value.is_string()) {
     try {
-      c.material = render::ParseMaterial(value.get<std::string>());
+      c.material = io::ParseMaterial(value.get<std::string>());
     } catch (const Error& e) {
       in.FailAt("material", e.what());
     }
@@ -137,10 +138,11 @@ void ParseConditionMaterial(const JsonSource& ctx, const StrictObject& in, const
     for (const char* key : {"t_collision_s", "frequency_hz"}) {
       if (in.Has(key)) {
         in.FailAt(key, "a material train takes f and t_c from its material " +
-                           Quote(c.material->name) + " (docs/renderers.md): give one or the other");
+                           text::Quote(c.material->name) +
+                           " (docs/renderers.md): give one or the other");
       }
     }
-    const render::MaterialTrainParams t = render::MaterialTrain(*c.material);
+    const io::MaterialTrainParams t = io::MaterialTrain(*c.material);
     c.t_collision_s = t.t_collision_s;
     c.frequency_hz = t.frequency_hz;
   }
@@ -148,11 +150,11 @@ void ParseConditionMaterial(const JsonSource& ctx, const StrictObject& in, const
 
 void ParseTrainWindow(const JsonSource& ctx, const StrictObject& in, const std::string& path,
                       Condition& c) {
-  c.t_collision_s = in.Number("t_collision_s").value_or(render::kMaxCollisionWindow_s);
-  if (!(c.t_collision_s > 0.0 && c.t_collision_s <= render::kMaxCollisionWindow_s)) {
-    in.FailAt("t_collision_s", FormatNumber(c.t_collision_s) +
+  c.t_collision_s = in.Number("t_collision_s").value_or(limits::kMaxCollisionWindow_s);
+  if (!(c.t_collision_s > 0.0 && c.t_collision_s <= limits::kMaxCollisionWindow_s)) {
+    in.FailAt("t_collision_s", text::FormatNumber(c.t_collision_s) +
                                    " s is out of range; valid: > 0 and <= " +
-                                   FormatNumber(render::kMaxCollisionWindow_s) + " s (II.a)");
+                                   text::FormatNumber(limits::kMaxCollisionWindow_s) + " s (II.a)");
   }
   auto f = in.Number("frequency_hz");
   if (!f) {
@@ -162,27 +164,27 @@ void ParseTrainWindow(const JsonSource& ctx, const StrictObject& in, const std::
   }
   c.frequency_hz = *f;
   const double f_min_hz = 1.0 / c.t_collision_s;
-  if (!render::TrainFrequencyFitsWindow(c.frequency_hz, c.t_collision_s)) {
-    in.FailAt("frequency_hz",
-              FormatNumber(c.frequency_hz) +
-                  " Hz is out of range; valid: >= 1 / t_collision_s = " + FormatNumber(f_min_hz) +
-                  " Hz (II.b; the upper bound 1/h is checked by the "
-                  "engine)");
+  if (!limits::TrainFrequencyFitsWindow(c.frequency_hz, c.t_collision_s)) {
+    in.FailAt("frequency_hz", text::FormatNumber(c.frequency_hz) +
+                                  " Hz is out of range; valid: >= 1 / t_collision_s = " +
+                                  text::FormatNumber(f_min_hz) +
+                                  " Hz (II.b; the upper bound 1/h is checked by the "
+                                  "engine)");
   }
 }
 
 void ParseConditionLaw(const StrictObject& in, Condition& c) {
   if (auto k = in.Number("stiffness_N_per_m")) {
-    if (!(*k > 0.0)) in.FailAt("stiffness_N_per_m", FormatNumber(*k) + " N/m; valid: > 0");
+    if (!(*k > 0.0)) in.FailAt("stiffness_N_per_m", text::FormatNumber(*k) + " N/m; valid: > 0");
     c.stiffness_N_per_m = k;
   }
   if (auto b = in.Number("damping_Ns_per_m")) {
-    if (*b < 0.0) in.FailAt("damping_Ns_per_m", FormatNumber(*b) + " Ns/m; valid: >= 0");
+    if (*b < 0.0) in.FailAt("damping_Ns_per_m", text::FormatNumber(*b) + " Ns/m; valid: >= 0");
     c.damping_Ns_per_m = b;
   }
   if (auto v = in.Number("approach_speed_mps")) {
     if (!(*v > 0.0)) {
-      in.FailAt("approach_speed_mps", FormatNumber(*v) + " m/s; valid: > 0");
+      in.FailAt("approach_speed_mps", text::FormatNumber(*v) + " m/s; valid: > 0");
     }
     c.approach_speed_mps = v;
   }
@@ -203,7 +205,7 @@ Condition ParseCondition(const JsonSource& ctx, const std::string& label, const 
              "a condition label must be non-empty, without control characters or "
              "leading/trailing spaces");
   }
-  if (Lower(label) == "quit") ctx.Fail(path, "\"quit\" is reserved for stopping a session");
+  if (text::Lower(label) == "quit") ctx.Fail(path, "\"quit\" is reserved for stopping a session");
   if (!value.is_object()) {
     ctx.Fail(path,
              "expected a renderer configuration (a JSON object), got " + io::JsonTypeName(value));
@@ -212,16 +214,16 @@ Condition ParseCondition(const JsonSource& ctx, const std::string& label, const 
   const StrictObject in(ctx, value, path, ConditionKeysFor(c.renderer), "a renderer configuration");
 
   if (auto e = in.Number("restitution")) {
-    if (c.renderer == RendererKind::kTrain && *e != render::kTrainRestitution) {
-      in.FailAt("restitution", FormatNumber(*e) +
+    if (c.renderer == RendererKind::kTrain && *e != limits::kTrainRestitution) {
+      in.FailAt("restitution", text::FormatNumber(*e) +
                                    " is not allowed; a train is only consistent with perfectly "
                                    "plastic collisions (Eq. 8): valid: " +
-                                   FormatNumber(render::kTrainRestitution));
+                                   text::FormatNumber(limits::kTrainRestitution));
     }
-    if (*e < render::kMinRestitution || *e > render::kMaxRestitution) {
-      in.FailAt("restitution", FormatNumber(*e) + " is out of range; valid: " +
-                                   FormatNumber(render::kMinRestitution) + " to " +
-                                   FormatNumber(render::kMaxRestitution) + " (Eq. 4)");
+    if (*e < limits::kMinRestitution || *e > limits::kMaxRestitution) {
+      in.FailAt("restitution", text::FormatNumber(*e) + " is out of range; valid: " +
+                                   text::FormatNumber(limits::kMinRestitution) + " to " +
+                                   text::FormatNumber(limits::kMaxRestitution) + " (Eq. 4)");
     }
     c.restitution = *e;
   }
@@ -244,7 +246,7 @@ std::vector<int> ParseTestConditions(const JsonSource& ctx, const StrictObject& 
                                      const std::string& path,
                                      const std::vector<Condition>& conditions) {
   std::vector<std::string> labels;
-  for (const auto& c : conditions) labels.push_back(Quote(c.label));
+  for (const auto& c : conditions) labels.push_back(text::Quote(c.label));
   const std::string range = std::to_string(kMinTestConditions) + " to " +
                             std::to_string(kMaxTestConditions) + " condition labels";
   if (!in.Has("conditions"))
@@ -261,7 +263,7 @@ std::vector<int> ParseTestConditions(const JsonSource& ctx, const StrictObject& 
     const int index = FindCondition(conditions, cs[i].get<std::string>());
     if (index < 0) {
       ctx.Fail(item_path,
-               "unknown condition " + cs[i].dump() + "; defined conditions: " + Join(labels));
+               "unknown condition " + cs[i].dump() + "; defined conditions: " + text::Join(labels));
     }
     if (std::find(indices.begin(), indices.end(), index) != indices.end()) {
       in.FailAt("conditions", "condition " + cs[i].dump() +
@@ -303,25 +305,26 @@ std::vector<std::string> ParseTestKeys(const JsonSource& ctx, const StrictObject
              std::iscntrl(static_cast<unsigned char>(c));
     });
     if (key.empty() || key.size() > kMaxKeyLength || has_space) {
-      ctx.Fail(key_path, Quote(key) +
+      ctx.Fail(key_path, text::Quote(key) +
                              " is not a valid key; valid: 1 to 16 characters without "
                              "spaces");
     }
-    if (Lower(key) == "quit") ctx.Fail(key_path, "\"quit\" is reserved for stopping a session");
+    if (text::Lower(key) == "quit")
+      ctx.Fail(key_path, "\"quit\" is reserved for stopping a session");
     for (std::size_t j = 0; j < k; ++j) {
-      if (j != i && Lower(key) == Lower(conditions[indices[j]].label)) {
+      if (j != i && text::Lower(key) == text::Lower(conditions[indices[j]].label)) {
         ctx.Fail(key_path,
-                 "key " + Quote(key) + " is the label of " +
+                 "key " + text::Quote(key) + " is the label of " +
                      (k == 2 ? std::string("the other condition")
-                             : "another condition, " + Quote(conditions[indices[j]].label)));
+                             : "another condition, " + text::Quote(conditions[indices[j]].label)));
       }
     }
   }
   for (std::size_t i = 0; i < k; ++i) {
     for (std::size_t j = i + 1; j < k; ++j) {
-      if (Lower(keys[i]) == Lower(keys[j])) {
+      if (text::Lower(keys[i]) == text::Lower(keys[j])) {
         in.FailAt("keys", k == 2 ? std::string("the two keys must differ (compared without case)")
-                                 : "keys " + Quote(keys[i]) + " and " + Quote(keys[j]) +
+                                 : "keys " + text::Quote(keys[i]) + " and " + text::Quote(keys[j]) +
                                        " must differ (compared without case)");
       }
     }
@@ -349,7 +352,7 @@ StudyTest ParseTest(const JsonSource& ctx, const json& value, const std::string&
 
 nlohmann::json Condition::ToJson() const {
   json j = json::object();
-  j["renderer"] = io::RendererName(renderer);
+  j["renderer"] = text::RendererName(renderer);
   if (renderer == RendererKind::kImpulse || renderer == RendererKind::kTrain) {
     j["restitution"] = restitution;
   }
@@ -360,7 +363,7 @@ nlohmann::json Condition::ToJson() const {
   }
   if (material) {
     // a preset by its name (as --material takes it); any other material by its own fields
-    j["material"] = render::FindPreset(*material) != nullptr
+    j["material"] = io::FindPreset(*material) != nullptr
                         ? json(material->name)
                         : json{{"name", material->name},
                                {"amplitude_Ns_per_m", material->amplitude_Ns_per_m},
@@ -385,7 +388,7 @@ RenderParams Condition::ToRenderParams() const {
     r.t_collision_s = t_collision_s;
     r.frequency_hz = frequency_hz;
   }
-  if (material) render::ApplyMaterial(r, *material);
+  if (material) io::ApplyMaterial(r, *material);
   r.passivity_control = passivity_control;
   return r;
 }
@@ -428,7 +431,8 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
   const StrictObject in(ctx, document, "", kTopKeys, "a protocol");
   Protocol p;
   if (auto format = in.String("format"); format && *format != kFormat) {
-    ctx.Fail("format", Quote(*format) + " is not a study protocol; valid: " + Quote(kFormat));
+    ctx.Fail("format",
+             text::Quote(*format) + " is not a study protocol; valid: " + text::Quote(kFormat));
   }
   in.Integer("format_version", kFormatVersion, kFormatVersion, kFormatVersion);
   p.name = in.RequiredString("name");
@@ -444,10 +448,10 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
     const StrictObject r = in.Object("randomization", kRandomizationKeys, "randomization settings");
     // the names in enum order: the index of the name is the enumerator
     if (auto order = r.OneOf("series_order", kSeriesOrders, "series order")) {
-      p.randomization.series_order = static_cast<SeriesOrder>(IndexOf(kSeriesOrders, *order));
+      p.randomization.series_order = static_cast<SeriesOrder>(text::IndexOf(kSeriesOrders, *order));
     }
     if (auto order = r.OneOf("test_order", kTestOrders, "test order")) {
-      p.randomization.test_order = static_cast<TestOrder>(IndexOf(kTestOrders, *order));
+      p.randomization.test_order = static_cast<TestOrder>(text::IndexOf(kTestOrders, *order));
     }
     p.randomization.seed = r.Unsigned("seed");
   }
@@ -460,11 +464,11 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
              "configurations");
   }
   for (const auto& [label, value] : cs.items()) {
-    const std::string path = "conditions[" + Quote(label) + "]";
+    const std::string path = "conditions[" + text::Quote(label) + "]";
     Condition c = ParseCondition(ctx, label, value, path);
     for (const auto& other : p.conditions) {
-      if (Lower(other.label) == Lower(label)) {
-        ctx.Fail(path, "label differs from " + Quote(other.label) +
+      if (text::Lower(other.label) == text::Lower(label)) {
+        ctx.Fail(path, "label differs from " + text::Quote(other.label) +
                            " only in case; answers are matched without case");
       }
     }
@@ -480,8 +484,8 @@ Protocol ParseProtocol(const nlohmann::json& document, std::string_view source) 
     const std::string path = "tests[" + std::to_string(i) + "]";
     StudyTest t = ParseTest(ctx, ts[i], path, p.conditions, defaults);
     for (const auto& other : p.tests) {
-      if (Lower(other.name) == Lower(t.name)) {
-        ctx.Fail(path + ".name", "duplicate test name " + Quote(t.name));
+      if (text::Lower(other.name) == text::Lower(t.name)) {
+        ctx.Fail(path + ".name", "duplicate test name " + text::Quote(t.name));
       }
     }
     p.tests.push_back(std::move(t));

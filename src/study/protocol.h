@@ -20,7 +20,7 @@ namespace rigidtouch::study {
 /// fields left empty mean "the engine's default" and are omitted from the canonical JSON.
 struct Condition {
   std::string label;                               ///< e.g. "wall 1"; unique within the protocol
-  RendererKind renderer = RendererKind::kPenalty;  ///< rendering method (io::RendererName)
+  RendererKind renderer = RendererKind::kPenalty;  ///< rendering method (text::RendererName)
   double restitution = 0.0;                  ///< e in Eq. 4/5; impulse: [0, 1], train: 0 (Eq. 8)
   double t_collision_s = 0.0;                ///< train only: window t_c in (0, 0.1] s (II.a)
   double frequency_hz = 0.0;                 ///< train only: f >= 1 / t_c (II.b, Eq. 7)
@@ -30,8 +30,8 @@ struct Condition {
   std::optional<std::string> device;         ///< device preset name, e.g. "touch"
   std::optional<double> approach_speed_mps;  ///< hand approach speed for simulated taps, > 0
   /// event (required) and train only: a material as `--material` takes it (a preset name or a
-  /// JSON material file, render::ParseMaterial), or the same fields written inline; a material
-  /// train takes its f and t_c from it (render::ApplyMaterial). Read when the protocol is parsed:
+  /// JSON material file, io::ParseMaterial), or the same fields written inline; a material
+  /// train takes its f and t_c from it (io::ApplyMaterial). Read when the protocol is parsed:
   /// the canonical JSON holds a preset's name, or else the material's own fields, so the hash
   /// covers what is rendered and a log does not need the file
   std::optional<Material> material;

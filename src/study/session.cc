@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-#include "io/text.h"
+#include "base/text.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::study {
@@ -19,9 +19,9 @@ namespace {
 
 using nlohmann::json;
 
-using io::Lower;
-using io::Quote;
-using io::Trim;
+using text::Lower;
+using text::Quote;
+using text::Trim;
 
 const Condition& ConditionOf(const Protocol& protocol, const Step& step) {
   return protocol.conditions[protocol.tests[step.test].conditions[step.condition]];
@@ -74,11 +74,11 @@ void TerminalResponder::Show(std::string_view text) {
 
 std::optional<int> ParseAnswer(const Protocol& protocol, const StudyTest& test,
                                std::string_view text) {
-  const std::string answer = Lower(Trim(text));
+  const std::string answer = text::Lower(Trim(text));
   if (answer.empty()) return std::nullopt;
   for (std::size_t c = 0; c < test.keys.size(); ++c) {
-    if (answer == Lower(test.keys[c]) ||
-        answer == Lower(protocol.conditions[test.conditions[c]].label)) {
+    if (answer == text::Lower(test.keys[c]) ||
+        answer == text::Lower(protocol.conditions[test.conditions[c]].label)) {
       return static_cast<int>(c);
     }
   }
@@ -104,12 +104,12 @@ std::optional<int> TerminalResponder::Ask(const Protocol& protocol, const Step& 
       stop_reason_ = "end of input";
       return std::nullopt;
     }
-    if (Lower(Trim(line)) == "quit") {
+    if (text::Lower(Trim(line)) == "quit") {
       stop_reason_ = "quit";
       return std::nullopt;
     }
     if (auto answer = ParseAnswer(protocol, test, line)) return answer;
-    out_ << Quote(Trim(line)) << " is not an answer: type " << keys
+    out_ << text::Quote(Trim(line)) << " is not an answer: type " << keys
          << " (or the wall's name), or quit to stop.\n";
   }
 }
@@ -119,7 +119,7 @@ void CheckParticipantId(std::string_view id) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
   });
   if (!ok) {
-    throw Error("participant " + Quote(id) +
+    throw Error("participant " + text::Quote(id) +
                 " is not a valid ID; valid: 1 to 64 characters among A-Z a-z 0-9 . _ -");
   }
 }
@@ -148,12 +148,12 @@ SessionState InspectRecords(const Protocol& protocol, const SessionConfig& confi
   const std::string hash = ProtocolHash(protocol);
   if (log.protocol_hash != hash) {
     throw Error(src + ": refusing to resume: the log was written for protocol " +
-                Quote(log.protocol.name) + " (" + log.protocol_hash + "), not for " +
-                Quote(protocol.name) + " (" + hash + ")");
+                text::Quote(log.protocol.name) + " (" + log.protocol_hash + "), not for " +
+                text::Quote(protocol.name) + " (" + hash + ")");
   }
   if (log.participant != config.participant) {
     throw Error(src + ": refusing to resume: the log belongs to participant " +
-                Quote(log.participant) + ", not " + Quote(config.participant));
+                text::Quote(log.participant) + ", not " + text::Quote(config.participant));
   }
   if (log.mode != config.mode) {
     throw Error(src + ": refusing to resume: the log was written by a " + log.mode +
@@ -218,8 +218,8 @@ SessionState StartSession(const Protocol& protocol, const SessionConfig& config,
   start["seed"] = state.seed;
   start["steps"] = state.plan.size();
   sink.Append(start, /*durable=*/true);
-  responder.Show("Protocol " + Quote(protocol.name) + ", participant " + config.participant + ", " +
-                 std::to_string(protocol.tests.size()) + " test(s).");
+  responder.Show("Protocol " + text::Quote(protocol.name) + ", participant " + config.participant +
+                 ", " + std::to_string(protocol.tests.size()) + " test(s).");
   if (!protocol.instructions.empty()) responder.Show(protocol.instructions);
   return state;
 }

@@ -8,7 +8,7 @@ namespace rigidtouch::study {
 
 void TextPresenter::Present(const Condition& condition, int taps) {
   out_ << "  [text presenter] rendering " << condition.label << " ("
-       << io::RendererName(condition.renderer) << ") for " << taps << " tap"
+       << text::RendererName(condition.renderer) << ") for " << taps << " tap"
        << (taps == 1 ? "" : "s") << "\n";
   out_.flush();
 }

@@ -290,7 +290,7 @@ void PanelSwitch(const Model& model, const ViewSnapshot& snap, FrameState& st) {
   for (const RendererKind k :
        {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
     ImGui::SameLine();
-    if (ImGui::RadioButton(io::RendererName(k), model.render.renderer == k)) {
+    if (ImGui::RadioButton(text::RendererName(k), model.render.renderer == k)) {
       st.pending = true;
       st.pending_kind = k;
     }
@@ -329,7 +329,7 @@ void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& s
   ImGui::Begin("rigidtouch", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
   ImGui::Text("device %s", o.device.c_str());
   ImGui::Text("renderer %s  e %.2f  t_c %.0f ms  f %.0f Hz",
-              io::RendererName(model.render.renderer), model.render.restitution,
+              text::RendererName(model.render.renderer), model.render.restitution,
               1e3 * model.render.t_collision_s, model.render.frequency_hz);
   if (can_switch) PanelSwitch(model, snap, st);
   if (model.device.max_force_N > 0.0) {

@@ -395,7 +395,7 @@ TEST(BroadphaseTest, FloatBlocksGiveThePlainSweepsPairsInItsOrder) {
   narrow.Reserve(m, 1 << 16);
   narrow.wide = false;
   shared.Reserve(m, 1 << 16);
-  Worker worker;  // `shared` sweeps half of the places on it
+  parallel::Worker worker;  // `shared` sweeps half of the places on it
   ReferenceSweep reference(m);
   std::normal_distribution<double> jitter(0.0, 1e-4);
   int total = 0, compared = 0, axis_switches = 0;
@@ -497,7 +497,7 @@ TEST(BroadphaseTest, TwoThreadsKeepAndDropAsOne) {
   all.Reserve(m, 1 << 16);
   FindPairs(m, poses, all);
   ASSERT_GT(all.npair, 1000);
-  Worker worker;
+  parallel::Worker worker;
   for (const int capacity : {5, all.npair / 3, all.npair / 2, 2 * all.npair / 3, all.npair - 1,
                              all.npair, all.npair + 7}) {
     Broadphase some;
@@ -537,7 +537,7 @@ TEST(BroadphaseTest, TheWorkersOverflowingBlocksAreSweptAgainInOrder) {
   all.Reserve(m, 1 << 16);
   FindPairs(m, poses, all);
   ASSERT_EQ(all.npair, 64 * 63 / 2);
-  Worker worker;
+  parallel::Worker worker;
   Broadphase some;
   some.Reserve(m, 300);
   for (int round = 0; round < 5000 && some.resweeps == 0; ++round) {

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "render/workspace.h"
+#include "engine/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
@@ -41,9 +41,10 @@ std::string WriteGrid(int nx, int ny, int nz) {
   return test::WriteTempFile(name, xml.str());
 }
 
-// bytes MakeData allocates for `m`, and of those the collision backend's mjData (MuJoCo sizes it
-// from the scene's nconmax and njmax, not from rigidtouch's capacity)
-void PrintMemory(const char* name, const Model& m, const SceneCapacity& cap) {
+// prints the bytes MakeData allocates for `m`, and of those the collision backend's mjData
+// (MuJoCo sizes it from the scene's nconmax and njmax, not from rigidtouch's capacity); returns
+// MakeData's bytes
+double PrintMemory(const char* name, const Model& m, const SceneCapacity& cap) {
   const struct mallinfo2 before = mallinfo2();
   Data d = MakeData(m);
   const struct mallinfo2 after = mallinfo2();
@@ -55,6 +56,7 @@ void PrintMemory(const char* name, const Model& m, const SceneCapacity& cap) {
             << " pairs and " << cap.contacts << " contacts (exact bound " << cap.exact_contacts
             << "); MakeData allocated " << (used(after) - used(before)) / 1e6
             << " MB, of which MuJoCo's mjData " << (used(with_mj) - used(after)) / 1e6 << " MB\n";
+  return used(after) - used(before);
 }
 
 TEST(CapacityTest, MaxPairPointsIsSymmetricAndMatchesTheNarrowPhases) {
@@ -103,10 +105,17 @@ TEST(CapacityTest, PackingBoundsALargeGridLinearly) {
   PrintMemory("1000-box grid", m, cap);
 }
 
+// what MakeData allocates for the pile stays bounded: 20.0 MB when this bound was set (about
+// 1.6 kB per contact of capacity, the collision backend's mjData 0.7 MB of it); a buffer sized by
+// pairs times contacts, or the capacity growing back towards every collidable pair's points,
+// would go past it
 TEST(CapacityTest, PileMemory) {
   const Model m = LoadModel(Pile(), {});
   const SceneCapacity cap = BoundCapacity(m);
-  PrintMemory("pile", m, cap);
+  const double bytes = PrintMemory("pile", m, cap);
+  EXPECT_GT(bytes, 0.0);
+  EXPECT_LT(bytes, 24e6);
+  EXPECT_LT(bytes / static_cast<double>(cap.contacts), 2000.0);
 }
 
 // a user-set max_contacts below what the scene can produce is refused at load, naming the number

@@ -189,9 +189,10 @@ TEST(ConfigTest, AFieldGivenTwiceIsAnError) {
 TEST(ConfigTest, RendererAndCouplingNamesRoundTrip) {
   for (RendererKind k : {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain,
                          RendererKind::kEvent}) {
-    EXPECT_EQ(ParseRenderer(RendererName(k)), k);
+    EXPECT_EQ(ParseRenderer(text::RendererName(k)), k);
   }
-  EXPECT_EQ(RendererNames(), (std::vector<std::string>{"penalty", "impulse", "train", "event"}));
+  EXPECT_EQ(text::RendererNames(),
+            (std::vector<std::string>{"penalty", "impulse", "train", "event"}));
   EXPECT_EQ(ParseCoupling("none"), Coupling::kNone);
   EXPECT_EQ(ParseCoupling("direct"), Coupling::kDirect);
   EXPECT_EQ(ParseCoupling("virtual"), Coupling::kVirtual);

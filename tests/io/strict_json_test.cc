@@ -7,7 +7,7 @@
 #include <limits>
 #include <string>
 
-#include "io/text.h"
+#include "base/text.h"
 #include "rigidtouch/types.h"
 #include "test_util.h"
 
@@ -145,14 +145,14 @@ TEST(StrictJsonTest, NonFiniteNumbersBuiltInCodeAreRejected) {
 }
 
 TEST(TextTest, QuoteLowerTrimJoinFormat) {
-  EXPECT_EQ(Quote("a b"), "\"a b\"");
-  EXPECT_EQ(Lower("QuIt"), "quit");
-  EXPECT_EQ(Trim("  x y \t\n"), "x y");
-  EXPECT_EQ(Trim(" \t"), "");
-  EXPECT_EQ(Join({"a", "b", "c"}), "a, b, c");
-  EXPECT_EQ(Join({}), "");
-  EXPECT_EQ(FormatNumber(0.1), "0.1");
-  EXPECT_EQ(FormatNumber(1234567.0), "1.23457e+06");
+  EXPECT_EQ(text::Quote("a b"), "\"a b\"");
+  EXPECT_EQ(text::Lower("QuIt"), "quit");
+  EXPECT_EQ(text::Trim("  x y \t\n"), "x y");
+  EXPECT_EQ(text::Trim(" \t"), "");
+  EXPECT_EQ(text::Join({"a", "b", "c"}), "a, b, c");
+  EXPECT_EQ(text::Join({}), "");
+  EXPECT_EQ(text::FormatNumber(0.1), "0.1");
+  EXPECT_EQ(text::FormatNumber(1234567.0), "1.23457e+06");
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "draw.h"
+#include "engine/workspace.h"
 #include "render/output.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
@@ -118,8 +119,8 @@ TEST(DeviceLimitsTest, OverflowingForceIsClippedNotLost) {
     Data d = MakeData(m);
     d.ncontact = 0;
     d.tool_impulse_W = Vec3(0.0, 1e306, 1e306);
-    DeviceCommand out = render::DeviceWrench(m, d, 0);
-    render::Safeguard(m, d, true, out);
+    DeviceCommand out = render::DeviceWrench(m, d, d.workspace->contact, 0);
+    render::Safeguard(d, true, out);
     EXPECT_TRUE(out.force_N.allFinite());
     if (limit > 0.0) {
       EXPECT_TRUE(out.clipped);

@@ -13,7 +13,7 @@
 
 #include "analysis/spectrum.h"
 #include "analysis/tap_experiment.h"
-#include "render/materials.h"
+#include "io/materials.h"
 
 namespace rigidtouch::render {
 namespace {
@@ -24,7 +24,7 @@ analysis::TapExperimentConfig EventTap(const std::string& material, const std::s
   c.scene_path = std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml";
   c.device_preset = device;
   c.load.render.renderer = RendererKind::kEvent;
-  c.load.render.material = ParseMaterial(material);
+  c.load.render.material = io::ParseMaterial(material);
   c.script.approach_speed_mps = speed;
   c.script.taps = taps;
   if (device == "ideal") {
@@ -73,7 +73,7 @@ TEST(EventTest, TransientIsTheDecayingSinusoidScaledByTheApproachSpeed) {
 
 // the transient's power spectrum over the 0.1 s window peaks within 5 % of the material's f
 TEST(EventTest, SpectrumPeaksAtTheMaterialsFrequency) {
-  for (const Material& m : MaterialPresets()) {
+  for (const Material& m : io::MaterialPresets()) {
     const analysis::TapRun run = analysis::RunTapExperiment(EventTap(m.name, "ideal", 0.2));
     const std::vector<double> f = Transient(run, 0.1);
     analysis::SpectrumOptions o;
@@ -118,7 +118,7 @@ TEST(EventTest, ActiveWithoutThePassivityControllerAndPassiveWithIt) {
   double worst_without = -1.0, worst_with = -1.0;
   for (const std::string device : {"touch", "omni", "falcon"}) {
     for (const double speed : {0.05, 0.15, 0.3, 0.5}) {
-      for (const Material& m : MaterialPresets()) {
+      for (const Material& m : io::MaterialPresets()) {
         for (const bool control : {false, true}) {
           analysis::TapExperimentConfig c = EventTap(m.name, device, speed, 2);
           c.load.render.passivity_control = control;

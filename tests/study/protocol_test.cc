@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "render/limits.h"
+#include "base/limits.h"
 #include "rigidtouch/types.h"
 #include "study/test_files.h"
 
@@ -500,9 +500,9 @@ TEST(ProtocolTest, FileProblemsNameTheFileAndTheField) {
 TEST(ProtocolTest, RenderLimitsAreTheEngines) {
   // the protocol accepts exactly the window the engine accepts
   json d = Minimal();
-  d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s;
+  d["conditions"]["b"]["t_collision_s"] = limits::kMaxCollisionWindow_s;
   EXPECT_EQ(ProtocolErrorOf(d), "");
-  d["conditions"]["b"]["t_collision_s"] = render::kMaxCollisionWindow_s * 1.001;
+  d["conditions"]["b"]["t_collision_s"] = limits::kMaxCollisionWindow_s * 1.001;
   EXPECT_NE(ProtocolErrorOf(d).find("valid: > 0 and <= 0.1 s"), std::string::npos)
       << ProtocolErrorOf(d);
   d = Minimal();

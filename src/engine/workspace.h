@@ -7,7 +7,7 @@
 #include "contact/phases.h"
 #include "dynamics/velocities.h"
 #include "geometry/collision.h"
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
 
@@ -20,7 +20,7 @@ struct Workspace {
   contact::ImpulseScratch impulse;       // stage 6: solver rows and the impulse solvers
   // Model::threads 2: the second thread, shared by stages 2 (narrow phase) and 5 (group solves);
   // null with one thread
-  std::unique_ptr<geometry::Worker> worker;
+  std::unique_ptr<parallel::Worker> worker;
   // the compiled scene of the model MakeData sized everything for (DataFitsModel); not owned, so
   // that a Data does not keep its model's MuJoCo model alive
   std::weak_ptr<mjModel_> made_for;

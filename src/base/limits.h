@@ -3,7 +3,7 @@
 // would refuse (or the other way round). Also how two device limits combine.
 #pragma once
 
-namespace rigidtouch::render {
+namespace rigidtouch::limits {
 
 /// Longest collision-rendering window t_c: shorter than human reaction time (II.a).
 inline constexpr double kMaxCollisionWindow_s = 0.1;
@@ -43,4 +43,4 @@ constexpr double StricterLimit(double a, double b) {
   return a < b ? a : b;
 }
 
-}  // namespace rigidtouch::render
+}  // namespace rigidtouch::limits

@@ -1,5 +1,5 @@
 // Materials of the event renderer: presets and JSON files whose mistakes name the field.
-#include "render/materials.h"
+#include "io/materials.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -15,7 +15,7 @@
 #include "analysis/tap_experiment.h"
 #include "rigidtouch/types.h"
 
-namespace rigidtouch::render {
+namespace rigidtouch::io {
 namespace {
 
 std::string Write(const std::string& text) {
@@ -149,4 +149,4 @@ TEST(MaterialsTest, MaterialTrainsArePassiveAndRingAtTheMaterialsFrequency) {
 }
 
 }  // namespace
-}  // namespace rigidtouch::render
+}  // namespace rigidtouch::io

@@ -1,15 +1,15 @@
-#include "render/materials.h"
+#include "io/materials.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
 
+#include "base/limits.h"
+#include "base/text.h"
 #include "io/strict_json.h"
-#include "io/text.h"
-#include "render/limits.h"
 
-namespace rigidtouch::render {
+namespace rigidtouch::io {
 namespace {
 
 // assumptions (docs/renderers.md): f rises and the decay quickens from rubber to wood to
@@ -29,8 +29,8 @@ double Required(const io::StrictObject& o, const std::string& key, double lo, do
   const std::optional<double> value = o.Number(key);
   if (!value) o.FailAt(key, "missing; a material gives amplitude, decay and frequency");
   if (!(*value >= lo && *value <= hi)) {
-    o.FailAt(key, io::FormatNumber(*value) + " is out of range: valid " + io::FormatNumber(lo) +
-                      " to " + io::FormatNumber(hi) + " " + unit);
+    o.FailAt(key, text::FormatNumber(*value) + " is out of range: valid " + text::FormatNumber(lo) +
+                      " to " + text::FormatNumber(hi) + " " + unit);
   }
   return *value;
 }
@@ -88,7 +88,8 @@ MaterialTrainParams MaterialTrain(const Material& material) {
   MaterialTrainParams p;
   p.frequency_hz = material.frequency_hz;
   const double window_s = std::log(20.0) / material.decay_per_s;
-  p.t_collision_s = std::max(std::min(window_s, kMaxCollisionWindow_s), 1.0 / p.frequency_hz);
+  p.t_collision_s =
+      std::max(std::min(window_s, limits::kMaxCollisionWindow_s), 1.0 / p.frequency_hz);
   return p;
 }
 
@@ -100,4 +101,4 @@ void ApplyMaterial(RenderParams& render, const Material& material) {
   render.t_collision_s = t.t_collision_s;
 }
 
-}  // namespace rigidtouch::render
+}  // namespace rigidtouch::io

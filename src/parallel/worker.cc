@@ -1,4 +1,4 @@
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 
 #include <linux/futex.h>
 #include <sys/syscall.h>
@@ -10,7 +10,7 @@
 
 #include "rigidtouch/types.h"
 
-namespace rigidtouch::geometry {
+namespace rigidtouch::parallel {
 namespace {
 
 // tells the core that this is a spin (x86's PAUSE): a core shared with the tick's thread (two
@@ -125,4 +125,4 @@ void Worker::Loop() {
   }
 }
 
-}  // namespace rigidtouch::geometry
+}  // namespace rigidtouch::parallel

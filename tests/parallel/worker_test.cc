@@ -2,7 +2,7 @@
 // hands out each index once, and the narrow phase and group solves shared with it give the
 // contacts, states and kept factor of one thread, bit for bit, without allocating. Run under
 // ThreadSanitizer by scripts/test.sh.
-#include "geometry/worker.h"
+#include "parallel/worker.h"
 
 #include <gtest/gtest.h>
 
@@ -20,12 +20,12 @@
 #include <vector>
 
 #include "draw.h"
+#include "engine/workspace.h"
 #include "limit_malloc.h"
-#include "render/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
-namespace rigidtouch::geometry {
+namespace rigidtouch::parallel {
 namespace {
 
 struct Counter {
@@ -509,4 +509,4 @@ TEST(WorkerTest, NeitherThreadAllocatesInTheTick) {
 }
 
 }  // namespace
-}  // namespace rigidtouch::geometry
+}  // namespace rigidtouch::parallel

@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-namespace rigidtouch::io {
+namespace rigidtouch::text {
 
 /// `s` in double quotes, as error messages show names and values.
 inline std::string Quote(std::string_view s) {
@@ -76,4 +76,4 @@ void AppendInteger(std::string& out, Int value) {
   out.append(buffer, result.ptr);
 }
 
-}  // namespace rigidtouch::io
+}  // namespace rigidtouch::text

@@ -11,7 +11,7 @@
 #include "io/strict_json.h"
 #include "rigidtouch/model.h"
 
-namespace rigidtouch::render {
+namespace rigidtouch::io {
 
 /// The presets, in a fixed order: rubber, wood, aluminium. Their A, B and f are assumptions in
 /// the range of the decaying-sinusoid fits of Okamura, Cutkosky and Dennerlein 2001 (the
@@ -51,4 +51,4 @@ MaterialTrainParams MaterialTrain(const Material& material);
 /// place for the CLI, `tap --compare` and study conditions, so all render a material alike.
 void ApplyMaterial(RenderParams& render, const Material& material);
 
-}  // namespace rigidtouch::render
+}  // namespace rigidtouch::io

@@ -4,7 +4,7 @@
 
 #include "dynamics/kinematics.h"
 #include "dynamics/rigid_body.h"
-#include "render/workspace.h"
+#include "engine/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -58,7 +58,7 @@ Data MakeData(const Model& model) {
   ws.made_for = model.collision;
   if (model.threads == 2) {
     ws.collision.ReserveTwoThreads(model);
-    ws.worker = std::make_unique<geometry::Worker>();
+    ws.worker = std::make_unique<parallel::Worker>();
   }
   ResetData(model, data);
   return data;

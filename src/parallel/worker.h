@@ -12,7 +12,7 @@
 #include <cstdint>
 #include <thread>
 
-namespace rigidtouch::geometry {
+namespace rigidtouch::parallel {
 
 /// Indices [begin, end) shared by two threads, one taking from the front and one from the back,
 /// so that each takes what the other has not reached: the split follows the speed the threads
@@ -202,4 +202,4 @@ void ShareRange(Worker* worker, int n, const Body& body) {
   ShareRange(worker, n, body, [] {});
 }
 
-}  // namespace rigidtouch::geometry
+}  // namespace rigidtouch::parallel

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <cstring>
 
-#include "render/workspace.h"
+#include "engine/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 

@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <string>
 
-#include "render/workspace.h"
+#include "engine/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 

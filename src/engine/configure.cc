@@ -9,10 +9,10 @@
 #include <utility>
 #include <vector>
 
+#include "base/limits.h"
+#include "base/names.h"
+#include "base/text.h"
 #include "contact/schedule.h"
-#include "io/config.h"
-#include "io/text.h"
-#include "render/limits.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -58,7 +58,7 @@ constexpr double kExplicitStableDamping = 2.0;
 constexpr double kDampingRatio = 0.2;
 
 std::string Num(double x) {
-  return io::FormatNumber(x);
+  return text::FormatNumber(x);
 }
 
 // The smallest size of a body's colliding geoms: radius, or smallest box half-extent, or a mesh's
@@ -245,18 +245,18 @@ void RequireContact(const ContactParams& c) {
 // the renderer's parameters, which depend on the renderer kind and on h (a material's Nyquist)
 void RequireRender(const Model& model) {
   const RenderParams& r = model.render;
-  RequireFinite("restitution", r.restitution, render::kMinRestitution, render::kMaxRestitution,
-                io::FormatNumber(render::kMinRestitution) +
-                    " <= e <= " + io::FormatNumber(render::kMaxRestitution) + " (Eq. 4)");
+  RequireFinite("restitution", r.restitution, limits::kMinRestitution, limits::kMaxRestitution,
+                text::FormatNumber(limits::kMinRestitution) +
+                    " <= e <= " + text::FormatNumber(limits::kMaxRestitution) + " (Eq. 4)");
   if (r.renderer == RendererKind::kTrain) {
     const std::string window =
-        "0 < t_c <= " + io::FormatNumber(render::kMaxCollisionWindow_s) + " s";
-    RequireFinite("t_collision_s", r.t_collision_s, 0.0, render::kMaxCollisionWindow_s,
+        "0 < t_c <= " + text::FormatNumber(limits::kMaxCollisionWindow_s) + " s";
+    RequireFinite("t_collision_s", r.t_collision_s, 0.0, limits::kMaxCollisionWindow_s,
                   window + " (shorter than human reaction time, docs/method.md)");
     Require(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, window);
     Require(std::isfinite(r.frequency_hz) && r.frequency_hz > 0.0, "frequency_hz", r.frequency_hz,
             "f > 0 Hz, within [1/t_c, 1/h] (Eq. 6-7)");
-    if (r.restitution != render::kTrainRestitution) {
+    if (r.restitution != limits::kTrainRestitution) {
       std::ostringstream msg;
       msg << "parameter restitution = " << r.restitution
           << " is not allowed with the train renderer: the method requires perfectly plastic "
@@ -278,11 +278,11 @@ void RequireRender(const Model& model) {
     const double nyquist_hz = 0.5 / model.timestep_s;
     Require(std::isfinite(m.frequency_hz) && m.frequency_hz > 0.0 && m.frequency_hz < nyquist_hz,
             "frequency_hz", m.frequency_hz,
-            "in (0, 1 / (2 h)) = (0, " + io::FormatNumber(nyquist_hz) +
+            "in (0, 1 / (2 h)) = (0, " + text::FormatNumber(nyquist_hz) +
                 ") Hz: a sampled transient cannot show more");
   } else if (r.renderer == RendererKind::kTrain && !r.material.name.empty()) {
     // a material train: its shares follow e^(-B t) (contact::TrainShare); f and t_c are the
-    // render parameters' (render::MaterialTrain derives them from the material)
+    // render parameters' (io::MaterialTrain derives them from the material)
     Require(std::isfinite(r.material.decay_per_s) && r.material.decay_per_s > 0.0, "decay_per_s",
             r.material.decay_per_s, "> 0 1/s, finite");
     if (r.reference_solver) {
@@ -293,7 +293,7 @@ void RequireRender(const Model& model) {
   } else if (!r.material.name.empty()) {
     throw Error("parameter material = " + r.material.name +
                 " is used only by the event and train renderers; the " +
-                io::RendererName(r.renderer) + " renderer takes none");
+                text::RendererName(r.renderer) + " renderer takes none");
   }
 }
 
@@ -340,9 +340,9 @@ void RequireDevice(const Model& model) {
 }  // namespace
 
 void Configure(Model& model) {
-  RequireFinite("timestep_s", model.timestep_s, render::kMinTimestep_s, render::kMaxTimestep_s,
-                "0 < h <= " + io::FormatNumber(render::kMaxTimestep_s) + " s (at least " +
-                    io::FormatNumber(render::kMinTimestep_s * 1e6) + " us)");
+  RequireFinite("timestep_s", model.timestep_s, limits::kMinTimestep_s, limits::kMaxTimestep_s,
+                "0 < h <= " + text::FormatNumber(limits::kMaxTimestep_s) + " s (at least " +
+                    text::FormatNumber(limits::kMinTimestep_s * 1e6) + " us)");
   Require(std::isfinite(model.timestep_s) && model.timestep_s > 0.0, "timestep_s", model.timestep_s,
           "h > 0");
   RequireContact(model.contact);
