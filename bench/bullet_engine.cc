@@ -10,7 +10,7 @@
 namespace rigidtouch::bench {
 namespace {
 
-const EngineRegistrar kRegistrar{"bullet", &MakeBulletEngine};
+const EngineRegistrar kBulletRegistrar{"bullet", &MakeBulletEngine};
 
 // pose from MuJoCo's world position (3) and row-major rotation matrix (9)
 Eigen::Isometry3d MjPose(const mjtNum* position, const mjtNum* rotation) {
@@ -43,7 +43,7 @@ bool IsIdentity(const Eigen::Isometry3d& pose) {
   return pose.matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-12);
 }
 
-bool Finite(const btVector3& v) {
+bool FiniteBt(const btVector3& v) {
   return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
 }
 
@@ -326,8 +326,8 @@ void BulletEngine::RestoreSnapshot() {
 
 bool BulletEngine::StateIsFinite() const {
   return std::all_of(dynamic_bodies_.begin(), dynamic_bodies_.end(), [](const btRigidBody* body) {
-    return Finite(body->getWorldTransform().getOrigin()) && Finite(body->getLinearVelocity()) &&
-           Finite(body->getAngularVelocity());
+    return FiniteBt(body->getWorldTransform().getOrigin()) && FiniteBt(body->getLinearVelocity()) &&
+           FiniteBt(body->getAngularVelocity());
   });
 }
 

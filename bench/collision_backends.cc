@@ -138,7 +138,7 @@ GeomSpec Plane() {
 }
 
 /// Returns a box with the given half extents.
-GeomSpec Box(const Vec3& half_size_m) {
+GeomSpec BoxSpec(const Vec3& half_size_m) {
   return {ShapeKind::kBox, half_size_m, 0.0};
 }
 
@@ -154,7 +154,7 @@ Scene MakeTap() {
 Scene MakeStack() {
   Scene s{"stack", {Plane()}, {Pose{}}, true, 10, kOverlap_m};
   for (int i = 0; i < 10; ++i) {
-    s.geoms.push_back(Box(Vec3::Constant(kBoxHalf_m)));
+    s.geoms.push_back(BoxSpec(Vec3::Constant(kBoxHalf_m)));
     s.nominal.push_back(
         {Vec3(0.0, 0.0, 0.025 + 0.05 * i - kOverlap_m * (i + 1)), Quat::Identity()});
   }
@@ -163,7 +163,7 @@ Scene MakeStack() {
 
 /// Scene (c): 100 boxes on a 5x5x4 grid, columns overlapping vertically by 10 um, 1 mm gaps
 /// sideways; with `tilted`, each box is tilted about a random horizontal axis by less than 0.5 deg.
-Scene MakePile(bool tilted, std::uint32_t seed) {
+Scene MakeBackendPile(bool tilted, std::uint32_t seed) {
   Scene s{tilted ? "pile-tilted" : "pile", {Plane()}, {Pose{}}, !tilted, 100,
           tilted ? 0.0 : kOverlap_m};
   std::mt19937 rng(seed);
@@ -179,7 +179,7 @@ Scene MakePile(bool tilted, std::uint32_t seed) {
           pose.q_WG = Quat(
               Eigen::AngleAxisd(tilt_rad, Vec3(std::cos(heading_rad), std::sin(heading_rad), 0.0)));
         }
-        s.geoms.push_back(Box(Vec3::Constant(kBoxHalf_m)));
+        s.geoms.push_back(BoxSpec(Vec3::Constant(kBoxHalf_m)));
         s.nominal.push_back(pose);
       }
     }
@@ -801,8 +801,8 @@ std::string LoadAverage() {
 
 /// Times every backend on every scene and prints the table.
 void RunTimings(bool quick) {
-  const std::vector<Scene> scenes = {MakeTap(), MakeStack(), MakePile(false, 7u),
-                                     MakePile(true, 7u)};
+  const std::vector<Scene> scenes = {MakeTap(), MakeStack(), MakeBackendPile(false, 7u),
+                                     MakeBackendPile(true, 7u)};
   std::vector<Contact> buffer(4096);
   std::printf(
       "| scene | backend | min ns | median ns | p99 ns | allocs/pass | points (range over passes) "
@@ -836,7 +836,7 @@ void RunTimings(bool quick) {
 /// Which Bullet setting buys what on the pile: broadphase x breaking threshold x ground shape,
 /// steady-state timing plus the box-ground points of a fresh frame.
 void RunBulletAblation(bool quick) {
-  const Scene scene = MakePile(false, 7u);
+  const Scene scene = MakeBackendPile(false, 7u);
   const auto pose_sets = PerturbedPoseSets(scene, 64, 11u);
   const int iterations = 3000 / (quick ? 10 : 1);
   std::vector<Contact> buffer(4096);
@@ -1022,7 +1022,7 @@ void RunAgreement() {
   for (int variant = 0; variant < 4; ++variant) {
     Scene scene{"agreement", {Plane()}, {Pose{}}, false, 1, 0.0};
     for (int b = 0; b < 2; ++b) {
-      scene.geoms.push_back(Box(Vec3(half_m(rng), half_m(rng), half_m(rng))));
+      scene.geoms.push_back(BoxSpec(Vec3(half_m(rng), half_m(rng), half_m(rng))));
       scene.nominal.push_back({Vec3(0.3 * b, 0.0, 0.5), Quat::Identity()});
     }
     std::array<std::unique_ptr<Backend>, Agreement::kBackends> backends = {

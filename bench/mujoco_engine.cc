@@ -8,9 +8,9 @@
 namespace rigidtouch::bench {
 namespace {
 
-const EngineRegistrar kRegistrar{"mujoco", &MakeMujocoEngine};
+const EngineRegistrar kMujocoRegistrar{"mujoco", &MakeMujocoEngine};
 
-bool AllFinite(const mjtNum* values, int n) {
+bool AllFiniteMjNum(const mjtNum* values, int n) {
   return std::all_of(values, values + n, [](mjtNum v) { return std::isfinite(v); });
 }
 
@@ -144,7 +144,7 @@ void MujocoEngine::RestoreSnapshot() {
 }
 
 bool MujocoEngine::StateIsFinite() const {
-  return AllFinite(data_->qpos, model_->nq) && AllFinite(data_->qvel, model_->nv);
+  return AllFiniteMjNum(data_->qpos, model_->nq) && AllFiniteMjNum(data_->qvel, model_->nv);
 }
 
 long MujocoEngine::WarningCount() const {

@@ -30,7 +30,7 @@ using rigidtouch::geometry::Collide;
 using rigidtouch::geometry::ContactPoint;
 using rigidtouch::geometry::GeomPose;
 using rigidtouch::geometry::kMaxPairContacts;
-using Clock = std::chrono::steady_clock;
+using SteadyClock = std::chrono::steady_clock;
 
 Mat3 Rot(const Vec3& axis, double angle_rad) {
   return Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix();
@@ -53,12 +53,12 @@ double TimeCase(const Case& c, int calls, int* points) {
   std::vector<double> batches;
   volatile int sink = 0;
   for (int batch = 0; batch < 11; ++batch) {
-    const auto start = Clock::now();
+    const auto start = SteadyClock::now();
     int total = 0;
     for (int i = 0; i < calls; ++i) {
       total += Collide(c.t1, c.size1, c.pose1, c.t2, c.size2, c.pose2, out, kMaxPairContacts);
     }
-    const auto stop = Clock::now();
+    const auto stop = SteadyClock::now();
     sink = sink + total;
     batches.push_back(std::chrono::duration<double, std::nano>(stop - start).count() / calls);
   }
@@ -77,7 +77,7 @@ struct Pile {
   std::vector<std::pair<int, int>> pairs;  // box pairs whose bounding spheres overlap
 };
 
-Pile MakePile() {
+Pile MakeNarrowPile() {
   Pile pile;
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> jitter(-1.0, 1.0);
@@ -112,7 +112,7 @@ double TimePile(const Pile& pile, int passes, int* contacts) {
   std::vector<double> batches;
   for (int batch = 0; batch < 11; ++batch) {
     int total = 0;
-    const auto start = Clock::now();
+    const auto start = SteadyClock::now();
     for (int pass = 0; pass < passes; ++pass) {
       total = 0;
       for (int i = 0; i < Pile::kBoxes; ++i) {
@@ -124,7 +124,7 @@ double TimePile(const Pile& pile, int passes, int* contacts) {
                          out, kMaxPairContacts);
       }
     }
-    const auto stop = Clock::now();
+    const auto stop = SteadyClock::now();
     *contacts = total;
     batches.push_back(std::chrono::duration<double, std::nano>(stop - start).count() / passes);
   }
@@ -163,12 +163,12 @@ double TimeMujocoPile(const Pile& pile, int passes, int* contacts) {
   }
   std::vector<double> batches;
   for (int batch = 0; batch < 11; ++batch) {
-    const auto start = Clock::now();
+    const auto start = SteadyClock::now();
     for (int pass = 0; pass < passes; ++pass) {
       mj_kinematics(m, d);
       mj_collision(m, d);
     }
-    const auto stop = Clock::now();
+    const auto stop = SteadyClock::now();
     batches.push_back(std::chrono::duration<double, std::nano>(stop - start).count() / passes);
   }
   *contacts = d->ncon;
@@ -251,7 +251,7 @@ int main(int argc, char** argv) {
     const double ns = TimeCase(c, calls, &points);
     std::printf("%-42s %8d %10.1f\n", c.name, points, ns);
   }
-  const Pile pile = MakePile();
+  const Pile pile = MakeNarrowPile();
   const int passes = quick ? 200 : 2000;
   int ours = 0, theirs = 0;
   const double ours_ns = TimePile(pile, passes, &ours);

@@ -8,7 +8,7 @@
 namespace rigidtouch::bench {
 namespace {
 
-std::string Fixed(double value, int decimals) {
+std::string FixedDecimals(double value, int decimals) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
   return buffer;
@@ -18,8 +18,8 @@ std::string Pad(const std::string& text, std::size_t width) {
   return text.size() >= width ? text + " " : text + std::string(width - text.size(), ' ');
 }
 
-const RunResult* Find(const std::vector<RunResult>& results, const std::string& scene,
-                      std::string_view engine) {
+const RunResult* FindResult(const std::vector<RunResult>& results, const std::string& scene,
+                            std::string_view engine) {
   for (const RunResult& result : results) {
     if (result.scene == scene && result.engine == engine) return &result;
   }
@@ -41,8 +41,8 @@ std::string RatioCell(const RunResult* reference, const RunResult* peer) {
     return "n/a";
   }
   const std::string flag = reference->gates.ok() && peer->gates.ok() ? "" : " !";
-  return Fixed(reference->time.median_ns / peer->time.median_ns, 2) + " (" +
-         Fixed(reference->time.p999_ns / peer->time.p999_ns, 2) + ")" + flag;
+  return FixedDecimals(reference->time.median_ns / peer->time.median_ns, 2) + " (" +
+         FixedDecimals(reference->time.p999_ns / peer->time.p999_ns, 2) + ")" + flag;
 }
 
 }  // namespace
@@ -93,10 +93,13 @@ std::string FormatResultTable(const std::vector<RunResult>& results) {
       << "gates\n";
   std::ostringstream failures;
   for (const RunResult& r : results) {
-    out << Pad(r.scene, 13) << Pad(r.engine, 12) << Pad(Fixed(r.time.median_ns * 1e-3, 1), 11)
-        << Pad(Fixed(r.time.p99_ns * 1e-3, 1), 11) << Pad(Fixed(r.time.p999_ns * 1e-3, 1), 11)
-        << Pad(Fixed(r.time.max_ns * 1e-3, 1), 11) << Pad(Fixed(r.mean_contacts, 1), 10)
-        << Pad(std::to_string(r.time.count), 8) << (r.gates.ok() ? "ok" : "FAILED") << "\n";
+    out << Pad(r.scene, 13) << Pad(r.engine, 12)
+        << Pad(FixedDecimals(r.time.median_ns * 1e-3, 1), 11)
+        << Pad(FixedDecimals(r.time.p99_ns * 1e-3, 1), 11)
+        << Pad(FixedDecimals(r.time.p999_ns * 1e-3, 1), 11)
+        << Pad(FixedDecimals(r.time.max_ns * 1e-3, 1), 11)
+        << Pad(FixedDecimals(r.mean_contacts, 1), 10) << Pad(std::to_string(r.time.count), 8)
+        << (r.gates.ok() ? "ok" : "FAILED") << "\n";
     for (const std::string& failure : r.gates.failures) {
       failures << "  " << r.scene << " / " << r.engine << ": " << failure << "\n";
     }
@@ -115,9 +118,9 @@ std::string FormatRatioTable(const std::vector<RunResult>& results, std::string_
   out << "\n";
   for (const std::string& scene : SceneOrder(results)) {
     out << Pad(scene, 13);
-    const RunResult* ours = Find(results, scene, reference);
+    const RunResult* ours = FindResult(results, scene, reference);
     for (const std::string& peer : peers)
-      out << Pad(RatioCell(ours, Find(results, scene, peer)), 24);
+      out << Pad(RatioCell(ours, FindResult(results, scene, peer)), 24);
     out << "\n";
   }
   return out.str();

@@ -123,6 +123,7 @@ if command -v ccache >/dev/null; then
 fi
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O0" -DRIGIDTOUCH_WERROR=ON "${compile_opts[@]}" \
+  -DRIGIDTOUCH_UNITY_BUILD=OFF \
   -DRIGIDTOUCH_BUILD_TESTS=OFF -DRIGIDTOUCH_BUILD_FUZZERS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
 fuzz_targets=$(ls tests/fuzz/*_fuzz.cc | xargs -n1 basename | sed 's/\.cc$//')
 # shellcheck disable=SC2086

@@ -61,7 +61,7 @@ nlohmann::json ReferenceJson(long units, const std::vector<double>& job_sorted,
   return r;
 }
 
-void Run(const BenchFlags& f) {
+void RunBench(const BenchFlags& f) {
   if (f.steps < 1) throw Error("--steps must be >= 1, got " + std::to_string(f.steps));
   if (f.warmup < 0) throw Error("--warmup must be >= 0, got " + std::to_string(f.warmup));
   const Vec3 tool_force = ToolForce(f.tool_force);
@@ -166,7 +166,7 @@ void Run(const BenchFlags& f) {
   }
 }
 
-void Register(CLI::App& root) {
+void RegisterBench(CLI::App& root) {
   auto f = std::make_shared<BenchFlags>();
   CLI::App* app = root.add_subcommand("bench", "time the steps of a scene");
   AddSceneFlags(app, f->scene);
@@ -180,10 +180,10 @@ void Register(CLI::App& root) {
                 "steps: the tail the machine adds to work that never varies "
                 "(docs/performance.md)");
   // an error about a parameter the user wrote says where it was written
-  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); }); });
+  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { RunBench(*f); }); });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar bench_registrar("bench", &RegisterBench);
 
 }  // namespace
 }  // namespace rigidtouch::cli

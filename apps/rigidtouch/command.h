@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <string_view>
 #include <vector>
 
 namespace rigidtouch::cli {
@@ -11,12 +12,28 @@ namespace rigidtouch::cli {
 /// Adds a subcommand (options and callback) to the root application.
 using CommandFactory = void (*)(CLI::App& root);
 
-/// All registered subcommands, in registration order.
-std::vector<CommandFactory>& Commands();
+/// A subcommand's name and the factory that adds it.
+struct Command {
+  std::string_view name;
+  CommandFactory add;
+};
+
+/// All registered subcommands, in registration order (static initialisation: the order of the
+/// files in the link, which a unity build changes; the tool adds them sorted by name).
+std::vector<Command>& Commands();
+
+/// Exit status of `serve` and `view` when the device never answered (docs/device-protocol.md,
+/// Watchdogs); 2 is any other error (bad parameter, e.g. a stiffness the device cannot display).
+inline constexpr int kExitNoDevice = 5;
+
+/// `--connect replay:LOG`: a recorded session's handle motion as the device.
+inline constexpr std::string_view kReplayPrefix = "replay:";
 
 /// Registers a subcommand at static-initialisation time.
 struct CommandRegistrar {
-  explicit CommandRegistrar(CommandFactory factory) { Commands().push_back(factory); }
+  CommandRegistrar(std::string_view name, CommandFactory factory) {
+    Commands().push_back({name, factory});
+  }
 };
 
 }  // namespace rigidtouch::cli

@@ -34,7 +34,7 @@ struct DeviceSimFlags {
   bool json = false;
 };
 
-void Run(const DeviceSimFlags& f) {
+void RunDeviceSim(const DeviceSimFlags& f) {
   if (f.device && f.preset) {
     throw Error("--device " + *f.device + " and --preset " + *f.preset +
                 " both name the device (--preset is the old spelling of --device); give one");
@@ -84,7 +84,7 @@ void Run(const DeviceSimFlags& f) {
   }
 }
 
-void Register(CLI::App& root) {
+void RegisterDeviceSim(CLI::App& root) {
   auto f = std::make_shared<DeviceSimFlags>();
   CLI::App* app =
       root.add_subcommand("device-sim", "run the simulated hand and device as a UDP device server");
@@ -112,10 +112,10 @@ void Register(CLI::App& root) {
   app->add_option("--test-drop", f->test_drop, "TEST ONLY: drop this fraction of packets");
   app->add_flag("--realtime", f->realtime, "SCHED_FIFO and locked memory when allowed");
   app->add_flag("--json", f->json, "print one JSON object");
-  app->callback([f] { Run(*f); });
+  app->callback([f] { RunDeviceSim(*f); });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar device_sim_registrar("device-sim", &RegisterDeviceSim);
 
 }  // namespace
 }  // namespace rigidtouch::cli

@@ -15,7 +15,7 @@ struct KeygenFlags {
   bool json = false;
 };
 
-void Run(const KeygenFlags& f) {
+void RunKeygen(const KeygenFlags& f) {
   const std::string path = f.out.empty() ? device::DefaultDeviceKeyPath() : f.out;
   device::WriteDeviceKey(path, device::GenerateDeviceKey(), f.force);
   // the key itself is never printed: terminals and logs keep what they show
@@ -27,7 +27,7 @@ void Run(const KeygenFlags& f) {
   }
 }
 
-void Register(CLI::App& root) {
+void RegisterKeygen(CLI::App& root) {
   auto f = std::make_shared<KeygenFlags>();
   CLI::App* app = root.add_subcommand(
       "keygen", "write a fresh random key for the UDP device link (device-sim, serve --key)");
@@ -36,10 +36,10 @@ void Register(CLI::App& root) {
                   "($XDG_CONFIG_HOME/rigidtouch/device.key or ~/.config/rigidtouch/device.key)");
   app->add_flag("--force", f->force, "replace an existing key file");
   app->add_flag("--json", f->json, "print one JSON object");
-  app->callback([f] { Run(*f); });
+  app->callback([f] { RunKeygen(*f); });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar keygen_registrar("keygen", &RegisterKeygen);
 
 }  // namespace
 }  // namespace rigidtouch::cli

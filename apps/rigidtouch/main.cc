@@ -3,6 +3,7 @@
 // (README, "Exit codes"): 0 success, 2 bad input (a file, field, value or output path), 3 an
 // internal error, 4 an output file could not be written (disk full, file size limit), 5 serve's
 // device did not answer. A malformed command line is bad input too: status 2, the same prefix.
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -13,8 +14,8 @@
 
 namespace rigidtouch::cli {
 
-std::vector<CommandFactory>& Commands() {
-  static std::vector<CommandFactory> commands;
+std::vector<Command>& Commands() {
+  static std::vector<Command> commands;
   return commands;
 }
 
@@ -43,7 +44,11 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // past `ulimit -f` a write then fails with EFBIG, which the writers report (exit 4)
   rigidtouch::io::IgnoreFileSizeSignal();
-  for (auto factory : rigidtouch::cli::Commands()) factory(app);
+  // by name, so that help and errors list them alike whatever the link order
+  auto& commands = rigidtouch::cli::Commands();
+  std::sort(commands.begin(), commands.end(),
+            [](const auto& a, const auto& b) { return a.name < b.name; });
+  for (const auto& command : commands) command.add(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

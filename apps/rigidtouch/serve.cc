@@ -53,12 +53,6 @@ struct ServeFlags {
   bool json = false;
 };
 
-constexpr std::string_view kReplayPrefix = "replay:";
-
-// exit status when the device never answered (docs/device-protocol.md, Watchdogs); 2 is any
-// other error (bad parameter, e.g. a stiffness the device cannot display)
-constexpr int kExitNoDevice = 5;
-
 void PrintResult(const nlohmann::json& result, bool json) {
   if (json) {
     std::cout << result.dump() << "\n";
@@ -254,7 +248,7 @@ bool ServeUdp(const ServeRun& s, nlohmann::json& result, loop::HapticLoopResult&
   return true;
 }
 
-void Run(const ServeFlags& f) {
+void RunServe(const ServeFlags& f) {
   const DeviceChoice choice = ResolveDevice(f.device, f.connect, f.preset);
   const std::string connect = choice.connect.empty() ? "sim" : choice.connect;
   const bool replay = connect.starts_with(kReplayPrefix);
@@ -332,7 +326,7 @@ void Run(const ServeFlags& f) {
   PrintResult(result, f.json);
 }
 
-void Register(CLI::App& root) {
+void RegisterServe(CLI::App& root) {
   auto f = std::make_shared<ServeFlags>();
   CLI::App* app = root.add_subcommand("serve", "run the real-time haptic loop against a device");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
@@ -419,11 +413,11 @@ void Register(CLI::App& root) {
         throw Error(std::string("serve: ") + flag + " applies to --connect udp://HOST:PORT only");
       }
     }
-    WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
+    WithOrigins(ResolveSettings(f->scene), [&] { RunServe(*f); });
   });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar serve_registrar("serve", &RegisterServe);
 
 }  // namespace
 }  // namespace rigidtouch::cli

@@ -18,7 +18,7 @@ struct SimulateFlags {
   bool json = false;
 };
 
-void Run(const SimulateFlags& f) {
+void RunSimulate(const SimulateFlags& f) {
   if (f.steps < 0) throw Error("--steps must be >= 0, got " + std::to_string(f.steps));
   const Vec3 tool_force = ToolForce(f.tool_force);
   const Settings settings = ResolveSettings(f.scene);
@@ -95,7 +95,7 @@ void Run(const SimulateFlags& f) {
   ThrowIfNonFinite(report);
 }
 
-void Register(CLI::App& root) {
+void RegisterSimulate(CLI::App& root) {
   auto flags = std::make_shared<SimulateFlags>();
   CLI::App* app = root.add_subcommand("simulate", "run a scene offline with a constant tool force");
   AddSceneFlags(app, flags->scene);
@@ -105,10 +105,11 @@ void Register(CLI::App& root) {
       ->expected(3);
   app->add_flag("--json", flags->json, "print one JSON object");
   // an error about a parameter the user wrote says where it was written
-  app->callback([flags] { WithOrigins(ResolveSettings(flags->scene), [&] { Run(*flags); }); });
+  app->callback(
+      [flags] { WithOrigins(ResolveSettings(flags->scene), [&] { RunSimulate(*flags); }); });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar simulate_registrar("simulate", &RegisterSimulate);
 
 }  // namespace
 }  // namespace rigidtouch::cli

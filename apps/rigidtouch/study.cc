@@ -121,7 +121,7 @@ void RefuseDeviceFlagsForText(const RunOptions& o) {
   }
 }
 
-void Run(const RunOptions& o) {
+void RunStudy(const RunOptions& o) {
   if (o.presenter == "text") RefuseDeviceFlagsForText(o);
   const st::Protocol protocol = st::LoadProtocol(o.protocol);
   // with --json, stdout carries only the final JSON object
@@ -324,7 +324,7 @@ void AddStudyCommand(CLI::App& root) {
                   "bridge key file (rigidtouch keygen); default: the per-user key");
   run->add_flag("--json", run_options->json,
                 "Prompts on stderr, one JSON summary object on stdout");
-  run->callback([run_options] { Run(*run_options); });
+  run->callback([run_options] { RunStudy(*run_options); });
 
   auto sim_options = std::make_shared<SimulateOptions>();
   CLI::App* simulate = study->add_subcommand(
@@ -383,7 +383,7 @@ void AddStudyCommand(CLI::App& root) {
   predict->callback([predict_options] { Predict(*predict_options); });
 }
 
-const CommandRegistrar registrar(&AddStudyCommand);
+const CommandRegistrar study_registrar("study", &AddStudyCommand);
 
 }  // namespace
 

@@ -46,7 +46,7 @@ std::vector<std::string> PackageDirs() {
   return dirs;
 }
 
-void Run(const SweepFlags& f) {
+void RunSweep(const SweepFlags& f) {
   std::string path;
   for (const std::string& dir : PackageDirs()) path += (path.empty() ? "" : ":") + dir;
   if (const char* old = std::getenv("PYTHONPATH"); old != nullptr && *old != '\0') {
@@ -75,7 +75,7 @@ void Run(const SweepFlags& f) {
   throw Error("cannot run " + python + " for the sweep: " + std::strerror(errno));
 }
 
-void Register(CLI::App& root) {
+void RegisterSweep(CLI::App& root) {
   auto f = std::make_shared<SweepFlags>();
   CLI::App* app = root.add_subcommand(
       "sweep",
@@ -92,10 +92,10 @@ void Register(CLI::App& root) {
   app->add_option("--batch", f->batch, "points per Dask task (default: about 8 tasks per worker)")
       ->check(CLI::Range(1, 100000));
   app->add_flag("--json", f->json, "print one JSON object");
-  app->callback([f] { Run(*f); });
+  app->callback([f] { RunSweep(*f); });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar sweep_registrar("sweep", &RegisterSweep);
 
 }  // namespace
 }  // namespace rigidtouch::cli

@@ -109,7 +109,7 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     throw Error(std::string(f.coupling ? "--coupling" : "device.coupling in " + f.scene.config) +
                 " none has no device; valid couplings for tap: direct, virtual");
   }
-  // a comparison's renderers share the flags: Run checks them against the whole list
+  // a comparison's renderers share the flags: RunTap checks them against the whole list
   if (!spec) RefuseUnusedRender(settings, {c.load.render.renderer});
   c.script.seed = f.seed;
   c.script.speed_spread = f.spread;
@@ -210,7 +210,7 @@ void CheckFigureFormat(const std::string& path) {
 }
 
 // draws a figure; a missing matplotlib is reported, not fatal (the trace is already written)
-void Plot(const std::string& script, const std::vector<std::string>& args, bool quiet) {
+void RunPlotScript(const std::string& script, const std::vector<std::string>& args, bool quiet) {
   const analysis::FigureResult r = analysis::RunPlotScript(io::ShippedFile(script), args);
   if (r.status == analysis::FigureStatus::kOk) return;
   if (r.status == analysis::FigureStatus::kMissingMatplotlib) {
@@ -236,7 +236,7 @@ double MeanPerTap(const analysis::TapRun& run, F value) {
   return n > 0 ? sum / n : std::nan("");
 }
 
-std::string Fixed(double v, int digits) {
+std::string FixedDigits(double v, int digits) {
   if (!std::isfinite(v)) return "-";
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << v;
@@ -268,23 +268,26 @@ std::string Row(const std::string& name, const analysis::TapRun& run) {
   // a peak less than twice the mean power stands out of nothing: a flat (broadband) transient
   std::string transient = "-";
   if (std::isfinite(transient_hz)) {
-    transient = (peak_to_mean < kFlatPeakToMean ? std::string("flat") : Fixed(transient_hz, 0)) +
-                " (" + Fixed(peak_to_mean, 1) + ")";
+    transient =
+        (peak_to_mean < kFlatPeakToMean ? std::string("flat") : FixedDigits(transient_hz, 0)) +
+        " (" + FixedDigits(peak_to_mean, 1) + ")";
   }
   std::ostringstream s;
-  s << "| " << name << " | " << Fixed(mean([](const M& t) { return t.peak_requested_force_N; }), 2)
-    << " | " << Fixed(mean([](const M& t) { return t.peak_force_N; }), 2) << " | "
-    << Fixed(mean([](const M& t) { return t.rate_hardness_N_per_m; }), 0) << " | "
-    << Fixed(mean([](const M& t) { return t.extended_rate_hardness_N_per_m; }), 0) << " | "
-    << Fixed(mean([](const M& t) { return 1e3 * t.max_penetration_m; }), 2) << " | "
-    << Fixed(mean([](const M& t) { return 1e3 * t.time_to_stop_s; }), 1) << " | "
-    << Fixed(mean([](const M& t) { return static_cast<double>(t.impulses.size()); }), 1) << " / "
-    << Fixed(nonzero, 1) << " | " << bounces << " | " << energy.str() << " | "
-    << Fixed(mean([](const M& t) { return t.dominant_frequency_hz; }), 1) << " / "
-    << Fixed(mean([](const M& t) { return 100.0 * t.band_energy_fraction[0]; }), 0) << " | "
+  s << "| " << name << " | "
+    << FixedDigits(mean([](const M& t) { return t.peak_requested_force_N; }), 2) << " | "
+    << FixedDigits(mean([](const M& t) { return t.peak_force_N; }), 2) << " | "
+    << FixedDigits(mean([](const M& t) { return t.rate_hardness_N_per_m; }), 0) << " | "
+    << FixedDigits(mean([](const M& t) { return t.extended_rate_hardness_N_per_m; }), 0) << " | "
+    << FixedDigits(mean([](const M& t) { return 1e3 * t.max_penetration_m; }), 2) << " | "
+    << FixedDigits(mean([](const M& t) { return 1e3 * t.time_to_stop_s; }), 1) << " | "
+    << FixedDigits(mean([](const M& t) { return static_cast<double>(t.impulses.size()); }), 1)
+    << " / " << FixedDigits(nonzero, 1) << " | " << bounces << " | " << energy.str() << " | "
+    << FixedDigits(mean([](const M& t) { return t.dominant_frequency_hz; }), 1) << " / "
+    << FixedDigits(mean([](const M& t) { return 100.0 * t.band_energy_fraction[0]; }), 0) << " | "
     << transient << " | "
-    << Fixed(mean([](const M& t) { return 100.0 * t.transient_band_energy_fraction[2]; }), 0)
-    << " | " << Fixed(mean([](const M& t) { return 100.0 * t.transient_power_ratio; }), 1) << " |";
+    << FixedDigits(mean([](const M& t) { return 100.0 * t.transient_band_energy_fraction[2]; }), 0)
+    << " | " << FixedDigits(mean([](const M& t) { return 100.0 * t.transient_power_ratio; }), 1)
+    << " |";
   return s.str();
 }
 
@@ -378,14 +381,14 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   args.push_back("--labels");
   args.insert(args.end(), labels.begin(), labels.end());
   args.insert(args.end(), {"--limit", text::FormatNumber(max_force_N), "--out", fig});
-  Plot("python/plot_walls.py", args, f.json);
+  RunPlotScript("python/plot_walls.py", args, f.json);
   std::vector<std::string> figures = {fig};
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const std::string tap_fig = OutPath(f, FileStem(specs[i]) + "_tap.png");
-    Plot("python/plot_tap.py",
-         {traces[i], "--out", tap_fig, "--limit", text::FormatNumber(max_force_N), "--title",
-          specs[i].label + ", tap 0"},
-         f.json);
+    RunPlotScript("python/plot_tap.py",
+                  {traces[i], "--out", tap_fig, "--limit", text::FormatNumber(max_force_N),
+                   "--title", specs[i].label + ", tap 0"},
+                  f.json);
     figures.push_back(tap_fig);
   }
   auto check = [&non_finite, &non_finite_name] {
@@ -403,7 +406,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   check();
 }
 
-void Run(const TapFlags& f) {
+void RunTap(const TapFlags& f) {
   if (f.compare_walls || !f.compare.empty()) {
     if (f.wall) throw Error("give either --wall or --compare/--compare-walls, not both");
     if (f.scene.renderer) {
@@ -457,10 +460,11 @@ void Run(const TapFlags& f) {
     // the temporary trace goes whether or not the figure could be drawn
     std::error_code ignored;
     try {
-      Plot("python/plot_tap.py",
-           {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N),
-            "--title", std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
-           f.json);
+      RunPlotScript(
+          "python/plot_tap.py",
+          {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N), "--title",
+           std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
+          f.json);
     } catch (...) {
       if (temporary) std::filesystem::remove(trace, ignored);
       throw;
@@ -535,18 +539,18 @@ std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
   return f;
 }
 
-void Register(CLI::App& root) {
+void RegisterTap(CLI::App& root) {
   CLI::App* app = root.add_subcommand(
       "tap", "tap a wall with the simulated hand and device; metrics, trace and figures");
   auto f = AddTapOptions(app);
   // an error about a parameter the user wrote says where it was written
   app->callback([f, app] {
     f->out_dir_given = app->get_option("--out-dir")->count() > 0;
-    WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
+    WithOrigins(ResolveSettings(f->scene), [&] { RunTap(*f); });
   });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar tap_registrar("tap", &RegisterTap);
 
 }  // namespace
 

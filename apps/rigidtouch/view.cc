@@ -54,11 +54,6 @@ struct ViewFlags {
   double startup_timeout_s = 1.0;
 };
 
-// exit status when the device never answered, as serve's
-constexpr int kExitNoDevice = 5;
-
-constexpr std::string_view kReplayPrefix = "replay:";
-
 std::vector<std::pair<double, double>> ParsePath(const std::string& text) {
   std::vector<std::pair<double, double>> out;
   std::istringstream in(text);
@@ -219,7 +214,7 @@ void PrintViewResult(const ViewFlags& f, const Model& model, const Data& data,
   }
 }
 
-void Run(const ViewFlags& f) {
+void RunView(const ViewFlags& f) {
   CheckViewFlags(f);
   std::optional<io::Record> recorded;
   const double rate_hz = ReadReplayRecord(f, recorded);
@@ -313,7 +308,7 @@ void Run(const ViewFlags& f) {
   PrintViewResult(f, model, data, r, totals, vr, record);
 }
 
-void Register(CLI::App& root) {
+void RegisterView(CLI::App& root) {
   auto f = std::make_shared<ViewFlags>();
   CLI::App* app = root.add_subcommand("view", "live viewer: the scene, the tool, the forces");
   AddSceneFlags(app, f->scene, /*scene_required=*/false);
@@ -380,11 +375,11 @@ void Register(CLI::App& root) {
     if (app->count("--switch-to") > 0 && f->switch_frame < 0 && !f->switch_at_contact) {
       throw Error("view: --switch-to needs --switch-at-frame or --switch-at-contact");
     }
-    WithOrigins(ResolveSettings(f->scene), [&] { Run(*f); });
+    WithOrigins(ResolveSettings(f->scene), [&] { RunView(*f); });
   });
 }
 
-const CommandRegistrar registrar(&Register);
+const CommandRegistrar view_registrar("view", &RegisterView);
 
 }  // namespace
 }  // namespace rigidtouch::cli

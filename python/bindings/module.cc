@@ -27,8 +27,8 @@
 namespace rigidtouch::cli {
 // the CLI's subcommand registry (main.cc defines it for the executable); the subcommands linked
 // into the module register here and are not used, except `tap` through RunTapFlags
-std::vector<CommandFactory>& Commands() {
-  static std::vector<CommandFactory> commands;
+std::vector<Command>& Commands() {
+  static std::vector<Command> commands;
   return commands;
 }
 }  // namespace rigidtouch::cli

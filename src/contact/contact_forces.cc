@@ -152,7 +152,7 @@ void GroupContactForces(const Model& model, Data& data, const ContactScratch& sc
 
 // fewer contacts than this are not worth the hand-off to the worker; the range carries the
 // groups' solves too (stage 5, which shared its groups from 64 implicit contacts on its own)
-constexpr int kMinContactsForTwoThreads = 64;
+constexpr int kMinForceContactsForTwoThreads = 64;
 
 }  // namespace
 
@@ -160,7 +160,7 @@ bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
                        dynamics::VelocityScratch& forces, parallel::Worker* worker,
                        parallel::Task alongside, parallel::ItemTask after_group) {
   const int n = data.ncontact;
-  const bool two = worker != nullptr && n >= kMinContactsForTwoThreads;
+  const bool two = worker != nullptr && n >= kMinForceContactsForTwoThreads;
   // by groups when there is no worker, or when last tick had groups enough to share (the choice
   // changes only the speed: one group is better classified by blocks of contacts on two threads)
   const bool by_groups = !two || data.ngroup >= 2;

@@ -7,7 +7,7 @@
 namespace rigidtouch::contact {
 namespace {
 
-int Find(int* parent, int i) {
+int FindRoot(int* parent, int i) {
   while (parent[i] != i) {
     parent[i] = parent[parent[i]];  // path halving
     i = parent[i];
@@ -16,8 +16,8 @@ int Find(int* parent, int i) {
 }
 
 void Unite(int* parent, int a, int b) {
-  a = Find(parent, a);
-  b = Find(parent, b);
+  a = FindRoot(parent, a);
+  b = FindRoot(parent, b);
   if (a == b) return;
   if (a < b) std::swap(a, b);
   parent[a] = b;  // the lowest index is the root, whatever the order of the unions
@@ -89,7 +89,7 @@ void BuildGroups(Data& data, Groups& g) {
   int ngroup = 0;
   for (int i = 0; i < nbody; ++i) body_group[i] = -1;
   ForEachRun(data, indexed, [&](int a, int b, int, int) {
-    const int root = Find(parent, a >= 0 ? a : b);  // a contact has a dynamic body
+    const int root = FindRoot(parent, a >= 0 ? a : b);  // a contact has a dynamic body
     if (body_group[root] >= 0) return;
     body_group[root] = ngroup;
     body_start[ngroup + 1] = 0;
@@ -101,7 +101,7 @@ void BuildGroups(Data& data, Groups& g) {
       slot[i] = -1;
       continue;
     }
-    const int k = body_group[Find(parent, i)];
+    const int k = body_group[FindRoot(parent, i)];
     body_group[i] = k;
     slot[i] = body_start[k + 1]++;
   }

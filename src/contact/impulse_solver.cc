@@ -10,7 +10,7 @@
 namespace rigidtouch::contact {
 namespace {
 
-bool AllFinite(const Vec3& v) {
+bool AllFiniteVec3(const Vec3& v) {
   return v.allFinite();
 }
 
@@ -251,8 +251,8 @@ ImpulseSolverError ImpulseSolver::Pack(const ImpulseProblem& problem) {
   for (int k = 0; k < num_bodies_; ++k) {
     const SolverBody& body = problem.bodies[k];
     if (!std::isfinite(body.inv_mass) || body.inv_mass < 0.0 || !body.inv_inertia_W.allFinite() ||
-        (body.inv_inertia_W.diagonal().array() < 0.0).any() || !AllFinite(body.v_W) ||
-        !AllFinite(body.w_W)) {
+        (body.inv_inertia_W.diagonal().array() < 0.0).any() || !AllFiniteVec3(body.v_W) ||
+        !AllFiniteVec3(body.w_W)) {
       return ImpulseSolverError::kNonFiniteInput;
     }
     body_row_count_[k] = 0;
@@ -265,7 +265,7 @@ ImpulseSolverError ImpulseSolver::Pack(const ImpulseProblem& problem) {
         row.body_b >= num_bodies_ || row.body_a == row.body_b) {
       return ImpulseSolverError::kBadBodyIndex;
     }
-    if (!AllFinite(row.n_W) || !AllFinite(row.r_a_W) || !AllFinite(row.r_b_W)) {
+    if (!AllFiniteVec3(row.n_W) || !AllFiniteVec3(row.r_a_W) || !AllFiniteVec3(row.r_b_W)) {
       return ImpulseSolverError::kNonFiniteInput;
     }
     PackedRow& packed = rows_[j];

@@ -59,7 +59,7 @@ namespace {
 // contacts per block the two threads take in ClassifyContacts
 constexpr int kContactBlock = 64;
 // fewer contacts than this are not worth the hand-off to the worker
-constexpr int kMinContactsForTwoThreads = 128;
+constexpr int kMinClassifyContactsForTwoThreads = 128;
 
 bool SamePair(const Contact& a, const Contact& b) {
   return a.geom_a == b.geom_a && a.geom_b == b.geom_b;
@@ -138,7 +138,7 @@ void ClassifyByPairs(const Model& model, Data& data, ContactScratch& scratch,
   const int n = data.ncontact;
   const int nblock = (n + kContactBlock - 1) / kContactBlock;
   parallel::ShareRange(
-      n >= kMinContactsForTwoThreads ? worker : nullptr, nblock,
+      n >= kMinClassifyContactsForTwoThreads ? worker : nullptr, nblock,
       [&model, &data, &scratch, n](int k) {
         ClassifyPairs(model, data, scratch, k * kContactBlock,
                       std::min(n, (k + 1) * kContactBlock));

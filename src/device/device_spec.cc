@@ -17,8 +17,8 @@ bool EndsWith(std::string_view text, std::string_view tail) {
 }
 
 // a required number in [lo, hi] (closed), naming the field and its unit when it is not
-double Required(const io::StrictObject& o, const std::string& key, double lo, double hi,
-                const std::string& unit) {
+double RequiredSpecNumber(const io::StrictObject& o, const std::string& key, double lo, double hi,
+                          const std::string& unit) {
   const std::optional<double> value = o.Number(key);
   if (!value) o.FailAt(key, "missing; a device spec gives every field (" + unit + ")");
   if (!(*value >= lo && *value <= hi)) {
@@ -55,18 +55,19 @@ DeviceSpec ReadDeviceSpec(const std::string& path) {
   spec.limits.name = o.String("name").value_or(std::filesystem::path(path).stem().string());
   if (spec.limits.name.empty()) o.FailAt("name", "must not be empty");
   // the same ranges the simulated device checks, so a spec that loads also runs
-  spec.limits.max_force_N = Required(o, "max_force_N", 0.0, 1e4, "N (0: no limit)");
+  spec.limits.max_force_N = RequiredSpecNumber(o, "max_force_N", 0.0, 1e4, "N (0: no limit)");
   spec.limits.max_stiffness_N_per_m =
-      Required(o, "max_stiffness_N_per_m", 0.0, 1e7, "N/m (0: unknown)");
+      RequiredSpecNumber(o, "max_stiffness_N_per_m", 0.0, 1e7, "N/m (0: unknown)");
   spec.limits.max_damping_Ns_per_m =
-      Required(o, "max_damping_Ns_per_m", 0.0, 1e5, "N s/m (0: unknown)");
+      RequiredSpecNumber(o, "max_damping_Ns_per_m", 0.0, 1e5, "N s/m (0: unknown)");
   // optional: a 3-DoF force device (0, the default) gets no torque
-  spec.limits.max_torque_Nm =
-      o.Has("max_torque_Nm") ? Required(o, "max_torque_Nm", 0.0, 1e3, "N m (0: no torque)") : 0.0;
-  spec.model.apparent_mass_kg = Required(o, "apparent_mass_kg", 0.0, 100.0, "kg");
+  spec.limits.max_torque_Nm = o.Has("max_torque_Nm") ? RequiredSpecNumber(o, "max_torque_Nm", 0.0,
+                                                                          1e3, "N m (0: no torque)")
+                                                     : 0.0;
+  spec.model.apparent_mass_kg = RequiredSpecNumber(o, "apparent_mass_kg", 0.0, 100.0, "kg");
   spec.model.encoder_resolution_m =
-      Required(o, "encoder_resolution_m", 0.0, 0.01, "m (0: no quantization)");
-  spec.model.velocity_cutoff_hz = Required(o, "velocity_filter_hz", 1e-3, 1e5, "Hz");
+      RequiredSpecNumber(o, "encoder_resolution_m", 0.0, 0.01, "m (0: no quantization)");
+  spec.model.velocity_cutoff_hz = RequiredSpecNumber(o, "velocity_filter_hz", 1e-3, 1e5, "Hz");
   if (!o.Has("delay_ticks")) o.FailAt("delay_ticks", "missing; a device spec gives every field");
   spec.model.delay_ticks = o.Integer("delay_ticks", 0, 0, 1);
   return spec;

@@ -15,8 +15,8 @@ namespace rigidtouch::device {
 namespace {
 
 // throws unless lo (<|<=) value (<|<=) hi; NaN always fails
-void CheckRange(const char* field, double value, double lo, double hi, bool lo_open, bool hi_open,
-                const char* unit) {
+void CheckHandRange(const char* field, double value, double lo, double hi, bool lo_open,
+                    bool hi_open, const char* unit) {
   const bool above = lo_open ? value > lo : value >= lo;
   const bool below = hi_open ? value < hi : value <= hi;
   if (above && below) return;
@@ -74,33 +74,34 @@ Profile RampDown(double tau_s, double v_mps, double ramp_s) {
 SimulatedDevice::SimulatedDevice(const DeviceLimits& limits, const HandParams& hand,
                                  const DeviceModelParams& model, const TapScript& script)
     : limits_(limits), hand_(hand), model_(model), script_(script) {
-  CheckRange("limits.max_force_N", limits.max_force_N, 0.0, 1e4, false, false, "N");
-  CheckRange("limits.max_torque_Nm", limits.max_torque_Nm, 0.0, 1e3, false, false, "N m");
-  CheckRange("hand.mass_kg", hand.mass_kg, 0.0, 100.0, true, false, "kg");
-  CheckRange("hand.damping_Ns_per_m", hand.damping_Ns_per_m, 0.0, 1e4, false, false, "N s/m");
-  CheckRange("hand.stiffness_N_per_m", hand.stiffness_N_per_m, 0.0, 1e6, false, false, "N/m");
-  CheckRange("device.apparent_mass_kg", model.apparent_mass_kg, 0.0, 100.0, false, false, "kg");
-  CheckRange("device.encoder_resolution_m", model.encoder_resolution_m, 0.0, 0.01, false, false,
-             "m");
-  CheckRange("device.tick_rate_hz", model.tick_rate_hz, 100.0, 1e5, false, false, "Hz");
-  CheckRange("device.velocity_cutoff_hz", model.velocity_cutoff_hz, 0.0, 1e5, true, false, "Hz");
-  CheckRange("device.delay_ticks", model.delay_ticks, 0, 1, false, false, "ticks");
-  CheckRange("device.substeps", model.substeps, 10, 10000, false, false, "per tick");
+  CheckHandRange("limits.max_force_N", limits.max_force_N, 0.0, 1e4, false, false, "N");
+  CheckHandRange("limits.max_torque_Nm", limits.max_torque_Nm, 0.0, 1e3, false, false, "N m");
+  CheckHandRange("hand.mass_kg", hand.mass_kg, 0.0, 100.0, true, false, "kg");
+  CheckHandRange("hand.damping_Ns_per_m", hand.damping_Ns_per_m, 0.0, 1e4, false, false, "N s/m");
+  CheckHandRange("hand.stiffness_N_per_m", hand.stiffness_N_per_m, 0.0, 1e6, false, false, "N/m");
+  CheckHandRange("device.apparent_mass_kg", model.apparent_mass_kg, 0.0, 100.0, false, false, "kg");
+  CheckHandRange("device.encoder_resolution_m", model.encoder_resolution_m, 0.0, 0.01, false, false,
+                 "m");
+  CheckHandRange("device.tick_rate_hz", model.tick_rate_hz, 100.0, 1e5, false, false, "Hz");
+  CheckHandRange("device.velocity_cutoff_hz", model.velocity_cutoff_hz, 0.0, 1e5, true, false,
+                 "Hz");
+  CheckHandRange("device.delay_ticks", model.delay_ticks, 0, 1, false, false, "ticks");
+  CheckHandRange("device.substeps", model.substeps, 10, 10000, false, false, "per tick");
   CheckFinite("device.gravity_mps2", model.gravity_mps2);
   CheckFinite("tap.surface_point_m", script.surface_point_m);
   CheckFinite("tap.surface_normal", script.surface_normal);
   if (!(script.surface_normal.norm() > 1e-9)) {
     throw Error("simulated device: tap.surface_normal must be a non-zero vector");
   }
-  CheckRange("tap.start_height_m", script.start_height_m, 0.0, 0.5, true, false, "m");
-  CheckRange("tap.approach_speed_mps", script.approach_speed_mps, 0.0, 2.0, true, false, "m/s");
-  CheckRange("tap.aim_depth_m", script.aim_depth_m, 0.0, 0.1, false, false, "m");
-  CheckRange("tap.dwell_s", script.dwell_s, 0.0, 10.0, false, false, "s");
-  CheckRange("tap.retract_speed_mps", script.retract_speed_mps, 0.0, 2.0, true, false, "m/s");
-  CheckRange("tap.pause_s", script.pause_s, 0.0, 10.0, false, false, "s");
-  CheckRange("tap.taps", script.taps, 1, 10000, false, false, "taps");
-  CheckRange("tap.speed_spread", script.speed_spread, 0.0, 0.5, false, false, "(relative)");
-  CheckRange("tap.velocity_ramp_s", script.velocity_ramp_s, 0.0, 0.5, false, false, "s");
+  CheckHandRange("tap.start_height_m", script.start_height_m, 0.0, 0.5, true, false, "m");
+  CheckHandRange("tap.approach_speed_mps", script.approach_speed_mps, 0.0, 2.0, true, false, "m/s");
+  CheckHandRange("tap.aim_depth_m", script.aim_depth_m, 0.0, 0.1, false, false, "m");
+  CheckHandRange("tap.dwell_s", script.dwell_s, 0.0, 10.0, false, false, "s");
+  CheckHandRange("tap.retract_speed_mps", script.retract_speed_mps, 0.0, 2.0, true, false, "m/s");
+  CheckHandRange("tap.pause_s", script.pause_s, 0.0, 10.0, false, false, "s");
+  CheckHandRange("tap.taps", script.taps, 1, 10000, false, false, "taps");
+  CheckHandRange("tap.speed_spread", script.speed_spread, 0.0, 0.5, false, false, "(relative)");
+  CheckHandRange("tap.velocity_ramp_s", script.velocity_ramp_s, 0.0, 0.5, false, false, "s");
 
   normal_ = script.surface_normal.normalized();
   start_point_m_ = script.surface_point_m + script.start_height_m * normal_;

@@ -6,7 +6,7 @@
 namespace rigidtouch::device {
 namespace {
 
-constexpr std::string_view kWhat = "udp device";
+constexpr std::string_view kUdpDeviceWhat = "udp device";
 
 UdpEndpoint ParseServer(const UdpDeviceOptions& options) {
   const UdpEndpoint server = ParseUdpAddress(options.server, "udp device: server");
@@ -18,7 +18,7 @@ UdpEndpoint ParseServer(const UdpDeviceOptions& options) {
 }
 
 UdpEndpoint ParseLocal(const UdpDeviceOptions& options) {
-  ValidatePacketLoss(options.test_loss, kWhat);
+  ValidatePacketLoss(options.test_loss, kUdpDeviceWhat);
   const UdpEndpoint local = ParseUdpAddress(options.local, "udp device: local");
   // 0.0.0.0 (any interface) is not loopback either, so it also needs the explicit option
   RequireLoopbackUnlessAllowed(local, "udp device: local", options.allow_non_loopback);
@@ -39,7 +39,7 @@ UdpDevice::UdpDevice(const UdpDeviceOptions& options)
     : own_limits_(options.limits),
       limits_(options.limits),
       server_(ParseServer(options)),
-      watchdog_ns_(WatchdogNs(options.watchdog_s, kWhat)),
+      watchdog_ns_(WatchdogNs(options.watchdog_s, kUdpDeviceWhat)),
       hello_interval_ns_(HelloIntervalNs(options.hello_interval_s)),
       key_(ResolveDeviceKey(options.key, options.key_file)),
       socket_(ParseLocal(options), "udp device: local"),

@@ -13,10 +13,10 @@
 namespace rigidtouch::device {
 namespace {
 
-constexpr std::string_view kWhat = "udp device server";
+constexpr std::string_view kUdpServerWhat = "udp device server";
 
 UdpEndpoint ParseListen(const UdpDeviceServerOptions& options) {
-  ValidatePacketLoss(options.test_loss, kWhat);
+  ValidatePacketLoss(options.test_loss, kUdpServerWhat);
   const UdpEndpoint listen = ParseUdpAddress(options.listen, "udp device server: listen");
   RequireLoopbackUnlessAllowed(listen, "udp device server: listen", options.allow_non_loopback);
   return listen;
@@ -46,7 +46,7 @@ std::int64_t SessionTimeoutNs(const UdpDeviceServerOptions& options) {
 struct UdpDeviceServer::Impl {
   Impl(Device& served, const UdpDeviceServerOptions& options)
       : device(served),
-        watchdog_ns(WatchdogNs(options.watchdog_s, kWhat)),
+        watchdog_ns(WatchdogNs(options.watchdog_s, kUdpServerWhat)),
         session_timeout_ns(SessionTimeoutNs(options)),
         fixed_peer(!options.peer.empty()),
         allowed_peer(ParsePeer(options)),

@@ -128,7 +128,7 @@ std::size_t PayloadBytes(PacketType type) {
   return 0;
 }
 
-bool AllFinite(const std::uint8_t* first_f64, std::size_t count) {
+bool AllFiniteDoubles(const std::uint8_t* first_f64, std::size_t count) {
   for (std::size_t i = 0; i < count; ++i) {
     if (!std::isfinite(GetF64(first_f64 + 8 * i))) return false;
   }
@@ -253,7 +253,7 @@ DecodeResult DecodeStatePayload(std::span<const std::uint8_t> datagram, DeviceSt
   if (datagram.size() != kStatePacketBytes) return DecodeResult::kTooShort;
   const std::uint8_t* in = datagram.data();
   // time, position, quaternion, velocity, angular velocity: 14 contiguous f64
-  if (!AllFinite(in + kStateTime, 14)) return DecodeResult::kNonFinite;
+  if (!AllFiniteDoubles(in + kStateTime, 14)) return DecodeResult::kNonFinite;
   const Quat orientation(GetF64(in + kStateOrientation), GetF64(in + kStateOrientation + 8),
                          GetF64(in + kStateOrientation + 16), GetF64(in + kStateOrientation + 24));
   if (std::abs(orientation.norm() - 1.0) > kQuaternionNormTolerance) {
@@ -274,7 +274,7 @@ DecodeResult DecodeCommandPayload(std::span<const std::uint8_t> datagram, Device
   if (datagram.size() != kCommandPacketBytes) return DecodeResult::kTooShort;
   const std::uint8_t* in = datagram.data();
   // force and torque: 6 contiguous f64
-  if (!AllFinite(in + kCommandForce, 6)) return DecodeResult::kNonFinite;
+  if (!AllFiniteDoubles(in + kCommandForce, 6)) return DecodeResult::kNonFinite;
   const std::uint32_t flags = GetU32(in + kCommandFlags);
   *command = DeviceCommand{};
   command->sequence = GetU64(in + kCommandSequence);
@@ -290,7 +290,7 @@ DecodeResult DecodeHelloReplyPayload(std::span<const std::uint8_t> datagram,
                                      AnnouncedLimits* limits) {
   if (datagram.size() != kHelloReplyPacketBytes) return DecodeResult::kTooShort;
   const std::uint8_t* in = datagram.data();
-  if (!AllFinite(in + kReplyMaxForce, 3)) return DecodeResult::kNonFinite;
+  if (!AllFiniteDoubles(in + kReplyMaxForce, 3)) return DecodeResult::kNonFinite;
   const AnnouncedLimits decoded{GetF64(in + kReplyMaxForce), GetF64(in + kReplyMaxStiffness),
                                 GetF64(in + kReplyMaxDamping)};
   if (decoded.max_force_N < 0.0 || decoded.max_stiffness_N_per_m < 0.0 ||

@@ -13,7 +13,7 @@
 namespace rigidtouch::dynamics {
 namespace {
 
-Mat3 Skew(const Vec3& v) {
+Mat3 CrossMatrix(const Vec3& v) {
   Mat3 s;
   s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
   return s;
@@ -96,7 +96,7 @@ Quat NormalizedQuat(Eigen::VectorXd& qpos, int adr) {
 
 // Spatial inertia about the world origin of a body with mass m, centre c and inertia Ic (world).
 Mat6 InertiaAboutOrigin(double m, const Vec3& c, const Mat3& Ic) {
-  const Mat3 C = Skew(c);
+  const Mat3 C = CrossMatrix(c);
   Mat6 I;
   I.topLeftCorner<3, 3>() = Ic - m * C * C;
   I.topRightCorner<3, 3>() = m * C;

@@ -18,7 +18,7 @@
 namespace rigidtouch {
 namespace {
 
-void Require(bool ok, const std::string& name, double value, const std::string& range) {
+void RequireInRange(bool ok, const std::string& name, double value, const std::string& range) {
   if (ok) return;
   std::ostringstream msg;
   msg << "parameter " << name << " = " << value << " is out of range: valid " << range;
@@ -27,10 +27,10 @@ void Require(bool ok, const std::string& name, double value, const std::string& 
 
 void RequireFinite(const std::string& name, double value, double lo, double hi,
                    const std::string& range) {
-  Require(std::isfinite(value) && value >= lo && value <= hi, name, value, range);
+  RequireInRange(std::isfinite(value) && value >= lo && value <= hi, name, value, range);
 }
 
-constexpr double kInf = INFINITY;
+constexpr double kInfinity = INFINITY;
 
 // A device cannot display a stiffness or damping above its closed-loop maximum (it goes unstable
 // or saturates against the user's hand); such a value is refused, never clamped silently.
@@ -57,14 +57,14 @@ constexpr double kExplicitStableStiffness = 4.0;
 constexpr double kExplicitStableDamping = 2.0;
 constexpr double kDampingRatio = 0.2;
 
-std::string Num(double x) {
+std::string ConfigNumber(double x) {
   return text::FormatNumber(x);
 }
 
 // The smallest size of a body's colliding geoms: radius, or smallest box half-extent, or a mesh's
 // bounding radius [m]; infinity if the body has none.
 double BodySize(const Model& model, int body) {
-  double size = kInf;
+  double size = kInfinity;
   for (const GeomModel& g : model.geoms) {
     if (g.body != body || (g.contype == 0 && g.conaffinity == 0)) continue;
     switch (g.type) {
@@ -86,7 +86,7 @@ double BodySize(const Model& model, int body) {
 }
 
 std::string Body(const Model& model, int i) {
-  return "body '" + model.bodies[i].name + "' (" + Num(model.bodies[i].mass_kg) + " kg)";
+  return "body '" + model.bodies[i].name + "' (" + ConfigNumber(model.bodies[i].mass_kg) + " kg)";
 }
 
 // Warns if stiffness k (named `name`) cannot hold body i on one contact pair: m g / k > size.
@@ -95,9 +95,9 @@ void CheckHold(const Model& model, int i, const std::string& name, double k,
   const double weight = model.bodies[i].mass_kg * model.gravity_W.norm();
   const double size = BodySize(model, i);
   if (!(weight > 0.0) || !std::isfinite(size) || weight <= k * size) return;
-  warnings.push_back(name + " = " + Num(k) + " N/m cannot hold " + Body(model, i) +
-                     ": it would sink m g / k = " + Num(weight / k) +
-                     " m into what it rests on, more than its size " + Num(size) + " m");
+  warnings.push_back(name + " = " + ConfigNumber(k) + " N/m cannot hold " + Body(model, i) +
+                     ": it would sink m g / k = " + ConfigNumber(weight / k) +
+                     " m into what it rests on, more than its size " + ConfigNumber(size) + " m");
 }
 
 // Warns if k h^2 / m or b h / m of body i exceeds the stability bounds (`verdict`: "is" for the
@@ -108,16 +108,16 @@ void CheckStable(const Model& model, int i, const std::string& k_name, double k,
                  std::vector<std::string>& warnings) {
   const double h = model.timestep_s, m = model.bodies[i].mass_kg;
   if (k * h * h / m > k_bound) {
-    warnings.push_back(k_name + " = " + Num(k) + " N/m " + verdict + " unstable for " +
-                       Body(model, i) + " at h = " + Num(h) +
-                       " s: k h^2 / m = " + Num(k * h * h / m) + " > " + Num(k_bound) + " (" +
-                       solve + "); at most " + Num(k_bound * m / (h * h)) + " N/m");
+    warnings.push_back(k_name + " = " + ConfigNumber(k) + " N/m " + verdict + " unstable for " +
+                       Body(model, i) + " at h = " + ConfigNumber(h) + " s: k h^2 / m = " +
+                       ConfigNumber(k * h * h / m) + " > " + ConfigNumber(k_bound) + " (" + solve +
+                       "); at most " + ConfigNumber(k_bound * m / (h * h)) + " N/m");
   }
   if (b * h / m > b_bound) {
-    warnings.push_back(b_name + " = " + Num(b) + " N s/m " + verdict + " unstable for " +
-                       Body(model, i) + " at h = " + Num(h) + " s: b h / m = " + Num(b * h / m) +
-                       " > " + Num(b_bound) + " (" + solve + "); at most " + Num(b_bound * m / h) +
-                       " N s/m");
+    warnings.push_back(b_name + " = " + ConfigNumber(b) + " N s/m " + verdict + " unstable for " +
+                       Body(model, i) + " at h = " + ConfigNumber(h) +
+                       " s: b h / m = " + ConfigNumber(b * h / m) + " > " + ConfigNumber(b_bound) +
+                       " (" + solve + "); at most " + ConfigNumber(b_bound * m / h) + " N s/m");
   }
 }
 
@@ -158,12 +158,13 @@ void SceneContactDefaults(Model& model, std::vector<std::string>& warnings) {
         const double size = BodySize(model, i);
         const double sink = model.bodies[i].mass_kg * g / k;
         if (i == model.tool || !std::isfinite(size) || sink <= size) continue;
-        warnings.push_back("no scene contact stiffness both holds " + Body(model, i) +
-                           " and is stable for " + Body(model, lightest) + " at h = " + Num(h) +
-                           " s (k h^2 / m <= " + Num(kStableStiffness) +
-                           "): the derived scene_stiffness_N_per_m = " + Num(k) +
-                           " N/m lets it sink m g / k = " + Num(sink) + " m, more than its size " +
-                           Num(size) + " m; lower the time step or set the stiffness");
+        warnings.push_back(
+            "no scene contact stiffness both holds " + Body(model, i) + " and is stable for " +
+            Body(model, lightest) + " at h = " + ConfigNumber(h) +
+            " s (k h^2 / m <= " + ConfigNumber(kStableStiffness) +
+            "): the derived scene_stiffness_N_per_m = " + ConfigNumber(k) +
+            " N/m lets it sink m g / k = " + ConfigNumber(sink) + " m, more than its size " +
+            ConfigNumber(size) + " m; lower the time step or set the stiffness");
       }
     }
     c.scene_stiffness_N_per_m = k;
@@ -222,24 +223,24 @@ void ToolContactWarnings(const Model& model, std::vector<std::string>& warnings)
 
 // contact law parameters (the tool's and the scene's)
 void RequireContact(const ContactParams& c) {
-  RequireFinite("stiffness_N_per_m", c.stiffness_N_per_m, 0.0, kInf, "k >= 0 N/m, finite");
-  RequireFinite("damping_Ns_per_m", c.damping_Ns_per_m, 0.0, kInf, "b >= 0 N s/m, finite");
-  RequireFinite("scene_stiffness_N_per_m", c.scene_stiffness_N_per_m, 0.0, kInf,
+  RequireFinite("stiffness_N_per_m", c.stiffness_N_per_m, 0.0, kInfinity, "k >= 0 N/m, finite");
+  RequireFinite("damping_Ns_per_m", c.damping_Ns_per_m, 0.0, kInfinity, "b >= 0 N s/m, finite");
+  RequireFinite("scene_stiffness_N_per_m", c.scene_stiffness_N_per_m, 0.0, kInfinity,
                 "k >= 0 N/m, finite");
-  RequireFinite("scene_damping_Ns_per_m", c.scene_damping_Ns_per_m, 0.0, kInf,
+  RequireFinite("scene_damping_Ns_per_m", c.scene_damping_Ns_per_m, 0.0, kInfinity,
                 "b >= 0 N s/m, finite");
   // -1 exactly stands for the MJCF geom friction; any other negative value is not a coefficient
   for (const auto& [name, mu] : {std::pair{"friction_static", c.friction_static},
                                  std::pair{"friction_kinetic", c.friction_kinetic}}) {
-    Require(mu == -1.0 || (std::isfinite(mu) && mu >= 0.0), name, mu,
-            ">= 0, or -1 for the MJCF geom friction");
+    RequireInRange(mu == -1.0 || (std::isfinite(mu) && mu >= 0.0), name, mu,
+                   ">= 0, or -1 for the MJCF geom friction");
   }
   if (c.friction_static >= 0.0 && c.friction_kinetic >= 0.0) {
-    Require(c.friction_static >= c.friction_kinetic, "friction_static", c.friction_static,
-            ">= friction_kinetic (" + std::to_string(c.friction_kinetic) + ")");
+    RequireInRange(c.friction_static >= c.friction_kinetic, "friction_static", c.friction_static,
+                   ">= friction_kinetic (" + std::to_string(c.friction_kinetic) + ")");
   }
-  RequireFinite("tangential_ratio", c.tangential_ratio, 0.0, kInf, ">= 0");
-  RequireFinite("onset_speed_mps", c.onset_speed_mps, 0.0, kInf, ">= 0 m/s");
+  RequireFinite("tangential_ratio", c.tangential_ratio, 0.0, kInfinity, ">= 0");
+  RequireFinite("onset_speed_mps", c.onset_speed_mps, 0.0, kInfinity, ">= 0 m/s");
 }
 
 // the renderer's parameters, which depend on the renderer kind and on h (a material's Nyquist)
@@ -253,9 +254,9 @@ void RequireRender(const Model& model) {
         "0 < t_c <= " + text::FormatNumber(limits::kMaxCollisionWindow_s) + " s";
     RequireFinite("t_collision_s", r.t_collision_s, 0.0, limits::kMaxCollisionWindow_s,
                   window + " (shorter than human reaction time, docs/method.md)");
-    Require(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, window);
-    Require(std::isfinite(r.frequency_hz) && r.frequency_hz > 0.0, "frequency_hz", r.frequency_hz,
-            "f > 0 Hz, within [1/t_c, 1/h] (Eq. 6-7)");
+    RequireInRange(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, window);
+    RequireInRange(std::isfinite(r.frequency_hz) && r.frequency_hz > 0.0, "frequency_hz",
+                   r.frequency_hz, "f > 0 Hz, within [1/t_c, 1/h] (Eq. 6-7)");
     if (r.restitution != limits::kTrainRestitution) {
       std::ostringstream msg;
       msg << "parameter restitution = " << r.restitution
@@ -272,19 +273,20 @@ void RequireRender(const Model& model) {
           "parameter material is missing: the event renderer plays a material's transient "
           "(--material rubber|wood|aluminium|FILE.json)");
     }
-    RequireFinite("amplitude_Ns_per_m", m.amplitude_Ns_per_m, 0.0, kInf, ">= 0 N/(m/s)");
-    Require(std::isfinite(m.decay_per_s) && m.decay_per_s > 0.0, "decay_per_s", m.decay_per_s,
-            "> 0 1/s, finite");
+    RequireFinite("amplitude_Ns_per_m", m.amplitude_Ns_per_m, 0.0, kInfinity, ">= 0 N/(m/s)");
+    RequireInRange(std::isfinite(m.decay_per_s) && m.decay_per_s > 0.0, "decay_per_s",
+                   m.decay_per_s, "> 0 1/s, finite");
     const double nyquist_hz = 0.5 / model.timestep_s;
-    Require(std::isfinite(m.frequency_hz) && m.frequency_hz > 0.0 && m.frequency_hz < nyquist_hz,
-            "frequency_hz", m.frequency_hz,
-            "in (0, 1 / (2 h)) = (0, " + text::FormatNumber(nyquist_hz) +
-                ") Hz: a sampled transient cannot show more");
+    RequireInRange(
+        std::isfinite(m.frequency_hz) && m.frequency_hz > 0.0 && m.frequency_hz < nyquist_hz,
+        "frequency_hz", m.frequency_hz,
+        "in (0, 1 / (2 h)) = (0, " + text::FormatNumber(nyquist_hz) +
+            ") Hz: a sampled transient cannot show more");
   } else if (r.renderer == RendererKind::kTrain && !r.material.name.empty()) {
     // a material train: its shares follow e^(-B t) (contact::TrainShare); f and t_c are the
     // render parameters' (io::MaterialTrain derives them from the material)
-    Require(std::isfinite(r.material.decay_per_s) && r.material.decay_per_s > 0.0, "decay_per_s",
-            r.material.decay_per_s, "> 0 1/s, finite");
+    RequireInRange(std::isfinite(r.material.decay_per_s) && r.material.decay_per_s > 0.0,
+                   "decay_per_s", r.material.decay_per_s, "> 0 1/s, finite");
     if (r.reference_solver) {
       throw Error(
           "parameter reference_solver = true cannot give a material train's decaying shares "
@@ -302,21 +304,24 @@ void RequireDevice(const Model& model) {
   const ContactParams& c = model.contact;
   const RenderParams& r = model.render;
   const DeviceParams& d = model.device;
-  RequireFinite("max_force_N", d.max_force_N, 0.0, kInf, ">= 0 N (0: unlimited)");
-  RequireFinite("coupling_stiffness_N_per_m", d.coupling_stiffness_N_per_m, 0.0, kInf, ">= 0 N/m");
-  RequireFinite("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m, 0.0, kInf, ">= 0 N s/m");
-  Require(d.workspace_offset_m.allFinite(), "workspace_offset_m", d.workspace_offset_m.norm(),
-          "finite");
-  RequireFinite("max_stiffness_N_per_m", d.max_stiffness_N_per_m, 0.0, kInf,
+  RequireFinite("max_force_N", d.max_force_N, 0.0, kInfinity, ">= 0 N (0: unlimited)");
+  RequireFinite("coupling_stiffness_N_per_m", d.coupling_stiffness_N_per_m, 0.0, kInfinity,
+                ">= 0 N/m");
+  RequireFinite("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m, 0.0, kInfinity,
+                ">= 0 N s/m");
+  RequireInRange(d.workspace_offset_m.allFinite(), "workspace_offset_m",
+                 d.workspace_offset_m.norm(), "finite");
+  RequireFinite("max_stiffness_N_per_m", d.max_stiffness_N_per_m, 0.0, kInfinity,
                 ">= 0 N/m (0: unknown)");
-  RequireFinite("max_damping_Ns_per_m", d.max_damping_Ns_per_m, 0.0, kInf,
+  RequireFinite("max_damping_Ns_per_m", d.max_damping_Ns_per_m, 0.0, kInfinity,
                 ">= 0 N s/m (0: unknown)");
-  Require(std::isfinite(d.plausible_radius_m) && d.plausible_radius_m > 0.0, "plausible_radius_m",
-          d.plausible_radius_m, "> 0 m, finite");
-  Require(std::isfinite(d.plausible_speed_mps) && d.plausible_speed_mps > 0.0,
-          "plausible_speed_mps", d.plausible_speed_mps, "> 0 m/s, finite");
-  Require(std::isfinite(d.plausible_angular_speed_radps) && d.plausible_angular_speed_radps > 0.0,
-          "plausible_angular_speed_radps", d.plausible_angular_speed_radps, "> 0 rad/s, finite");
+  RequireInRange(std::isfinite(d.plausible_radius_m) && d.plausible_radius_m > 0.0,
+                 "plausible_radius_m", d.plausible_radius_m, "> 0 m, finite");
+  RequireInRange(std::isfinite(d.plausible_speed_mps) && d.plausible_speed_mps > 0.0,
+                 "plausible_speed_mps", d.plausible_speed_mps, "> 0 m/s, finite");
+  RequireInRange(
+      std::isfinite(d.plausible_angular_speed_radps) && d.plausible_angular_speed_radps > 0.0,
+      "plausible_angular_speed_radps", d.plausible_angular_speed_radps, "> 0 rad/s, finite");
   if (r.passivity_control && d.coupling == Coupling::kNone) {
     throw Error(
         "parameter passivity_control = true needs a device port to observe: direct or virtual "
@@ -343,18 +348,18 @@ void Configure(Model& model) {
   RequireFinite("timestep_s", model.timestep_s, limits::kMinTimestep_s, limits::kMaxTimestep_s,
                 "0 < h <= " + text::FormatNumber(limits::kMaxTimestep_s) + " s (at least " +
                     text::FormatNumber(limits::kMinTimestep_s * 1e6) + " us)");
-  Require(std::isfinite(model.timestep_s) && model.timestep_s > 0.0, "timestep_s", model.timestep_s,
-          "h > 0");
+  RequireInRange(std::isfinite(model.timestep_s) && model.timestep_s > 0.0, "timestep_s",
+                 model.timestep_s, "h > 0");
   RequireContact(model.contact);
   RequireRender(model);
   model.schedule = contact::MakeSchedule(model.timestep_s, model.render);
 
   RequireDevice(model);
-  Require(model.tool >= 0 && model.tool < static_cast<int>(model.bodies.size()), "tool", model.tool,
-          "an index of a free body");
+  RequireInRange(model.tool >= 0 && model.tool < static_cast<int>(model.bodies.size()), "tool",
+                 model.tool, "an index of a free body");
   for (auto& b : model.bodies) {
-    Require(std::isfinite(b.mass_kg) && b.mass_kg > 0.0, "mass_kg of body '" + b.name + "'",
-            b.mass_kg, "> 0 kg");
+    RequireInRange(std::isfinite(b.mass_kg) && b.mass_kg > 0.0, "mass_kg of body '" + b.name + "'",
+                   b.mass_kg, "> 0 kg");
   }
   std::vector<std::string> warnings;
   SceneContactDefaults(model, warnings);

@@ -18,46 +18,46 @@
 namespace rigidtouch::io {
 namespace {
 
-constexpr std::array<std::string_view, 38> kColumns = {"tick",
-                                                       "tap",
-                                                       "sequence",
-                                                       "time_s",
-                                                       "valid",
-                                                       "fresh",
-                                                       "buttons",
-                                                       "x_m",
-                                                       "y_m",
-                                                       "z_m",
-                                                       "qw",
-                                                       "qx",
-                                                       "qy",
-                                                       "qz",
-                                                       "vx_mps",
-                                                       "vy_mps",
-                                                       "vz_mps",
-                                                       "wx_radps",
-                                                       "wy_radps",
-                                                       "wz_radps",
-                                                       "command_sequence",
-                                                       "fx_N",
-                                                       "fy_N",
-                                                       "fz_N",
-                                                       "tx_Nm",
-                                                       "ty_Nm",
-                                                       "tz_Nm",
-                                                       "penalty_fx_N",
-                                                       "penalty_fy_N",
-                                                       "penalty_fz_N",
-                                                       "impulsive_fx_N",
-                                                       "impulsive_fy_N",
-                                                       "impulsive_fz_N",
-                                                       "clipped",
-                                                       "safe_fallback",
-                                                       "hand_fx_N",
-                                                       "hand_fy_N",
-                                                       "hand_fz_N"};
+constexpr std::array<std::string_view, 38> kRecordColumns = {"tick",
+                                                             "tap",
+                                                             "sequence",
+                                                             "time_s",
+                                                             "valid",
+                                                             "fresh",
+                                                             "buttons",
+                                                             "x_m",
+                                                             "y_m",
+                                                             "z_m",
+                                                             "qw",
+                                                             "qx",
+                                                             "qy",
+                                                             "qz",
+                                                             "vx_mps",
+                                                             "vy_mps",
+                                                             "vz_mps",
+                                                             "wx_radps",
+                                                             "wy_radps",
+                                                             "wz_radps",
+                                                             "command_sequence",
+                                                             "fx_N",
+                                                             "fy_N",
+                                                             "fz_N",
+                                                             "tx_Nm",
+                                                             "ty_Nm",
+                                                             "tz_Nm",
+                                                             "penalty_fx_N",
+                                                             "penalty_fy_N",
+                                                             "penalty_fz_N",
+                                                             "impulsive_fx_N",
+                                                             "impulsive_fy_N",
+                                                             "impulsive_fz_N",
+                                                             "clipped",
+                                                             "safe_fallback",
+                                                             "hand_fx_N",
+                                                             "hand_fy_N",
+                                                             "hand_fz_N"};
 
-constexpr std::string_view kWhat = "record file";
+constexpr std::string_view kRecordWhat = "record file";
 
 void Put(std::string& line, double v) {
   text::AppendShortest(line, v);
@@ -84,11 +84,11 @@ std::string RateLine(double rate_hz) {
 }  // namespace
 
 std::span<const std::string_view> RecordColumns() {
-  return kColumns;
+  return kRecordColumns;
 }
 
 RecordFileWriter::RecordFileWriter(const std::string& path, double rate_hz) : path_(path) {
-  CheckOutputPath(path, kWhat);
+  CheckOutputPath(path, kRecordWhat);
   temp_path_ = path + ".tmp.XXXXXX";
   const int fd = ::mkstemp(temp_path_.data());
   if (fd < 0) {
@@ -104,7 +104,7 @@ RecordFileWriter::RecordFileWriter(const std::string& path, double rate_hz) : pa
   std::string head(kRecordMagic);
   head += '\n';
   head += RateLine(rate_hz);
-  for (const std::string_view c : kColumns) {
+  for (const std::string_view c : kRecordColumns) {
     head += c;
     head += ',';
   }
@@ -226,8 +226,8 @@ class RowParser {
   std::string_view Next() { return fields_[column_++]; }
   [[noreturn]] void Bad(std::string_view value, const char* expected) const {
     std::ostringstream m;
-    m << "record file '" << path_ << "': line " << line_ << ", column " << kColumns[column_ - 1]
-      << ": '" << value << "' is not " << expected;
+    m << "record file '" << path_ << "': line " << line_ << ", column "
+      << kRecordColumns[column_ - 1] << ": '" << value << "' is not " << expected;
     throw Error(m.str());
   }
 
@@ -263,10 +263,10 @@ Record ReadRecord(const std::string& path) {
   std::vector<std::string_view> fields;
   if (!std::getline(in, line)) fail(3, "no header row");
   Split(line, fields);
-  if (fields.size() != kColumns.size() ||
-      !std::equal(fields.begin(), fields.end(), kColumns.begin())) {
+  if (fields.size() != kRecordColumns.size() ||
+      !std::equal(fields.begin(), fields.end(), kRecordColumns.begin())) {
     std::string expected;
-    for (const std::string_view c : kColumns) (expected += c) += ',';
+    for (const std::string_view c : kRecordColumns) (expected += c) += ',';
     expected.pop_back();
     fail(3, "the header row is not '" + expected + "'");
   }
@@ -275,9 +275,9 @@ Record ReadRecord(const std::string& path) {
     ++n;
     if (line.empty()) continue;
     Split(line, fields);
-    if (fields.size() != kColumns.size()) {
-      fail(n,
-           std::to_string(fields.size()) + " fields, expected " + std::to_string(kColumns.size()));
+    if (fields.size() != kRecordColumns.size()) {
+      fail(n, std::to_string(fields.size()) + " fields, expected " +
+                  std::to_string(kRecordColumns.size()));
     }
     RowParser p(path, n, fields);
     RecordSample r;

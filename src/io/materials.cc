@@ -24,8 +24,8 @@ const std::array<Material, 3>& Table() {
   return table;
 }
 
-double Required(const io::StrictObject& o, const std::string& key, double lo, double hi,
-                const std::string& unit) {
+double RequiredMaterialNumber(const io::StrictObject& o, const std::string& key, double lo,
+                              double hi, const std::string& unit) {
   const std::optional<double> value = o.Number(key);
   if (!value) o.FailAt(key, "missing; a material gives amplitude, decay and frequency");
   if (!(*value >= lo && *value <= hi)) {
@@ -64,10 +64,10 @@ Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& va
   Material m;
   m.name = o.String("name").value_or(default_name);
   if (m.name.empty()) o.FailAt("name", "must not be empty");
-  m.amplitude_Ns_per_m = Required(o, "amplitude_Ns_per_m", 0.0, 1e4, "N/(m/s)");
-  m.decay_per_s = Required(o, "decay_per_s", 1e-3, 1e5, "1/s");
+  m.amplitude_Ns_per_m = RequiredMaterialNumber(o, "amplitude_Ns_per_m", 0.0, 1e4, "N/(m/s)");
+  m.decay_per_s = RequiredMaterialNumber(o, "decay_per_s", 1e-3, 1e5, "1/s");
   // the frequency's upper bound depends on the time step (Nyquist): Configure checks it
-  m.frequency_hz = Required(o, "frequency_hz", 1e-3, 1e5, "Hz");
+  m.frequency_hz = RequiredMaterialNumber(o, "frequency_hz", 1e-3, 1e5, "Hz");
   return m;
 }
 

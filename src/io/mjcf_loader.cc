@@ -99,25 +99,25 @@ constexpr double kMaxGravity = 1e3;                // m/s^2, |gravity|
 constexpr double kMaxFriction = 1e2;               // friction coefficient
 constexpr double kMaxInitialOverlap = 1e-3;        // m, deeper overlaps at start fail
 
-std::string Num(double v) {
+std::string SceneNumber(double v) {
   std::ostringstream s;
   s << v;
   return s.str();
 }
 
 // throws unless v is finite and lo <= v <= hi
-void CheckRange(const std::string& path, const std::string& what, double v, double lo, double hi,
-                const char* unit) {
+void CheckSceneRange(const std::string& path, const std::string& what, double v, double lo,
+                     double hi, const char* unit) {
   if (std::isfinite(v) && v >= lo && v <= hi) return;
-  throw Error("scene file '" + path + "': " + what + " is " + Num(v) + (unit[0] ? " " : "") + unit +
-              ", outside the valid range [" + Num(lo) + ", " + Num(hi) + "]" +
-              (unit[0] ? " " : "") + unit);
+  throw Error("scene file '" + path + "': " + what + " is " + SceneNumber(v) +
+              (unit[0] ? " " : "") + unit + ", outside the valid range [" + SceneNumber(lo) + ", " +
+              SceneNumber(hi) + "]" + (unit[0] ? " " : "") + unit);
 }
 
 void CheckVec(const std::string& path, const std::string& what, const mjtNum* v, int n,
               double bound, const char* unit) {
   for (int i = 0; i < n; ++i) {
-    CheckRange(path, what + "[" + std::to_string(i) + "]", v[i], -bound, bound, unit);
+    CheckSceneRange(path, what + "[" + std::to_string(i) + "]", v[i], -bound, bound, unit);
   }
 }
 
@@ -262,10 +262,11 @@ std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& mo
                   (merged > 1 ? " (with the bodies welded into it)" : "") +
                   " has no positive mass and inertia (give its geoms a mass or density)");
     }
-    CheckRange(path, "the mass of body '" + name + "'", body.mass_kg, kMinMass, kMaxMass, "kg");
+    CheckSceneRange(path, "the mass of body '" + name + "'", body.mass_kg, kMinMass, kMaxMass,
+                    "kg");
     for (int i = 0; i < 3; ++i) {
-      CheckRange(path, "inertia[" + std::to_string(i) + "] of body '" + name + "'",
-                 body.inertia_kgm2[i], 0.0, kMaxInertia, "kg m^2");
+      CheckSceneRange(path, "inertia[" + std::to_string(i) + "] of body '" + name + "'",
+                      body.inertia_kgm2[i], 0.0, kMaxInertia, "kg m^2");
     }
     CheckVec(path, "the centre of mass of body '" + name + "'", body.ipos_B.data(), 3, kMaxPosition,
              "m");
@@ -306,14 +307,14 @@ void CheckGeomNumbers(const mjModel* m, const std::string& path, int g, const Ge
                                                                    : 0;
   for (int i = 0; i < 3; ++i) {
     const double lo = i < used ? kMinSize : 0.0;
-    CheckRange(path, "size[" + std::to_string(i) + "] of " + who, m->geom_size[3 * g + i], lo,
-               kMaxSize, "m");
+    CheckSceneRange(path, "size[" + std::to_string(i) + "] of " + who, m->geom_size[3 * g + i], lo,
+                    kMaxSize, "m");
   }
   if (geom.type != GeomType::kPlane) {
-    CheckRange(path, "the bounding radius of " + who, m->geom_rbound[g], 0.0, kMaxSize, "m");
+    CheckSceneRange(path, "the bounding radius of " + who, m->geom_rbound[g], 0.0, kMaxSize, "m");
   }
   CheckVec(path, "the position of " + who, m->geom_pos + 3 * g, 3, kMaxPosition, "m");
-  CheckRange(path, "the friction of " + who, m->geom_friction[3 * g], 0.0, kMaxFriction, "");
+  CheckSceneRange(path, "the friction of " + who, m->geom_friction[3 * g], 0.0, kMaxFriction, "");
 }
 
 void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>& body_index,
@@ -393,7 +394,7 @@ void InitialState(const mjModel* m, const std::string& path, Model& model) {
     std::copy(m->key_qvel + key * m->nv, m->key_qvel + (key + 1) * m->nv, qvel.begin());
     if (m->key_time[key] != 0.0) {
       model.load_warnings.push_back("scene file '" + path + "': keyframe 'initial' has time=\"" +
-                                    Num(m->key_time[key]) +
+                                    SceneNumber(m->key_time[key]) +
                                     "\"; rigidtouch starts every run at t = 0 and ignores it");
     }
   }
@@ -452,8 +453,8 @@ void CheckInitialOverlap(const Model& model, const std::string& path) {
     const int g1 = std::min(c.geom_a, c.geom_b), g2 = std::max(c.geom_a, c.geom_b);
     const mjModel* m = model.collision.get();
     throw Error("scene file '" + path + "': geoms '" + GeomName(m, model.geoms[g1]) + "' and '" +
-                GeomName(m, model.geoms[g2]) + "' overlap by " + Num(c.depth_m) +
-                " m at the start (more than " + Num(kMaxInitialOverlap) +
+                GeomName(m, model.geoms[g2]) + "' overlap by " + SceneNumber(c.depth_m) +
+                " m at the start (more than " + SceneNumber(kMaxInitialOverlap) +
                 " m); move them apart in the scene or its keyframe 'initial'");
   }
 }
@@ -522,15 +523,16 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   // parameter); a step given by the caller is checked, and named, there
   const double h = m->opt.timestep;
   if (!options.timestep_s && !(h >= limits::kMinTimestep_s && h <= limits::kMaxTimestep_s)) {
-    throw Error("scene file '" + path + "': <option timestep=\"" + Num(h) +
-                "\"> is out of range: valid " + Num(limits::kMinTimestep_s) + " to " +
-                Num(limits::kMaxTimestep_s) + " s (or give the time step in the config or a flag)");
+    throw Error("scene file '" + path + "': <option timestep=\"" + SceneNumber(h) +
+                "\"> is out of range: valid " + SceneNumber(limits::kMinTimestep_s) + " to " +
+                SceneNumber(limits::kMaxTimestep_s) +
+                " s (or give the time step in the config or a flag)");
   }
   model.gravity_W = Vec3(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
   if (!model.gravity_W.allFinite() || model.gravity_W.norm() > kMaxGravity) {
-    throw Error("scene file '" + path + "': option gravity (" + Num(model.gravity_W.x()) + " " +
-                Num(model.gravity_W.y()) + " " + Num(model.gravity_W.z()) +
-                ") m/s^2 is not finite or longer than " + Num(kMaxGravity) + " m/s^2");
+    throw Error("scene file '" + path + "': option gravity (" + SceneNumber(model.gravity_W.x()) +
+                " " + SceneNumber(model.gravity_W.y()) + " " + SceneNumber(model.gravity_W.z()) +
+                ") m/s^2 is not finite or longer than " + SceneNumber(kMaxGravity) + " m/s^2");
   }
 
   if (m->opt.disableflags & mjDSBL_GRAVITY) model.gravity_W.setZero();  // <flag gravity="disable"/>

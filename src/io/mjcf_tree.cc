@@ -11,7 +11,7 @@ namespace {
 Vec3 MjVec3(const mjtNum* v) {
   return Vec3(v[0], v[1], v[2]);
 }
-Quat MjQuat(const mjtNum* q) {
+Quat MjUnitQuat(const mjtNum* q) {
   return Quat(q[0], q[1], q[2], q[3]).normalized();
 }
 
@@ -69,10 +69,10 @@ dynamics::TreeModel TreeFromMjModel(const mjModel* m) {
     dynamics::TreeBody& b = bodies[i - 1];
     b.parent = m->body_parentid[i] - 1;
     b.pos_m = MjVec3(m->body_pos + 3 * i);
-    b.quat = MjQuat(m->body_quat + 4 * i);
+    b.quat = MjUnitQuat(m->body_quat + 4 * i);
     b.mass_kg = m->body_mass[i];
     b.com_m = MjVec3(m->body_ipos + 3 * i);
-    const Mat3 R = MjQuat(m->body_iquat + 4 * i).toRotationMatrix();
+    const Mat3 R = MjUnitQuat(m->body_iquat + 4 * i).toRotationMatrix();
     b.inertia_kgm2 = R * MjVec3(m->body_inertia + 3 * i).asDiagonal() * R.transpose();
     b.inertia_kgm2 = 0.5 * (b.inertia_kgm2 + b.inertia_kgm2.transpose()).eval();
     for (int k = 0; k < m->body_jntnum[i]; ++k) {

@@ -16,7 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Reason(int error_number) {
+std::string ErrnoReason(int error_number) {
   return std::generic_category().message(error_number);
 }
 
@@ -35,18 +35,18 @@ std::string FolderProblem(const std::string& dir) {
   struct stat st {};
   if (::stat(dir.c_str(), &st) != 0) {
     const int e = errno;
-    if (e == ENOENT) return "folder '" + dir + "' does not exist (" + Reason(e) + ")";
-    return "folder '" + dir + "': " + Reason(e);
+    if (e == ENOENT) return "folder '" + dir + "' does not exist (" + ErrnoReason(e) + ")";
+    return "folder '" + dir + "': " + ErrnoReason(e);
   }
   if (!S_ISDIR(st.st_mode)) return "'" + dir + "' is not a folder";
   if (::access(dir.c_str(), W_OK | X_OK) != 0) {
-    return "folder '" + dir + "' is not writable (" + Reason(errno) + ")";
+    return "folder '" + dir + "' is not writable (" + ErrnoReason(errno) + ")";
   }
   // access() passes for root, and on file systems that take no new files (/proc, /sys): a file
   // created and removed at once is the only sure test, made before the run rather than after it
   std::string probe = (fs::path(dir) / ".rigidtouch-probe.XXXXXX").string();
   const int fd = ::mkstemp(probe.data());
-  if (fd < 0) return "folder '" + dir + "' takes no new file (" + Reason(errno) + ")";
+  if (fd < 0) return "folder '" + dir + "' takes no new file (" + ErrnoReason(errno) + ")";
   ::close(fd);
   ::unlink(probe.c_str());
   return "";
@@ -79,7 +79,7 @@ bool WriteAll(int fd, std::string_view data) {
 }  // namespace
 
 std::string WriteFailureReason(int error_number) {
-  std::string reason = Reason(error_number);
+  std::string reason = ErrnoReason(error_number);
   if (error_number == EFBIG) reason += "; the file size limit (ulimit -f) was reached";
   if (error_number == ENOSPC) reason += "; the disk is full";
   if (error_number == EDQUOT) reason += "; the disk quota is used up";
@@ -95,7 +95,7 @@ void CheckOutputPath(const std::string& path, std::string_view what) {
   // lstat: a link is judged itself, never by what it points to
   if (::lstat(path.c_str(), &st) != 0) {
     if (errno == ENOENT) return;
-    throw Error(Prefix(what, path) + Reason(errno));
+    throw Error(Prefix(what, path) + ErrnoReason(errno));
   }
   if (!S_ISREG(st.st_mode)) {
     throw Error(Prefix(what, path) + "it is " + KindOf(st.st_mode) +

@@ -96,7 +96,7 @@ std::string LineColumn(std::string_view text, std::size_t byte) {
 }
 
 // nlohmann's reason without its "[json.exception...] parse error at line L, column C: " prefix
-std::string Reason(const std::string& what) {
+std::string JsonReason(const std::string& what) {
   const std::size_t column = what.find("column ");
   const std::size_t colon = what.find(": ", column == std::string::npos ? 0 : column);
   return colon == std::string::npos ? what : what.substr(colon + 2);
@@ -139,7 +139,7 @@ nlohmann::json ParseJsonText(std::string_view text, const JsonSource& source) {
     const std::string field = tracker.Path();
     source.Fail("", "not valid JSON at " + LineColumn(text, e.byte) +
                         (field.empty() ? "" : " (reading field " + field + ")") + ": " +
-                        Reason(e.what()));
+                        JsonReason(e.what()));
   } catch (const json::out_of_range& e) {
     // 406: a number beyond the range of a double, which would otherwise become infinity
     source.Fail(tracker.Path(), OverflowToken(e.what()) + " is not a finite number");

@@ -18,36 +18,36 @@ namespace {
 
 constexpr std::size_t kColumnCount = 30;
 
-constexpr std::array<std::string_view, kColumnCount> kColumns = {"time_s",
-                                                                 "tool_x_m",
-                                                                 "tool_y_m",
-                                                                 "tool_z_m",
-                                                                 "tool_vx_mps",
-                                                                 "tool_vy_mps",
-                                                                 "tool_vz_mps",
-                                                                 "penalty_fx_N",
-                                                                 "penalty_fy_N",
-                                                                 "penalty_fz_N",
-                                                                 "impulsive_fx_N",
-                                                                 "impulsive_fy_N",
-                                                                 "impulsive_fz_N",
-                                                                 "device_fx_N",
-                                                                 "device_fy_N",
-                                                                 "device_fz_N",
-                                                                 "hand_fx_N",
-                                                                 "hand_fy_N",
-                                                                 "hand_fz_N",
-                                                                 "wall_nx",
-                                                                 "wall_ny",
-                                                                 "wall_nz",
-                                                                 "penetration_m",
-                                                                 "tool_contacts",
-                                                                 "impulses",
-                                                                 "kinetic_energy_before_J",
-                                                                 "kinetic_energy_after_J",
-                                                                 "clipped",
-                                                                 "tap",
-                                                                 "step"};
+constexpr std::array<std::string_view, kColumnCount> kTraceColumns = {"time_s",
+                                                                      "tool_x_m",
+                                                                      "tool_y_m",
+                                                                      "tool_z_m",
+                                                                      "tool_vx_mps",
+                                                                      "tool_vy_mps",
+                                                                      "tool_vz_mps",
+                                                                      "penalty_fx_N",
+                                                                      "penalty_fy_N",
+                                                                      "penalty_fz_N",
+                                                                      "impulsive_fx_N",
+                                                                      "impulsive_fy_N",
+                                                                      "impulsive_fz_N",
+                                                                      "device_fx_N",
+                                                                      "device_fy_N",
+                                                                      "device_fz_N",
+                                                                      "hand_fx_N",
+                                                                      "hand_fy_N",
+                                                                      "hand_fz_N",
+                                                                      "wall_nx",
+                                                                      "wall_ny",
+                                                                      "wall_nz",
+                                                                      "penetration_m",
+                                                                      "tool_contacts",
+                                                                      "impulses",
+                                                                      "kinetic_energy_before_J",
+                                                                      "kinetic_energy_after_J",
+                                                                      "clipped",
+                                                                      "tap",
+                                                                      "step"};
 
 // integer columns: tool_contacts, impulses, clipped, tap, step
 constexpr bool IsIntegerColumn(std::size_t k) {
@@ -116,7 +116,7 @@ std::vector<std::string_view> SplitCommas(std::string_view line) {
 }  // namespace
 
 std::span<const std::string_view> TraceColumns() {
-  return kColumns;
+  return kTraceColumns;
 }
 
 void WriteTraceCsv(const std::string& path, std::span<const TraceSample> samples) {
@@ -124,7 +124,7 @@ void WriteTraceCsv(const std::string& path, std::span<const TraceSample> samples
   text.reserve(64 + samples.size() * 400);
   for (std::size_t i = 0; i < kColumnCount; ++i) {
     if (i > 0) text += ',';
-    text += kColumns[i];
+    text += kTraceColumns[i];
   }
   text += '\n';
   for (const TraceSample& s : samples) AppendRow(text, s);
@@ -144,12 +144,12 @@ std::vector<TraceSample> ReadTraceCsv(const std::string& path) {
   const std::vector<std::string_view> header = SplitCommas(line);
   for (std::size_t c = 0; c < header.size(); ++c) {
     for (std::size_t k = 0; k < kColumnCount; ++k) {
-      if (header[c] == kColumns[k]) index[k] = static_cast<int>(c);
+      if (header[c] == kTraceColumns[k]) index[k] = static_cast<int>(c);
     }
   }
   std::string missing;
   for (std::size_t k = 0; k < kColumnCount; ++k) {
-    if (index[k] < 0) missing += (missing.empty() ? "" : ", ") + std::string(kColumns[k]);
+    if (index[k] < 0) missing += (missing.empty() ? "" : ", ") + std::string(kTraceColumns[k]);
   }
   if (!missing.empty()) {
     throw Error("trace file '" + path + "' line 1: missing columns: " + missing);
@@ -173,7 +173,7 @@ std::vector<TraceSample> ReadTraceCsv(const std::string& path) {
                                                 : std::from_chars(first, last, values[k]);
       if (field.empty() || result.ec != std::errc() || result.ptr != last) {
         throw Error("trace file '" + path + "' line " + std::to_string(line_number) + ": column '" +
-                    std::string(kColumns[k]) + "' value '" + std::string(field) + "' is not " +
+                    std::string(kTraceColumns[k]) + "' value '" + std::string(field) + "' is not " +
                     (IsIntegerColumn(k) ? "an integer" : "a number"));
       }
     }

@@ -5,7 +5,7 @@
 namespace rigidtouch::render {
 namespace {
 
-bool Finite(const DeviceState& s) {
+bool FiniteState(const DeviceState& s) {
   return std::isfinite(s.time_s) && s.position_m.allFinite() && s.velocity_mps.allFinite() &&
          s.angular_velocity_radps.allFinite() && s.orientation.coeffs().allFinite();
 }
@@ -42,7 +42,7 @@ CouplingResult Couple(const Model& model, Data& data, const TickInput& input) {
     } else {
       r.device_ok = false;
     }
-  } else if (!dev.valid || !Finite(dev)) {
+  } else if (!dev.valid || !FiniteState(dev)) {
     r.device_ok = false;
   } else if (!Plausible(model.device, dev)) {
     data.Warn(Warning::kImplausibleDeviceState);

@@ -128,7 +128,7 @@ std::string RangeText(const ParamSpec& spec) {
   return text;
 }
 
-void Require(bool ok, const std::string& message) {
+void RequireParams(bool ok, const std::string& message) {
   if (!ok) throw Error(message);
 }
 
@@ -197,16 +197,16 @@ std::array<double, kPerceptBands> PerceptBandCentres_hz() {
 
 PerceptVector ToPerceptVector(const ObserverParams& p, const TapPercept& percept) {
   auto ok = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  Require(
+  RequireParams(
       ok(percept.peak_force_N) && ok(percept.vibration_rms_N) && ok(percept.dominant_frequency_hz),
       "stimulus source returned a tap percept with a negative or non-finite force or "
       "frequency");
-  Require(std::isfinite(percept.periodicity) && percept.periodicity >= 0.0 &&
-              percept.periodicity <= 1.0,
-          "stimulus source returned a tap percept with a periodicity outside [0, 1]");
+  RequireParams(std::isfinite(percept.periodicity) && percept.periodicity >= 0.0 &&
+                    percept.periodicity <= 1.0,
+                "stimulus source returned a tap percept with a periodicity outside [0, 1]");
   double fraction_sum = 0.0;
   for (double f : percept.band_energy_fraction) {
-    Require(ok(f), "stimulus source returned a negative or non-finite band energy fraction");
+    RequireParams(ok(f), "stimulus source returned a negative or non-finite band energy fraction");
     fraction_sum += f;
   }
 

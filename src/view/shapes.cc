@@ -23,7 +23,7 @@ void Triangle(std::vector<float>& out, const Vec3& a, const Vec3& b, const Vec3&
   Vertex(out, c, n);
 }
 
-void Box(const Vec3& half, std::vector<float>& out) {
+void BoxTriangles(const Vec3& half, std::vector<float>& out) {
   for (int axis = 0; axis < 3; ++axis) {
     for (const double side : {-1.0, 1.0}) {
       const int i = (axis + 1) % 3, j = (axis + 2) % 3;
@@ -125,7 +125,7 @@ void AppendGeomTriangles(const Model& model, const GeomModel& g, std::vector<flo
       Capsule(g.size.x(), g.size.y(), out);
       return;
     case GeomType::kBox:
-      Box(g.size, out);
+      BoxTriangles(g.size, out);
       return;
     case GeomType::kMesh:
       // cylinders and ellipsoids collide as meshes (GeomModel::mj_type tells them apart)

@@ -105,8 +105,8 @@ struct Scope {
   }
 };
 
-void Plot(const char* label, const std::vector<float>& v, ImU32 color, float max,
-          const char* text) {
+void PlotScope(const char* label, const std::vector<float>& v, ImU32 color, float max,
+               const char* text) {
   ImGui::PushStyleColor(ImGuiCol_PlotLines, color);
   ImGui::PlotLines(label, v.data(), static_cast<int>(v.size()), 0, text, 0.0f, max,
                    ImVec2(360.0f, 70.0f));
@@ -357,10 +357,10 @@ void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& s
   // each trace's full scale written over it: the force panels span 0 to the device's limit
   char force_range[48];
   std::snprintf(force_range, sizeof force_range, "0 to %.2f N", force_scale);
-  Plot("total N", scope.total, kTotalColor, force_scale, force_range);
-  Plot("penalty N", scope.penalty, kPenaltyColor, force_scale, force_range);
-  Plot("impulsive N", scope.impulsive, kImpulsiveColor, force_scale, force_range);
-  Plot("penetr. mm", scope.penetration_mm, kPenetrationColor, 5.0f, "0 to 5 mm");
+  PlotScope("total N", scope.total, kTotalColor, force_scale, force_range);
+  PlotScope("penalty N", scope.penalty, kPenaltyColor, force_scale, force_range);
+  PlotScope("impulsive N", scope.impulsive, kImpulsiveColor, force_scale, force_range);
+  PlotScope("penetr. mm", scope.penetration_mm, kPenetrationColor, 5.0f, "0 to 5 mm");
   ImGui::Separator();
   PanelWarnings(snap);
   if (has_mouse) ImGui::TextDisabled("drag: move the tool  wheel: depth  T: tap");
