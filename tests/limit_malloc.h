@@ -15,7 +15,10 @@
 #include <cstddef>
 #include <cstdlib>
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(RIGIDTOUCH_SANITIZE)
+// (gcc defines __SANITIZE_*__; clang does not, so the build's own definitions are checked too)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) ||       \
+    defined(RIGIDTOUCH_SANITIZE) || defined(RIGIDTOUCH_SANITIZE_THREAD) || \
+    defined(RIGIDTOUCH_FUZZING)
 #define RIGIDTOUCH_MALLOC_COUNTING 0
 #else
 #define RIGIDTOUCH_MALLOC_COUNTING 1
