@@ -417,13 +417,13 @@ TEST(WorkerTest, ImpulseGroupsTooLargeForTheWorkersLaneAreSolvedByTheTicksThread
 // the 100-box pile kicked (every body given a seeded random velocity, as in KickedPileTest): its
 // groups of 300-600 rows go to the interior-point method, and their next impulses go there at
 // once (the window's hint, read by whichever thread solves the group). The results are those of
-// one thread, bit for bit
-TEST(WorkerTest, KickedPileWithTheInteriorPointHintIsTheSameOnTwoThreads) {
+// one thread, bit for bit. Returns the ticks with an impulse while the hint was set.
+int KickedPileOnOneAndTwoThreads(int settle, int steps) {
   OneAndTwoThreads t(std::string(RIGIDTOUCH_SCENES) + "/pile.xml");
   const Model &m1 = t.m1, &m2 = t.m2;
   Data &d1 = t.d1, &d2 = t.d2;
   TickInput in;
-  for (int s = 0; s < 500; ++s) {  // settle
+  for (int s = 0; s < settle; ++s) {
     Tick(m1, d1, in);
     Tick(m2, d2, in);
   }
@@ -438,17 +438,29 @@ TEST(WorkerTest, KickedPileWithTheInteriorPointHintIsTheSameOnTwoThreads) {
   }
   const contact::ImpulseScratch& shared = d2.workspace->impulse;
   int hinted_ticks = 0;
-  for (int s = 0; s < 300 || (shared.solved_on_worker == 0 && s < 1500); ++s) {
+  for (int s = 0; s < steps || (shared.solved_on_worker == 0 && s < 1500); ++s) {
     bool hint = false;
     for (const WindowState& window : d1.window) hint = hint || window.interior;
     Tick(m1, d1, in);
     Tick(m2, d2, in);
     std::string why;
-    ASSERT_TRUE(SameImpulses(d1, d2, &why)) << "step " << s << ": " << why;
+    EXPECT_TRUE(SameImpulses(d1, d2, &why)) << "step " << s << ": " << why;
+    if (!why.empty()) break;
     if (hint && d1.nimpulse > 0) ++hinted_ticks;
   }
-  EXPECT_GT(hinted_ticks, 10);  // the hint was in use (measured: 224 ticks)
   EXPECT_GT(shared.solved_on_worker, 0);
+  return hinted_ticks;
+}
+
+// 0.3 s after the kick: a release-build test (label slow-parallel)
+TEST(WorkerTest, SlowKickedPileWithTheInteriorPointHintIsTheSameOnTwoThreads) {
+  EXPECT_GT(KickedPileOnOneAndTwoThreads(500, 300), 10);  // the hint was in use (measured: 224)
+}
+
+// its fast counterpart, run under the sanitizers too: the first 0.08 s after the kick
+// (measured: 67 ticks with the hint in use)
+TEST(WorkerTest, KickedPileWithTheInteriorPointHintIsTheSameOnTwoThreadsAtFirst) {
+  EXPECT_GT(KickedPileOnOneAndTwoThreads(300, 80), 20);
 }
 
 // an allocation guard that lives on the worker thread between two of its jobs
