@@ -84,10 +84,12 @@ took "$start_s" "README check"
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer over the tests"
 start_s=$(date +%s)
 # clang at -O1 -g1 (line-number stacks): a third of gcc's -O2 -g build time, the tests as fast;
-# the library, the CLI and the tests only (not the viewer, the benchmark or the Python module)
+# the library, the CLI, the tests and the libFuzzer harnesses of tests/fuzz, which share the
+# library compiled once (not the viewer, the benchmark or the Python module)
 CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DRIGIDTOUCH_WERROR=ON \
-  -DRIGIDTOUCH_SANITIZE=ON -DRIGIDTOUCH_BUILD_TESTS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
+  -DRIGIDTOUCH_SANITIZE=ON -DRIGIDTOUCH_BUILD_FUZZERS=ON -DRIGIDTOUCH_BUILD_TESTS=ON \
+  -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
 cmake --build build-asan -j"$jobs"
 took "$start_s" "AddressSanitizer build"
 # the slow tests ran in the release pass above; each has a fast counterpart that runs here
@@ -114,34 +116,21 @@ took "$start_s" "ThreadSanitizer pass"
 
 echo "== libFuzzer: each harness of tests/fuzz from its seed corpus, bounded in time"
 start_s=$(date +%s)
-# clang's libFuzzer with ASan + UBSan; -O0: the cold build is the pass's largest cost, and
-# ccache, when installed, makes later ones seconds (it does not cache a file compiled against
-# precompiled headers: with it, none are made)
-compile_opts=(-DRIGIDTOUCH_PCH=ON)
-if command -v ccache >/dev/null; then
-  compile_opts=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DRIGIDTOUCH_PCH=OFF)
-fi
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O0" -DRIGIDTOUCH_WERROR=ON "${compile_opts[@]}" \
-  -DRIGIDTOUCH_UNITY_BUILD=OFF \
-  -DRIGIDTOUCH_BUILD_TESTS=OFF -DRIGIDTOUCH_BUILD_FUZZERS=ON -DRIGIDTOUCH_BUILD_VIEWER=OFF >/dev/null
+# built with ASan + UBSan in the AddressSanitizer pass above
 fuzz_targets=$(ls tests/fuzz/*_fuzz.cc | xargs -n1 basename | sed 's/\.cc$//')
-# shellcheck disable=SC2086
-cmake --build build-fuzz -j"$jobs" --target $fuzz_targets
-took "$start_s" "fuzz build"
 for target in $fuzz_targets; do
   name=${target%_fuzz}
   # new inputs go to a scratch folder, the committed seeds stay as they are; a crash leaves its
-  # input in build-fuzz/artifacts/ and fails the pass. A fixed mutation seed makes a run
+  # input in build-asan/fuzz/artifacts/ and fails the pass. A fixed mutation seed makes a run
   # repeatable (a crash here reproduces with the same seed); RIGIDTOUCH_FUZZ_SEED=0 (libFuzzer:
   # a random seed) and a larger RIGIDTOUCH_FUZZ_SECONDS explore further
-  scratch="build-fuzz/corpus/$name"
-  mkdir -p "$scratch" build-fuzz/artifacts
+  scratch="build-asan/fuzz/corpus/$name"
+  mkdir -p "$scratch" build-asan/fuzz/artifacts
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    "build-fuzz/tests/fuzz/$target" -max_total_time="${RIGIDTOUCH_FUZZ_SECONDS:-20}" \
+    "build-asan/tests/fuzz/$target" -max_total_time="${RIGIDTOUCH_FUZZ_SECONDS:-20}" \
     -seed="${RIGIDTOUCH_FUZZ_SEED:-1}" \
     -runs=2000000 -max_len=4096 -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-    -artifact_prefix=build-fuzz/artifacts/"$name"- \
+    -artifact_prefix=build-asan/fuzz/artifacts/"$name"- \
     "$scratch" "tests/fuzz/corpus/$name" 2>&1 | tail -n 12
 done
 took "$start_s" "fuzz pass"
