@@ -26,20 +26,8 @@ class BulletEngine final : public Engine {
   ~BulletEngine() override;
 
   std::string_view Name() const override { return "bullet"; }
-  void Load(const Scene& scene) override;
-  void Step() override;
-  int ContactCount() const override;
-  int BodyContactCount(std::string_view body) const override;
-  double DeepestPenetration_m() const override;
-  Vec3 BodyPosition(std::string_view body) const override;
-  Quat BodyOrientation(std::string_view body) const override;
-  void SetBodyMotion(std::string_view body, const Vec3& position_m,
-                     const Vec3& velocity_mps) override;
-  void SaveSnapshot() override;
-  void RestoreSnapshot() override;
-  bool StateIsFinite() const override;
+  RIGIDTOUCH_PEER_ENGINE_OVERRIDES
   long WarningCount() const override { return 0; }
-  std::string Configuration() const override;
 
   /// Returns the Bullet body built for the named MJCF body (null for a static one). Throws
   /// `rigidtouch::Error` when the scene has no such body.

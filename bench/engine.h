@@ -68,6 +68,24 @@ class Engine {
   virtual std::string Configuration() const = 0;
 };
 
+/// The overrides of Engine that a peer engine (bench/bullet_engine.h, bench/mujoco_engine.h)
+/// defines in its own .cc file: the one declaration of them, so that a call added to Engine is
+/// added here once. Name() and WarningCount() stay in each class.
+#define RIGIDTOUCH_PEER_ENGINE_OVERRIDES                                                      \
+  void Load(const Scene& scene) override;                                                     \
+  void Step() override;                                                                       \
+  int ContactCount() const override;                                                          \
+  int BodyContactCount(std::string_view body) const override;                                 \
+  double DeepestPenetration_m() const override;                                               \
+  Vec3 BodyPosition(std::string_view body) const override;                                    \
+  Quat BodyOrientation(std::string_view body) const override;                                 \
+  void SetBodyMotion(std::string_view body, const Vec3& position_m, const Vec3& velocity_mps) \
+      override;                                                                               \
+  void SaveSnapshot() override;                                                               \
+  void RestoreSnapshot() override;                                                            \
+  bool StateIsFinite() const override;                                                        \
+  std::string Configuration() const override;
+
 /// Makes a new, unloaded engine.
 using EngineFactory = std::unique_ptr<Engine> (*)();
 

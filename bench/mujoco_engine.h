@@ -29,20 +29,8 @@ class MujocoEngine final : public Engine {
   ~MujocoEngine() override;
 
   std::string_view Name() const override { return "mujoco"; }
-  void Load(const Scene& scene) override;
-  void Step() override;
-  int ContactCount() const override;
-  int BodyContactCount(std::string_view body) const override;
-  double DeepestPenetration_m() const override;
-  Vec3 BodyPosition(std::string_view body) const override;
-  Quat BodyOrientation(std::string_view body) const override;
-  void SetBodyMotion(std::string_view body, const Vec3& position_m,
-                     const Vec3& velocity_mps) override;
-  void SaveSnapshot() override;
-  void RestoreSnapshot() override;
-  bool StateIsFinite() const override;
+  RIGIDTOUCH_PEER_ENGINE_OVERRIDES
   long WarningCount() const override;
-  std::string Configuration() const override;
 
   /// Returns the compiled model (null before Load()).
   const mjModel* model() const { return model_; }

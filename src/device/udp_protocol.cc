@@ -6,6 +6,10 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <string_view>
+#include <type_traits>
+
+#include "io/record_fields.h"
 
 namespace rigidtouch::device {
 namespace {
@@ -70,22 +74,67 @@ constexpr std::size_t kServerNonceOffset = 24;
 constexpr std::size_t kCounterOffset = 32;
 static_assert(kCounterOffset + 8 == kHeaderBytes);
 
-// state payload offsets from the start of the datagram
-constexpr std::size_t kStateSequence = 40;
-constexpr std::size_t kStateTime = 48;
-constexpr std::size_t kStatePosition = 56;
-constexpr std::size_t kStateOrientation = 80;
-constexpr std::size_t kStateVelocity = 112;
-constexpr std::size_t kStateAngularVelocity = 136;
-constexpr std::size_t kStateButtons = 160;
-static_assert(kStateButtons + 4 + kMacBytes == kStatePacketBytes);
-
-// command payload offsets from the start of the datagram
-constexpr std::size_t kCommandSequence = 40;
-constexpr std::size_t kCommandForce = 48;
-constexpr std::size_t kCommandTorque = 72;
+// the state's and the command's fields on the wire: the offsets in io/record_fields.h, from the
+// start of the datagram (docs/device-protocol.md, "State" and "Command"). The checks below read
+// these before decoding; tests/device/udp_protocol_test.cc holds the table to them
+constexpr std::size_t kStateTime = 48;         // the first of 14 contiguous f64
+constexpr std::size_t kStateOrientation = 80;  // checked for a unit quaternion before decoding
+constexpr std::size_t kCommandForce = 48;      // the first of 6 contiguous f64
 constexpr std::size_t kCommandFlags = 96;
+
 static_assert(kCommandFlags + 4 + kMacBytes == kCommandPacketBytes);
+
+// one field at its offset (fields without one are not sent); a flag sets its bit of the u32
+struct PutWire {
+  std::uint8_t* out;
+  template <class T>
+  void operator()(const io::RecordField& f, const T& v) const {
+    if (f.wire_offset < 0) return;
+    std::uint8_t* at = out + f.wire_offset;
+    if constexpr (std::is_same_v<T, bool>) {
+      if (v) PutU32(at, GetU32(at) | f.wire_bit);
+    } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+      PutU64(at, v);
+    } else if constexpr (std::is_same_v<T, std::uint32_t>) {
+      PutU32(at, v);
+    } else if constexpr (std::is_same_v<T, double>) {
+      PutF64(at, v);
+    } else if constexpr (std::is_same_v<T, Vec3>) {
+      PutVec3(at, v);
+    } else {
+      static_assert(std::is_same_v<T, Quat>);
+      PutF64(at, v.w());
+      PutF64(at + 8, v.x());
+      PutF64(at + 16, v.y());
+      PutF64(at + 24, v.z());
+    }
+  }
+};
+
+// one field from its offset; fields without one are left as they are. A flag is its bit; the
+// flags word's other bits are reserved and ignored (they must be sent as zero)
+struct GetWire {
+  const std::uint8_t* in;
+  template <class T>
+  void operator()(const io::RecordField& f, T& v) const {
+    if (f.wire_offset < 0) return;
+    const std::uint8_t* at = in + f.wire_offset;
+    if constexpr (std::is_same_v<T, bool>) {
+      v = (GetU32(at) & f.wire_bit) != 0;
+    } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+      v = GetU64(at);
+    } else if constexpr (std::is_same_v<T, std::uint32_t>) {
+      v = GetU32(at);
+    } else if constexpr (std::is_same_v<T, double>) {
+      v = GetF64(at);
+    } else if constexpr (std::is_same_v<T, Vec3>) {
+      v = GetVec3(at);
+    } else {
+      static_assert(std::is_same_v<T, Quat>);
+      v = Quat(GetF64(at), GetF64(at + 8), GetF64(at + 16), GetF64(at + 24));
+    }
+  }
+};
 
 // hello-reply payload offsets
 constexpr std::size_t kReplyMaxForce = 40;
@@ -198,16 +247,7 @@ StatePacket EncodeState(const DeviceState& state, const PacketHeader& header,
   StatePacket packet{};
   std::uint8_t* out = packet.data();
   PutHeader(out, PacketType::kState, kStatePayloadBytes, header);
-  PutU64(out + kStateSequence, state.sequence);
-  PutF64(out + kStateTime, state.time_s);
-  PutVec3(out + kStatePosition, state.position_m);
-  PutF64(out + kStateOrientation, state.orientation.w());
-  PutF64(out + kStateOrientation + 8, state.orientation.x());
-  PutF64(out + kStateOrientation + 16, state.orientation.y());
-  PutF64(out + kStateOrientation + 24, state.orientation.z());
-  PutVec3(out + kStateVelocity, state.velocity_mps);
-  PutVec3(out + kStateAngularVelocity, state.angular_velocity_radps);
-  PutU32(out + kStateButtons, state.buttons);
+  io::VisitStateFields(state, PutWire{out});
   Seal(packet, key);
   return packet;
 }
@@ -217,13 +257,7 @@ CommandPacket EncodeCommand(const DeviceCommand& command, const PacketHeader& he
   CommandPacket packet{};
   std::uint8_t* out = packet.data();
   PutHeader(out, PacketType::kCommand, kCommandPayloadBytes, header);
-  PutU64(out + kCommandSequence, command.sequence);
-  PutVec3(out + kCommandForce, command.force_N);
-  PutVec3(out + kCommandTorque, command.torque_Nm);
-  std::uint32_t flags = 0;
-  if (command.safe_fallback) flags |= kCommandFlagSafeFallback;
-  if (command.clipped) flags |= kCommandFlagClipped;
-  PutU32(out + kCommandFlags, flags);
+  io::VisitCommandFields(command, PutWire{out});
   Seal(packet, key);
   return packet;
 }
@@ -259,13 +293,8 @@ DecodeResult DecodeStatePayload(std::span<const std::uint8_t> datagram, DeviceSt
   if (std::abs(orientation.norm() - 1.0) > kQuaternionNormTolerance) {
     return DecodeResult::kBadQuaternion;
   }
-  state->sequence = GetU64(in + kStateSequence);
-  state->time_s = GetF64(in + kStateTime);
-  state->position_m = GetVec3(in + kStatePosition);
-  state->orientation = orientation.normalized();
-  state->velocity_mps = GetVec3(in + kStateVelocity);
-  state->angular_velocity_radps = GetVec3(in + kStateAngularVelocity);
-  state->buttons = GetU32(in + kStateButtons);
+  io::VisitStateFields(*state, GetWire{in});
+  state->orientation.normalize();
   state->valid = true;
   return DecodeResult::kOk;
 }
@@ -275,14 +304,8 @@ DecodeResult DecodeCommandPayload(std::span<const std::uint8_t> datagram, Device
   const std::uint8_t* in = datagram.data();
   // force and torque: 6 contiguous f64
   if (!AllFiniteDoubles(in + kCommandForce, 6)) return DecodeResult::kNonFinite;
-  const std::uint32_t flags = GetU32(in + kCommandFlags);
   *command = DeviceCommand{};
-  command->sequence = GetU64(in + kCommandSequence);
-  command->force_N = GetVec3(in + kCommandForce);
-  command->torque_Nm = GetVec3(in + kCommandTorque);
-  // reserved flag bits are ignored (they must be sent as zero)
-  command->safe_fallback = (flags & kCommandFlagSafeFallback) != 0;
-  command->clipped = (flags & kCommandFlagClipped) != 0;
+  io::VisitCommandFields(*command, GetWire{in});
   return DecodeResult::kOk;
 }
 

@@ -1,7 +1,7 @@
 // The rigidtouch device protocol over UDP, version 2: fixed-size little-endian packets (hello,
 // hello-reply, state, command), each closed by an HMAC-SHA-256 under a pre-shared key over
-// everything before it. docs/device-protocol.md is the reference; the offsets below must match
-// its tables.
+// everything before it. docs/device-protocol.md is the reference; the offsets below and the state's
+// and command's in io/record_fields.h must match its tables.
 #pragma once
 
 #include <array>
@@ -10,6 +10,7 @@
 #include <span>
 #include <string_view>
 
+#include "io/record_fields.h"
 #include "rigidtouch/bridge.h"
 #include "rigidtouch/types.h"
 
@@ -45,9 +46,9 @@ inline constexpr std::size_t kHelloReplyPacketBytes =
 inline constexpr std::size_t kMaxDatagramBytes = 512;
 
 /// Command flag bit 0: the renderer detected an error and the wrench is zero (safe fallback).
-inline constexpr std::uint32_t kCommandFlagSafeFallback = 1u << 0;
+inline constexpr std::uint32_t kCommandFlagSafeFallback = io::kWireFlagSafeFallback;
 /// Command flag bit 1: the renderer clipped the force to the device limit.
-inline constexpr std::uint32_t kCommandFlagClipped = 1u << 1;
+inline constexpr std::uint32_t kCommandFlagClipped = io::kWireFlagClipped;
 
 /// Packet type at offset 6.
 enum class PacketType : std::uint16_t {

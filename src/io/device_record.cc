@@ -14,48 +14,26 @@
 
 #include "base/text.h"
 #include "io/output_file.h"
+#include "io/record_fields.h"
 
 namespace rigidtouch::io {
 namespace {
 
-constexpr std::array<std::string_view, 38> kRecordColumns = {"tick",
-                                                             "tap",
-                                                             "sequence",
-                                                             "time_s",
-                                                             "valid",
-                                                             "fresh",
-                                                             "buttons",
-                                                             "x_m",
-                                                             "y_m",
-                                                             "z_m",
-                                                             "qw",
-                                                             "qx",
-                                                             "qy",
-                                                             "qz",
-                                                             "vx_mps",
-                                                             "vy_mps",
-                                                             "vz_mps",
-                                                             "wx_radps",
-                                                             "wy_radps",
-                                                             "wz_radps",
-                                                             "command_sequence",
-                                                             "fx_N",
-                                                             "fy_N",
-                                                             "fz_N",
-                                                             "tx_Nm",
-                                                             "ty_Nm",
-                                                             "tz_Nm",
-                                                             "penalty_fx_N",
-                                                             "penalty_fy_N",
-                                                             "penalty_fz_N",
-                                                             "impulsive_fx_N",
-                                                             "impulsive_fy_N",
-                                                             "impulsive_fz_N",
-                                                             "clipped",
-                                                             "safe_fallback",
-                                                             "hand_fx_N",
-                                                             "hand_fy_N",
-                                                             "hand_fz_N"};
+// a record's row: the loop's tick and tap, the state's and the command's tables, the hand's force
+template <class Sample, class Visit>
+void VisitRecordFields(Sample& r, Visit&& visit) {
+  visit(RecordField{"tick", ""}, r.tick);
+  visit(RecordField{"tap", ""}, r.tap);
+  VisitStateFields(r.state, visit);
+  VisitCommandFields(r.command, visit);
+  visit(RecordField{"hand_f", "N"}, r.hand_force_N);
+}
+
+const ColumnNames& RecordColumnNames() {
+  static const ColumnNames columns = MakeColumnNames<RecordSample>(
+      [](const RecordSample& r, auto&& visit) { VisitRecordFields(r, visit); });
+  return columns;
+}
 
 constexpr std::string_view kRecordWhat = "record file";
 
@@ -64,14 +42,22 @@ void Put(std::string& line, double v) {
   line.push_back(',');
 }
 
-template <typename Int>
-void PutInt(std::string& line, Int v) {
-  text::AppendInteger(line, v);
-  line.push_back(',');
-}
-
-void Put(std::string& line, const Vec3& v) {
-  for (int i = 0; i < 3; ++i) Put(line, v[i]);
+// one field's columns, each followed by a comma
+template <class T>
+void PutField(std::string& line, const T& v) {
+  if constexpr (std::is_same_v<T, bool>) {
+    line += v ? "1," : "0,";
+  } else if constexpr (std::is_integral_v<T>) {
+    text::AppendInteger(line, v);
+    line.push_back(',');
+  } else if constexpr (std::is_same_v<T, double>) {
+    Put(line, v);
+  } else if constexpr (std::is_same_v<T, Vec3>) {
+    for (int i = 0; i < 3; ++i) Put(line, v[i]);
+  } else {
+    static_assert(std::is_same_v<T, Quat>);
+    for (const double q : {v.w(), v.x(), v.y(), v.z()}) Put(line, q);
+  }
 }
 
 std::string RateLine(double rate_hz) {
@@ -84,7 +70,7 @@ std::string RateLine(double rate_hz) {
 }  // namespace
 
 std::span<const std::string_view> RecordColumns() {
-  return kRecordColumns;
+  return RecordColumnNames().views;
 }
 
 RecordFileWriter::RecordFileWriter(const std::string& path, double rate_hz) : path_(path) {
@@ -104,7 +90,7 @@ RecordFileWriter::RecordFileWriter(const std::string& path, double rate_hz) : pa
   std::string head(kRecordMagic);
   head += '\n';
   head += RateLine(rate_hz);
-  for (const std::string_view c : kRecordColumns) {
+  for (const std::string_view c : RecordColumns()) {
     head += c;
     head += ',';
   }
@@ -130,30 +116,7 @@ void RecordFileWriter::Append(std::span<const RecordSample> samples) {
   if (file_ == nullptr) throw OutputError("record file '" + path_ + "' is closed");
   for (const RecordSample& r : samples) {
     line_.clear();
-    const DeviceState& s = r.state;
-    const DeviceCommand& c = r.command;
-    PutInt(line_, r.tick);
-    PutInt(line_, r.tap);
-    PutInt(line_, s.sequence);
-    Put(line_, s.time_s);
-    PutInt(line_, s.valid ? 1 : 0);
-    PutInt(line_, s.fresh ? 1 : 0);
-    PutInt(line_, s.buttons);
-    Put(line_, s.position_m);
-    Put(line_, s.orientation.w());
-    Put(line_, s.orientation.x());
-    Put(line_, s.orientation.y());
-    Put(line_, s.orientation.z());
-    Put(line_, s.velocity_mps);
-    Put(line_, s.angular_velocity_radps);
-    PutInt(line_, c.sequence);
-    Put(line_, c.force_N);
-    Put(line_, c.torque_Nm);
-    Put(line_, c.penalty_force_N);
-    Put(line_, c.impulsive_force_N);
-    PutInt(line_, c.clipped ? 1 : 0);
-    PutInt(line_, c.safe_fallback ? 1 : 0);
-    Put(line_, r.hand_force_N);
+    VisitRecordFields(r, [this](const RecordField&, const auto& value) { PutField(line_, value); });
     line_.back() = '\n';
     if (std::fwrite(line_.data(), 1, line_.size(), file_) != line_.size()) Fail(errno);
   }
@@ -221,13 +184,30 @@ class RowParser {
     if (f == "1") return true;
     Bad(f, "0 or 1");
   }
+  // one field's columns into `v`
+  template <class T>
+  void Read(T& v) {
+    if constexpr (std::is_same_v<T, bool>) {
+      v = Flag();
+    } else if constexpr (std::is_integral_v<T>) {
+      v = Integer<T>();
+    } else if constexpr (std::is_same_v<T, double>) {
+      v = Real();
+    } else if constexpr (std::is_same_v<T, Vec3>) {
+      v = Vector();
+    } else {
+      static_assert(std::is_same_v<T, Quat>);
+      const double w = Real(), x = Real(), y = Real(), z = Real();
+      v = Quat(w, x, y, z);
+    }
+  }
 
  private:
   std::string_view Next() { return fields_[column_++]; }
   [[noreturn]] void Bad(std::string_view value, const char* expected) const {
     std::ostringstream m;
     m << "record file '" << path_ << "': line " << line_ << ", column "
-      << kRecordColumns[column_ - 1] << ": '" << value << "' is not " << expected;
+      << RecordColumns()[column_ - 1] << ": '" << value << "' is not " << expected;
     throw Error(m.str());
   }
 
@@ -263,10 +243,11 @@ Record ReadRecord(const std::string& path) {
   std::vector<std::string_view> fields;
   if (!std::getline(in, line)) fail(3, "no header row");
   Split(line, fields);
-  if (fields.size() != kRecordColumns.size() ||
-      !std::equal(fields.begin(), fields.end(), kRecordColumns.begin())) {
+  const std::span<const std::string_view> columns = RecordColumns();
+  if (fields.size() != columns.size() ||
+      !std::equal(fields.begin(), fields.end(), columns.begin())) {
     std::string expected;
-    for (const std::string_view c : kRecordColumns) (expected += c) += ',';
+    for (const std::string_view c : columns) (expected += c) += ',';
     expected.pop_back();
     fail(3, "the header row is not '" + expected + "'");
   }
@@ -275,34 +256,13 @@ Record ReadRecord(const std::string& path) {
     ++n;
     if (line.empty()) continue;
     Split(line, fields);
-    if (fields.size() != kRecordColumns.size()) {
+    if (fields.size() != RecordColumns().size()) {
       fail(n, std::to_string(fields.size()) + " fields, expected " +
-                  std::to_string(kRecordColumns.size()));
+                  std::to_string(RecordColumns().size()));
     }
     RowParser p(path, n, fields);
     RecordSample r;
-    DeviceState& s = r.state;
-    DeviceCommand& c = r.command;
-    r.tick = p.Integer<std::int64_t>();
-    r.tap = p.Integer<int>();
-    s.sequence = p.Integer<std::uint64_t>();
-    s.time_s = p.Real();
-    s.valid = p.Flag();
-    s.fresh = p.Flag();
-    s.buttons = p.Integer<std::uint32_t>();
-    s.position_m = p.Vector();
-    const double qw = p.Real(), qx = p.Real(), qy = p.Real(), qz = p.Real();
-    s.orientation = Quat(qw, qx, qy, qz);
-    s.velocity_mps = p.Vector();
-    s.angular_velocity_radps = p.Vector();
-    c.sequence = p.Integer<std::uint64_t>();
-    c.force_N = p.Vector();
-    c.torque_Nm = p.Vector();
-    c.penalty_force_N = p.Vector();
-    c.impulsive_force_N = p.Vector();
-    c.clipped = p.Flag();
-    c.safe_fallback = p.Flag();
-    r.hand_force_N = p.Vector();
+    VisitRecordFields(r, [&p](const RecordField&, auto& value) { p.Read(value); });
     const std::int64_t expected_tick = static_cast<std::int64_t>(record.samples.size());
     if (r.tick != expected_tick) {
       fail(n, "tick " + std::to_string(r.tick) + ", expected " + std::to_string(expected_tick) +

@@ -1,95 +1,55 @@
 #include "io/trace_csv.h"
 
-#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
 #include <fstream>
 #include <string>
 #include <system_error>
+#include <type_traits>
+#include <vector>
 
 #include "base/text.h"
 #include "io/output_file.h"
+#include "io/record_fields.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch::io {
 
 namespace {
 
-constexpr std::size_t kColumnCount = 30;
-
-constexpr std::array<std::string_view, kColumnCount> kTraceColumns = {"time_s",
-                                                                      "tool_x_m",
-                                                                      "tool_y_m",
-                                                                      "tool_z_m",
-                                                                      "tool_vx_mps",
-                                                                      "tool_vy_mps",
-                                                                      "tool_vz_mps",
-                                                                      "penalty_fx_N",
-                                                                      "penalty_fy_N",
-                                                                      "penalty_fz_N",
-                                                                      "impulsive_fx_N",
-                                                                      "impulsive_fy_N",
-                                                                      "impulsive_fz_N",
-                                                                      "device_fx_N",
-                                                                      "device_fy_N",
-                                                                      "device_fz_N",
-                                                                      "hand_fx_N",
-                                                                      "hand_fy_N",
-                                                                      "hand_fz_N",
-                                                                      "wall_nx",
-                                                                      "wall_ny",
-                                                                      "wall_nz",
-                                                                      "penetration_m",
-                                                                      "tool_contacts",
-                                                                      "impulses",
-                                                                      "kinetic_energy_before_J",
-                                                                      "kinetic_energy_after_J",
-                                                                      "clipped",
-                                                                      "tap",
-                                                                      "step"};
-
-// integer columns: tool_contacts, impulses, clipped, tap, step
-constexpr bool IsIntegerColumn(std::size_t k) {
-  return k == 23 || k == 24 || k == 27 || k == 28 || k == 29;
+const ColumnNames& TraceColumnNames() {
+  static const ColumnNames columns = MakeColumnNames<TraceSample>(
+      [](const TraceSample& s, auto&& visit) { VisitTraceFields(s, visit); });
+  return columns;
 }
 
 std::string SystemReason(int error_number) {
   return std::generic_category().message(error_number);
 }
 
-void AppendVec(std::string& out, const Vec3& v) {
-  for (int i = 0; i < 3; ++i) {
+// one field's columns, each preceded by a comma
+template <class T>
+void AppendField(std::string& out, const T& v) {
+  if constexpr (std::is_same_v<T, Vec3>) {
+    for (int i = 0; i < 3; ++i) AppendField(out, v[i]);
+  } else {
     out += ',';
-    text::AppendShortest(out, v[i]);
+    if constexpr (std::is_same_v<T, bool>) {
+      out += v ? '1' : '0';
+    } else if constexpr (std::is_integral_v<T>) {
+      text::AppendInteger(out, v);
+    } else {
+      static_assert(std::is_same_v<T, double>);
+      text::AppendShortest(out, v);
+    }
   }
 }
 
 void AppendRow(std::string& out, const TraceSample& s) {
-  text::AppendShortest(out, s.time_s);
-  AppendVec(out, s.tool_position_m);
-  AppendVec(out, s.tool_velocity_mps);
-  AppendVec(out, s.penalty_force_N);
-  AppendVec(out, s.impulsive_force_N);
-  AppendVec(out, s.device_force_N);
-  AppendVec(out, s.hand_force_N);
-  AppendVec(out, s.wall_normal);
-  out += ',';
-  text::AppendShortest(out, s.penetration_m);
-  out += ',';
-  text::AppendInteger(out, s.tool_contacts);
-  out += ',';
-  text::AppendInteger(out, s.impulses);
-  out += ',';
-  text::AppendShortest(out, s.kinetic_energy_before_J);
-  out += ',';
-  text::AppendShortest(out, s.kinetic_energy_after_J);
-  out += ',';
-  out += s.clipped ? '1' : '0';
-  out += ',';
-  text::AppendInteger(out, s.tap);
-  out += ',';
-  text::AppendInteger(out, s.step);
+  const std::size_t begin = out.size();
+  VisitTraceFields(s, [&out](const RecordField&, const auto& value) { AppendField(out, value); });
+  out.erase(begin, 1);  // the first field's comma
   out += '\n';
 }
 
@@ -116,15 +76,16 @@ std::vector<std::string_view> SplitCommas(std::string_view line) {
 }  // namespace
 
 std::span<const std::string_view> TraceColumns() {
-  return kTraceColumns;
+  return TraceColumnNames().views;
 }
 
 void WriteTraceCsv(const std::string& path, std::span<const TraceSample> samples) {
   std::string text;
   text.reserve(64 + samples.size() * 400);
-  for (std::size_t i = 0; i < kColumnCount; ++i) {
+  const std::span<const std::string_view> columns = TraceColumns();
+  for (std::size_t i = 0; i < columns.size(); ++i) {
     if (i > 0) text += ',';
-    text += kTraceColumns[i];
+    text += columns[i];
   }
   text += '\n';
   for (const TraceSample& s : samples) AppendRow(text, s);
@@ -139,17 +100,17 @@ std::vector<TraceSample> ReadTraceCsv(const std::string& path) {
   if (!std::getline(in, line)) throw Error("trace file '" + path + "' is empty (no header row)");
 
   // column index in the file of each known column
-  std::array<int, kColumnCount> index;
-  index.fill(-1);
+  const std::span<const std::string_view> columns = TraceColumns();
+  std::vector<int> index(columns.size(), -1);
   const std::vector<std::string_view> header = SplitCommas(line);
   for (std::size_t c = 0; c < header.size(); ++c) {
-    for (std::size_t k = 0; k < kColumnCount; ++k) {
-      if (header[c] == kTraceColumns[k]) index[k] = static_cast<int>(c);
+    for (std::size_t k = 0; k < columns.size(); ++k) {
+      if (header[c] == columns[k]) index[k] = static_cast<int>(c);
     }
   }
   std::string missing;
-  for (std::size_t k = 0; k < kColumnCount; ++k) {
-    if (index[k] < 0) missing += (missing.empty() ? "" : ", ") + std::string(kTraceColumns[k]);
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    if (index[k] < 0) missing += (missing.empty() ? "" : ", ") + std::string(columns[k]);
   }
   if (!missing.empty()) {
     throw Error("trace file '" + path + "' line 1: missing columns: " + missing);
@@ -157,48 +118,41 @@ std::vector<TraceSample> ReadTraceCsv(const std::string& path) {
 
   std::vector<TraceSample> samples;
   int line_number = 1;
-  std::array<double, kColumnCount> values{};
-  std::array<long long, kColumnCount> integers{};
   while (std::getline(in, line)) {
     ++line_number;
     if (TrimSpaces(line).empty()) continue;
     const std::vector<std::string_view> fields = SplitCommas(line);
-    for (std::size_t k = 0; k < kColumnCount; ++k) {
+    std::size_t k = 0;  // the next column of the table
+    // the table's column k parsed into v (a flag is any integer, non-zero for true)
+    const auto parse = [&](auto& v) {
+      using T = std::remove_reference_t<decltype(v)>;
       const std::size_t c = static_cast<std::size_t>(index[k]);
       const std::string_view field = c < fields.size() ? fields[c] : std::string_view();
       const char* first = field.data();
       const char* last = field.data() + field.size();
-      const std::from_chars_result result = IsIntegerColumn(k)
-                                                ? std::from_chars(first, last, integers[k])
-                                                : std::from_chars(first, last, values[k]);
+      std::from_chars_result result{};
+      if constexpr (std::is_same_v<T, bool>) {
+        long long flag = 0;
+        result = std::from_chars(first, last, flag);
+        v = flag != 0;
+      } else {
+        result = std::from_chars(first, last, v);
+      }
       if (field.empty() || result.ec != std::errc() || result.ptr != last) {
         throw Error("trace file '" + path + "' line " + std::to_string(line_number) + ": column '" +
-                    std::string(kTraceColumns[k]) + "' value '" + std::string(field) + "' is not " +
-                    (IsIntegerColumn(k) ? "an integer" : "a number"));
+                    std::string(columns[k]) + "' value '" + std::string(field) + "' is not " +
+                    (std::is_integral_v<T> ? "an integer" : "a number"));
       }
-    }
-    TraceSample s;
-    std::size_t k = 0;
-    const auto vec = [&](Vec3& v) {
-      v = Vec3(values[k], values[k + 1], values[k + 2]);
-      k += 3;
+      ++k;
     };
-    s.time_s = values[k++];
-    vec(s.tool_position_m);
-    vec(s.tool_velocity_mps);
-    vec(s.penalty_force_N);
-    vec(s.impulsive_force_N);
-    vec(s.device_force_N);
-    vec(s.hand_force_N);
-    vec(s.wall_normal);
-    s.penetration_m = values[k++];
-    s.tool_contacts = static_cast<int>(integers[k++]);
-    s.impulses = static_cast<int>(integers[k++]);
-    s.kinetic_energy_before_J = values[k++];
-    s.kinetic_energy_after_J = values[k++];
-    s.clipped = integers[k++] != 0;
-    s.tap = static_cast<int>(integers[k++]);
-    s.step = static_cast<std::int64_t>(integers[k++]);
+    TraceSample s;
+    VisitTraceFields(s, [&parse](const RecordField&, auto& value) {
+      if constexpr (std::is_same_v<std::remove_reference_t<decltype(value)>, Vec3>) {
+        for (int i = 0; i < 3; ++i) parse(value[i]);
+      } else {
+        parse(value);
+      }
+    });
     samples.push_back(s);
   }
   return samples;

@@ -9,7 +9,10 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
+
+#include "io/record_fields.h"
 
 namespace rigidtouch::device {
 namespace {
@@ -138,6 +141,50 @@ TEST(UdpProtocol, EncodingsMatchGoldenBytes) {
   const HelloReplyPacket reply = EncodeHelloReply(AnnouncedLimits{3.3, 1000.0, 2.5}, kClientNonce,
                                                   kProtocolServerNonce, TestKey());
   EXPECT_EQ(std::vector<std::uint8_t>(reply.begin(), reply.end()), FromHex(kGoldenHelloReplyHex));
+}
+
+// the bytes each wire field of a record's table takes: every payload byte is one field's, and
+// the f64 values lie where the decoder checks them for finite numbers (docs/device-protocol.md:
+// the state's 14 from offset 48, the command's 6 from offset 48)
+template <class Record, class Table>
+void ExpectTheTableTilesThePayload(Table visit_fields, std::size_t payload_bytes,
+                                   std::size_t f64_begin, std::size_t f64_count) {
+  std::vector<int> owners(kHeaderBytes + payload_bytes, 0);
+  Record record;
+  int field = 0;
+  visit_fields(record, [&](const io::RecordField& f, const auto& value) {
+    ++field;
+    if (f.wire_offset < 0) return;
+    using T = std::remove_cvref_t<decltype(value)>;
+    const std::size_t size = std::is_same_v<T, std::uint64_t> || std::is_same_v<T, double> ? 8
+                             : std::is_same_v<T, Vec3>                                     ? 24
+                             : std::is_same_v<T, Quat>                                     ? 32
+                                                                                           : 4;
+    const auto begin = static_cast<std::size_t>(f.wire_offset);
+    ASSERT_LE(begin + size, owners.size()) << f.name;
+    if (std::is_floating_point_v<T> || std::is_same_v<T, Vec3> || std::is_same_v<T, Quat>) {
+      EXPECT_GE(begin, f64_begin) << f.name;
+      EXPECT_LE(begin + size, f64_begin + 8 * f64_count) << f.name;
+    }
+    for (std::size_t b = begin; b < begin + size; ++b) {
+      // the flags of one word share it, each with its own bit
+      const bool shared_flag_word = std::is_same_v<T, bool>;
+      EXPECT_TRUE(owners[b] == 0 || shared_flag_word) << f.name << " byte " << b;
+      owners[b] = field;
+    }
+  });
+  for (std::size_t b = kHeaderBytes; b < owners.size(); ++b) {
+    EXPECT_NE(owners[b], 0) << "payload byte " << b << " belongs to no field";
+  }
+}
+
+TEST(UdpProtocol, TheStateAndCommandTablesTileTheirPayloads) {
+  ExpectTheTableTilesThePayload<DeviceState>(
+      [](DeviceState& s, auto&& visit) { io::VisitStateFields(s, visit); }, kStatePayloadBytes, 48,
+      14);
+  ExpectTheTableTilesThePayload<DeviceCommand>(
+      [](DeviceCommand& c, auto&& visit) { io::VisitCommandFields(c, visit); },
+      kCommandPayloadBytes, 48, 6);
 }
 
 TEST(UdpProtocol, HeaderFieldsAreRead) {
