@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <memory>
 #include <sstream>
+#include <string_view>
 
 namespace rigidtouch::io {
 namespace {
@@ -20,7 +23,114 @@ bool StartsWith(const std::string& s, std::size_t at, const char* prefix) {
 // MuJoCo's own "Stack overflow" message
 constexpr long kMaxStack = 1L << 27;
 
+// attributes whose values are names, references or paths: text, even when it reads "inf"
+bool IsTextAttribute(std::string_view name) {
+  static constexpr std::string_view kText[] = {
+      "name",       "class",    "childclass",   "body",       "body1",     "body2",
+      "joint",      "joint1",   "joint2",       "geom",       "geom1",     "geom2",
+      "site",       "site1",    "site2",        "mesh",       "material",  "texture",
+      "hfield",     "tendon",   "tendon1",      "tendon2",    "actuator",  "target",
+      "file",       "model",    "prefix",       "objname",    "refname",   "meshdir",
+      "texturedir", "assetdir", "content_type", "slidersite", "cranksite", "jointinparent",
+      "fileright",  "fileleft", "fileup",       "filedown",   "filefront", "fileback"};
+  return std::find(std::begin(kText), std::end(kText), name) != std::end(kText);
+}
+
+// true when every whitespace-separated token of `value` is a number and one is not finite
+bool HoldsNonFiniteNumber(std::string_view value) {
+  bool any = false;
+  bool non_finite = false;
+  std::size_t pos = 0;
+  while (pos < value.size()) {
+    while (pos < value.size() && std::isspace(static_cast<unsigned char>(value[pos])) != 0) ++pos;
+    std::size_t end = pos;
+    while (end < value.size() && std::isspace(static_cast<unsigned char>(value[end])) == 0) ++end;
+    if (end == pos) break;
+    const std::string token(value.substr(pos, end - pos));
+    char* parsed_end = nullptr;
+    const double number = std::strtod(token.c_str(), &parsed_end);
+    if (parsed_end != token.c_str() + token.size()) return false;  // not a list of numbers
+    any = true;
+    non_finite = non_finite || !std::isfinite(number);
+    pos = end;
+  }
+  return any && non_finite;
+}
+
+// calls visit(element, attribute, value, offset) for each attribute of each start tag of `xml`,
+// outside comments, CDATA, processing instructions and declarations, until it returns true
+template <class Visit>
+void VisitAttributes(const std::string& xml, Visit&& visit) {
+  const auto is_name = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == ':' ||
+           c == '.';
+  };
+  std::size_t pos = 0;
+  while ((pos = xml.find('<', pos)) != std::string::npos) {
+    const char* close = StartsWith(xml, pos, "<!--")        ? "-->"
+                        : StartsWith(xml, pos, "<![CDATA[") ? "]]>"
+                        : StartsWith(xml, pos, "<?")        ? "?>"
+                        : StartsWith(xml, pos, "<!")        ? ">"
+                                                            : nullptr;
+    if (close != nullptr) {
+      const std::size_t end = xml.find(close, pos + 2);
+      if (end == std::string::npos) return;
+      pos = end + std::strlen(close);
+      continue;
+    }
+    std::size_t i = pos + 1;
+    const std::size_t name_begin = i;
+    while (i < xml.size() && is_name(xml[i])) ++i;
+    const std::string element = xml.substr(name_begin, i - name_begin);
+    // attributes: name = "value" or 'value', up to the tag's end
+    while (i < xml.size() && xml[i] != '>') {
+      if (!is_name(xml[i])) {
+        ++i;
+        continue;
+      }
+      const std::size_t attr_begin = i;
+      while (i < xml.size() && is_name(xml[i])) ++i;
+      const std::string attribute = xml.substr(attr_begin, i - attr_begin);
+      while (i < xml.size() && std::isspace(static_cast<unsigned char>(xml[i])) != 0) ++i;
+      if (i >= xml.size() || xml[i] != '=') continue;
+      ++i;
+      while (i < xml.size() && std::isspace(static_cast<unsigned char>(xml[i])) != 0) ++i;
+      if (i >= xml.size() || (xml[i] != '"' && xml[i] != '\'')) continue;
+      const std::size_t value_end = xml.find(xml[i], i + 1);
+      if (value_end == std::string::npos) return;  // unterminated: MuJoCo's parser says so
+      const std::string_view value(xml.data() + i + 1, value_end - i - 1);
+      if (visit(element, attribute, value, attr_begin)) return;
+      i = value_end + 1;
+    }
+    pos = i;
+  }
+}
+
 }  // namespace
+
+NonFiniteValue FindNonFiniteValue(const std::string& xml) {
+  NonFiniteValue found;
+  VisitAttributes(xml, [&](const std::string& element, const std::string& attribute,
+                           std::string_view value, std::size_t offset) {
+    if (IsTextAttribute(attribute) || !HoldsNonFiniteNumber(value)) return false;
+    found.element = element;
+    found.attribute = attribute;
+    found.value = std::string(value);
+    found.line = 1 + static_cast<int>(std::count(xml.begin(), xml.begin() + offset, '\n'));
+    return true;
+  });
+  return found;
+}
+
+std::vector<std::string> IncludedFiles(const std::string& xml) {
+  std::vector<std::string> files;
+  VisitAttributes(xml, [&](const std::string& element, const std::string& attribute,
+                           std::string_view value, std::size_t) {
+    if (element == "include" && attribute == "file") files.emplace_back(value);
+    return false;
+  });
+  return files;
+}
 
 std::size_t RootEndTag(const std::string& xml) {
   std::size_t last = std::string::npos;

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace rigidtouch::io {
 
@@ -28,6 +29,25 @@ std::string WithMinimalSolverSizes(const std::string& xml, long nstack);
 
 /// The initial stack size for a file of this text: linear in its number of elements.
 long InitialStackSize(const std::string& xml);
+
+/// A number attribute of an MJCF text whose value holds a number that is not finite.
+struct NonFiniteValue {
+  std::string element;    // "geom"
+  std::string attribute;  // "mass"
+  std::string value;      // "nan", "0 inf 0", "1e999"
+  int line = 0;           // 1-based line of the attribute
+};
+
+/// The first attribute of `xml` (outside comments, CDATA and processing instructions) whose value
+/// is a list of numbers with one that is not finite (nan, inf, infinity with any sign or case, or
+/// a number beyond a double's range such as 1e999), or an empty `element` when there is none.
+/// Names and references to other elements (name, class, body, joint, mesh, file ...) are text and
+/// are not checked. MuJoCo 2.2.2 warns about a NaN and then uses its default for the value, and
+/// takes an infinity as it is: rigidtouch refuses both before compiling.
+NonFiniteValue FindNonFiniteValue(const std::string& xml);
+
+/// The `file` attribute of every <include> element of `xml`, in order.
+std::vector<std::string> IncludedFiles(const std::string& xml);
 
 /// Compiles the MJCF file at `path` with MuJoCo (includes and assets resolved relative to it, as
 /// mj_loadXML does) with the minimal solver sizes above. Returns nullptr and MuJoCo's message in

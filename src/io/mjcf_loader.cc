@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -493,6 +495,25 @@ class CompileWarnings {
   CompileWarnings& operator=(const CompileWarnings&) = delete;
 };
 
+// refuses a number that is not finite in the scene file or the files it includes (MuJoCo 2.2.2
+// resolves an include relative to the scene file's folder; nesting is bounded, as MuJoCo's own)
+void RefuseNonFiniteValues(const std::string& file, const std::filesystem::path& folder,
+                           int depth = 0) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in || depth > 16) return;  // a file that cannot be read is MuJoCo's to report
+  const std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const io::NonFiniteValue bad = io::FindNonFiniteValue(xml);
+  if (!bad.element.empty()) {
+    throw Error("scene file '" + file + "' line " + std::to_string(bad.line) + ": <" + bad.element +
+                "> attribute " + bad.attribute + "=\"" + bad.value +
+                "\" is not a finite number (MuJoCo would replace it with its default or keep the "
+                "infinity); give a finite value");
+  }
+  for (const std::string& included : io::IncludedFiles(xml)) {
+    RefuseNonFiniteValues((folder / included).string(), folder, depth + 1);
+  }
+}
+
 }  // namespace
 
 Model LoadModel(const std::string& path, const LoadOptions& options) {
@@ -500,6 +521,7 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw Error("scene file '" + path + "' does not exist or is not a regular file");
   }
+  RefuseNonFiniteValues(path, std::filesystem::path(path).parent_path());
   char error[1024] = "";
   std::vector<std::string> mujoco_warnings;
   mjModel* raw = nullptr;

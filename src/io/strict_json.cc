@@ -1,11 +1,11 @@
 #include "io/strict_json.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
-#include <sstream>
 
 #include "base/text.h"
 #include "rigidtouch/types.h"
@@ -120,6 +120,35 @@ std::string Shown(const json& value) {
 
 }  // namespace
 
+std::size_t JsonDepthExceededAt(std::string_view text) {
+  int depth = 0;
+  bool in_string = false;
+  bool escaped = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth) return i;
+    } else if (c == ']' || c == '}') {
+      --depth;  // unbalanced text is the parser's to report
+    }
+  }
+  return std::string_view::npos;
+}
+
+std::string JsonLineColumn(std::string_view text, std::size_t byte) {
+  return LineColumn(text, byte + 1);
+}
+
 void JsonSource::Fail(std::string_view path, std::string_view message) const {
   std::string text = name_ + ": ";
   if (!path.empty()) text.append(path).append(": ");
@@ -128,6 +157,12 @@ void JsonSource::Fail(std::string_view path, std::string_view message) const {
 }
 
 nlohmann::json ParseJsonText(std::string_view text, const JsonSource& source) {
+  // checked before parsing: the parser and everything that walks its result recurse per level
+  if (const std::size_t deep = JsonDepthExceededAt(text); deep != std::string_view::npos) {
+    source.Fail("", "arrays and objects nested more than " + std::to_string(kMaxJsonDepth) +
+                        " deep at " + JsonLineColumn(text, deep) +
+                        " (the limit of every JSON input rigidtouch reads)");
+  }
   PathTracker tracker;
   json document;
   try {
@@ -160,10 +195,19 @@ nlohmann::json ReadJsonFile(const std::string& path, std::string_view what) {
   }
   std::ifstream file(path, std::ios::binary);
   if (!file) throw Error(path + ": cannot open the " + kind);
-  std::stringstream buffer;
-  buffer << file.rdbuf();
+  // read in chunks, and stop one chunk past the limit: a larger file, or an endless one (a
+  // device, a pipe), is refused without being read whole
+  std::string text;
+  std::array<char, 1 << 16> chunk;
+  while (file.read(chunk.data(), chunk.size()) || file.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(file.gcount()));
+    if (text.size() > kMaxJsonFileBytes) {
+      throw Error(path + ": the " + kind + " is larger than " +
+                  std::to_string(kMaxJsonFileBytes >> 20) +
+                  " MiB, the limit of every JSON file rigidtouch reads");
+    }
+  }
   if (file.bad()) throw Error(path + ": cannot read the " + kind);
-  const std::string text = buffer.str();
   if (text::Trim(text).empty()) throw Error(path + ": the " + kind + " is empty");
   return ParseJsonText(text, JsonSource(path));
 }

@@ -4,6 +4,7 @@
 // naming the bad value, so a user can fix the file without guessing.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -28,13 +29,31 @@ class JsonSource {
   std::string name_;
 };
 
-/// Parses JSON text. Errors name the source; malformed text gives the line and column (and the
+/// The deepest nesting of arrays and objects a JSON input may have (rigidtouch's own files nest
+/// at most 5 deep). Deeper text is refused before it is parsed, whatever reads it.
+inline constexpr int kMaxJsonDepth = 64;
+
+/// The largest JSON file rigidtouch reads (64 MiB; its own are a few kilobytes). A larger file,
+/// or an endless one (a device, a pipe), is refused after reading one byte more than this.
+inline constexpr std::size_t kMaxJsonFileBytes = std::size_t{64} << 20;
+
+/// The byte offset at which `text` opens its (kMaxJsonDepth + 1)-th nested array or object, or
+/// std::string_view::npos when it nests no deeper than kMaxJsonDepth. Brackets inside strings do
+/// not count. Linear in the text and without recursion, so any input is safe to give it.
+std::size_t JsonDepthExceededAt(std::string_view text);
+
+/// "line L, column C" of byte `byte` of `text` (1-based), as errors give positions.
+std::string JsonLineColumn(std::string_view text, std::size_t byte);
+
+/// Parses JSON text. Errors name the source; text nested deeper than kMaxJsonDepth is refused with
+/// its line and column; malformed text gives the line and column (and the
 /// field being read, when known), a number too large for a double names its field, and a field
 /// given twice in one object is an error (a strict reader does not pick one of them).
 nlohmann::json ParseJsonText(std::string_view text, const JsonSource& source);
 
 /// Reads and parses the file at `path`. `what` names the kind of file in errors ("config file").
-/// Errors: the file cannot be opened or read, is empty (or only white space), or ParseJsonText's.
+/// Errors: the file cannot be opened or read, is larger than kMaxJsonFileBytes, is empty (or only
+/// white space), or ParseJsonText's.
 nlohmann::json ReadJsonFile(const std::string& path, std::string_view what);
 
 /// The type of a JSON value as messages say it: "null", "a boolean", "a number", "a string",

@@ -13,6 +13,7 @@
 
 #include "base/text.h"
 #include "io/output_file.h"
+#include "io/strict_json.h"
 #include "rigidtouch/types.h"
 #include "study/session.h"
 
@@ -195,6 +196,12 @@ LogContents ParseLog(std::string_view bytes, std::string_view source) {
     ++line_number;
     const std::string_view line = bytes.substr(start, end - start);
     json record;
+    if (const std::size_t deep = io::JsonDepthExceededAt(line); deep != std::string_view::npos) {
+      throw Error(std::string(source) + ": line " + std::to_string(line_number) +
+                  " nests arrays and objects more than " + std::to_string(io::kMaxJsonDepth) +
+                  " deep (at byte " + std::to_string(deep + 1) +
+                  " of the line); this is not a study log, so it was not modified");
+    }
     try {
       record = json::parse(line);
     } catch (const json::parse_error& e) {

@@ -31,6 +31,39 @@ class SettingsCliTest : public ::testing::Test {
   fs::path dir_;
 };
 
+// every JSON input, nested 100,000 deep (an array, an object) or 1 GiB long, is refused with
+// exit 2 and the file named: the depth before parsing, the size after reading one byte past the
+// 64 MiB limit (a sparse file: it takes no disk space)
+TEST_F(SettingsCliTest, DeepOrHugeJsonInputsAreRefusedNamingTheFile) {
+  const std::string deep_array =
+      Config("deep_array.json", std::string(100000, '[') + std::string(100000, ']'));
+  std::string object;
+  for (int i = 0; i < 100000; ++i) object += "{\"a\":";
+  const std::string deep_object =
+      Config("deep_object.json", object + "1" + std::string(100000, '}'));
+  const std::string huge = Config("huge.json", "");
+  fs::resize_file(huge, std::uintmax_t{1} << 30);
+  const std::string protocol = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
+  const std::vector<std::string> commands = {
+      "tap --config ",
+      "simulate --scene " + std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/tap.xml --config ",
+      "study predict --protocol ",
+      "study predict --protocol " + protocol + " --observer ",
+      "tap --device ",
+      "tap --material "};
+  for (const std::string& command : commands) {
+    for (const std::string& file : {deep_array, deep_object, huge}) {
+      const CliResult r = RunCli(command + file);
+      EXPECT_EQ(r.exit_code, 2) << command << file << "\n" << r.err;
+      EXPECT_EQ(r.err.rfind("rigidtouch: error: ", 0), 0u) << command << file << "\n" << r.err;
+      EXPECT_NE(r.err.find(file), std::string::npos) << command << file << "\n" << r.err;
+      const std::string why = file == huge ? "is larger than 64 MiB" : "nested more than 64 deep";
+      EXPECT_NE(r.err.find(why), std::string::npos) << command << file << "\n" << r.err;
+    }
+  }
+  fs::remove(huge);
+}
+
 // a first word that names no subcommand is named, with the valid ones (CLI11 said only "A
 // subcommand is required", and pointed at `rigidtouch nosuch --help`)
 TEST_F(SettingsCliTest, AnUnknownSubcommandIsNamed) {

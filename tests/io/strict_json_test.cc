@@ -81,6 +81,55 @@ TEST(StrictJsonTest, ReadJsonFileNamesTheFileAndTheProblem) {
   EXPECT_EQ(ReadJsonFile(good, "widget file")["x"], 2);
 }
 
+// arrays and objects deeper than kMaxJsonDepth are refused before parsing, at the bracket that
+// goes one level too deep; brackets in strings do not count
+TEST(StrictJsonTest, NestingDeeperThanTheLimitIsRefusedWithItsPlace) {
+  const auto nested = [](int depth, char open, const std::string& inner, char close) {
+    std::string text;
+    for (int i = 0; i < depth; ++i) text += open == '{' ? std::string("{\"k\":") : "[";
+    text += inner;
+    for (int i = 0; i < depth; ++i) text += close;
+    return text;
+  };
+  EXPECT_EQ(ThrownErrorOf([&] { Parse(nested(kMaxJsonDepth, '[', "1", ']')); }), "");
+  const std::string deep = ThrownErrorOf([&] { Parse(nested(kMaxJsonDepth + 1, '[', "1", ']')); });
+  EXPECT_EQ(deep,
+            "s.json: arrays and objects nested more than 64 deep at line 1, column 65 (the "
+            "limit of every JSON input rigidtouch reads)");
+  for (const char open : {'[', '{'}) {
+    const std::string huge =
+        ThrownErrorOf([&] { Parse(nested(100000, open, "1", open == '[' ? ']' : '}')); });
+    EXPECT_NE(huge.find("s.json: arrays and objects nested more than 64 deep"), std::string::npos)
+        << huge.substr(0, 200);
+  }
+  // unclosed: the depth is found before the parser would report the missing brackets
+  EXPECT_NE(ThrownErrorOf([] { Parse(std::string(100000, '[')); }).find("nested more than 64"),
+            std::string::npos);
+  // brackets inside strings, escaped quotes included, are text
+  const std::string in_string =
+      "[\"" + std::string(200, '[') + "\\\"" + std::string(200, '{') + "\"]";
+  EXPECT_EQ(Parse(in_string)[0].get<std::string>().size(), 401u);
+  EXPECT_EQ(JsonDepthExceededAt(in_string), std::string_view::npos);
+  // two levels, a string holding a bracket, then 64 more: the 63rd of them is level 65
+  const std::string after_string = "[[\"]\"" + std::string(kMaxJsonDepth, '[');
+  EXPECT_EQ(JsonDepthExceededAt(after_string), 5u + (kMaxJsonDepth - 2));
+}
+
+// a file larger than kMaxJsonFileBytes is refused without being read whole (a sparse file: the
+// size is what is checked, whatever the bytes)
+TEST(StrictJsonTest, AFileOverTheSizeLimitIsRefused) {
+  const std::string big = test::WriteTempFile("big.json", "");
+  std::filesystem::resize_file(big, kMaxJsonFileBytes + 1);
+  EXPECT_EQ(ThrownErrorOf([&] { ReadJsonFile(big, "widget file"); }),
+            big +
+                ": the widget file is larger than 64 MiB, the limit of every JSON file "
+                "rigidtouch reads");
+  std::filesystem::resize_file(big, kMaxJsonFileBytes);  // at the limit: read, then parsed
+  EXPECT_NE(ThrownErrorOf([&] { ReadJsonFile(big, "widget file"); }).find("not valid JSON"),
+            std::string::npos);
+  std::filesystem::remove(big);
+}
+
 TEST(StrictJsonTest, UnknownFieldsListTheValidOnes) {
   const json j = {{"a", 1}, {"z", 2}};
   EXPECT_EQ(ThrownErrorOf([&] {

@@ -73,6 +73,15 @@ TEST(LogTest, RefusesWhatIsNotAStudyLog) {
             std::string::npos);
 }
 
+// a line nested deeper than every JSON input may be is refused before it is parsed
+TEST(LogTest, RefusesALineNestedTooDeep) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']') + "\n";
+  EXPECT_NE(LogErrorOf(RecordLines({Start()}) + deep)
+                .find("line 2 nests arrays and objects more than 64 deep (at byte 65 of the line)"),
+            std::string::npos)
+      << LogErrorOf(RecordLines({Start()}) + deep).substr(0, 300);
+}
+
 // a field of the wrong type in the first record (found by the study_log fuzzer: a "format" that is
 // an object threw nlohmann's type_error out of ParseLog) is a rigidtouch::Error like any other
 TEST(LogTest, FirstRecordFieldsOfTheWrongTypeAreRefused) {
