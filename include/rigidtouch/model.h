@@ -101,7 +101,7 @@ struct JointModel {
   int dof_adr = -1;   // into the tree's qvel: 1, 3 or 6 numbers
   /// MJCF range with limited (or the compiler's autolimits): hinge [rad], slide [m]; a ball's
   /// limit is the rotation angle, range_hi_rad_or_m (range_lo is 0). Reported by the trees stage
-  /// (Data::joint_at_limit); enforced as unilateral contacts by the contact stages.
+  /// (Data::joint_at_limit); to be enforced as unilateral contacts by the contact stages.
   bool limited = false;
   double range_lo_rad_or_m = 0.0;
   double range_hi_rad_or_m = 0.0;
