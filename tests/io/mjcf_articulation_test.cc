@@ -147,6 +147,11 @@ std::vector<Refused> RefusedInputs() {
        World("<body name=\"b\"><joint name=\"j\" type=\"ball\"/>" + std::string(kLink) + "</body>",
              "<actuator><motor name=\"twist\" joint=\"j\"/></actuator>"),
        "<actuator> 'twist' drives <joint> 'j' of body 'b'"},
+      {"free_joint_below_the_top",
+       World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) +
+             "<body name=\"loose\" pos=\"0.2 0 0\"><freejoint name=\"f\"/>" + std::string(kLink) +
+             "</body></body>"),
+       "free joint can only be used on top level"},  // MuJoCo's compiler
       {"equality",
        World(body + "<body name=\"c\" pos=\"0.5 0 0\"><joint name=\"k\"/>" + std::string(kLink) +
                  "</body>",
