@@ -148,6 +148,34 @@ TEST(ArticulatedTest, PositionActuatorHoldsThePoseOfTheStaticEquilibrium) {
   EXPECT_LT(std::abs(d.trees[0]->qvel[0]), 1e-6);
 }
 
+// a link's geoms move with it for the collision stage: a box on a rail, sliding at 0.5 m/s with no
+// gravity, reaches a free sphere 0.3 m ahead of it (the tool) after about 0.5 s and pushes it
+// along (the link feels no force back until contacts on links land)
+TEST(ArticulatedTest, LinkGeomsMoveForTheCollisionStage) {
+  const std::string xml =
+      "<mujoco><option timestep=\"0.001\" gravity=\"0 0 0\"/><worldbody>"
+      "<body name=\"cart\"><joint name=\"rail\" type=\"slide\" axis=\"1 0 0\"/>"
+      "<geom name=\"pusher\" type=\"box\" size=\"0.05 0.05 0.05\" mass=\"1\"/></body>"
+      "<body name=\"tool\" pos=\"0.4 0 0\"><freejoint/>"
+      "<geom type=\"sphere\" size=\"0.05\" mass=\"0.1\"/></body></worldbody>"
+      "<keyframe><key name=\"initial\" qpos=\"0 0.4 0 0 1 0 0 0\" qvel=\"0.5 0 0 0 0 0 0\"/>"
+      "</keyframe></mujoco>";
+  const Model m = LoadModel(test::WriteTempFile("cart.xml", xml), LoadOptions{});
+  ASSERT_EQ(m.trees.size(), 1u);
+  Data d = MakeData(m);
+  const TickInput in;
+  int contacts = 0;
+  for (int s = 0; s < 1000; ++s) {
+    Tick(m, d, in);
+    contacts += d.ncontact;
+  }
+  // the cart is at 0.5 m (its rail is free), the sphere ahead of its front face
+  EXPECT_NEAR(d.trees[0]->qpos[0], 0.5, 1e-9);
+  EXPECT_GT(contacts, 0);
+  EXPECT_GT(d.bodies[m.tool].x_W.x(), 0.55);  // beyond the cart's front face
+  EXPECT_GT(d.bodies[m.tool].v_W.x(), 0.0);
+}
+
 // a tick that steps trees (the test scenes' arm with actuators and the humanoid-like tree with
 // ball joints and a free root) allocates nothing
 TEST(ArticulatedTest, NoHeapAllocationInATickWithTrees) {
