@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 
 #include "contact/impulse_math.h"
 #include "rigidtouch/types.h"
@@ -476,7 +475,9 @@ JointImpulseStats JointGroupSolver::ApplyJointImpulses(const JointGroup& group) 
   stats.error = Assemble(group);
   if (stats.error != JointGroupError::kNone) return stats;
   const int n = dofs_;
-  std::sort(scales_.begin(), scales_.begin() + nscales, std::greater<double>());
+  // smallest share first: the rows with the largest (a plastic single impulse) end the tick as
+  // their rule says, whatever the shares before them did
+  std::sort(scales_.begin(), scales_.begin() + nscales);
   double w_max = 0.0;
   for (int j = 0; j < nrows; ++j) {
     b_[3 * j] = jac_t_.col(3 * j).head(n).dot(u_.head(n));

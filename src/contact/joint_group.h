@@ -132,7 +132,7 @@ class JointGroupSolver {
   JointPenaltyStats SolveJointPenalty(const JointGroup& group, double h_s);
 
   /// The group's collision impulses this tick: the rows with impulse_scale > 0, one non-negative
-  /// plastic solve (min 1/2 p^T W p + p^T J u, p >= 0) per distinct scale s, largest first, each
+  /// plastic solve (min 1/2 p^T W p + p^T J u, p >= 0) per distinct scale s, smallest first, each
   /// applied as s p through M^-1 J^T (Eq. 2); s = 1 + e is Eq. 5, s = 1 / (N - i + 1) Eq. 8.
   JointImpulseStats ApplyJointImpulses(const JointGroup& group);
 

@@ -224,6 +224,36 @@ TEST(JointGroupTest, DoorStopTrainNeverPullsNorRaisesEnergyAndStopsTheDoor) {
   EXPECT_EQ(pushing_impulses, impulses);
 }
 
+TEST(JointGroupTest, ToolTrainAndPlasticStopInOneGroup) {
+  // the door turning into its stop at q = 0 while a tool, faster, pushes it there: the tool's row
+  // takes a train's share 1/3, the stop a plastic single impulse
+  JgStop stop(1.5);
+  JgPrepare(stop.model, stop.data);
+  const double r = 0.6;
+  SolverBody tool = JgTool(0.3, Vec3(0, -2.0, 0));
+  const Vec3 tool_com_W(r, 0.01, 0.3);
+  JointRow rows[2];
+  rows[0].a = {RowSideKind::kBody, 0, -1};
+  rows[0].b = {RowSideKind::kLink, 0, 0};
+  rows[0].n_W = Vec3::UnitY();
+  rows[0].p_W = Vec3(r, 0, 0.3);
+  rows[0].impulse_scale = 1.0 / 3.0;
+  rows[1] = stop.row;
+  rows[1].impulse_scale = 1.0;
+  JointGroup group{{&tool, 1}, {&tool_com_W, 1}, {&stop.tree, 1}, rows};
+  const double ke0 = JointGroupKineticEnergy(group);
+  JointGroupSolver solver(2, 8);
+  const JointImpulseStats stats = solver.ApplyJointImpulses(group);
+  ASSERT_EQ(stats.error, JointGroupError::kNone);
+  EXPECT_EQ(stats.solves, 2);
+  EXPECT_GT(rows[0].impulse_Ns, 0.0);
+  EXPECT_GT(rows[1].impulse_Ns, 0.0);
+  EXPECT_LE(JointGroupKineticEnergy(group), ke0);
+  // the stop's plastic impulse, solved last, leaves the door at rest against it (rounding: 1e-12
+  // of the approach)
+  EXPECT_NEAR(stop.data.qvel[0], 0.0, 1e-12 * 1.5);
+}
+
 // a tool pressing link 2 of the chain at rest, 1 mm deep, with a stick anchor force
 struct JgPress {
   TreeModel model = JgChain();
@@ -291,7 +321,7 @@ TEST(JointGroupTest, ChainLinkFrictionStaysInsideTheCone) {
 }
 
 // tool -> free body -> a block on a slide along x, plus the tool resting on a floor and the free
-// body touching a wall behind it
+// body touching a stop behind it
 struct JgMixed {
   double m_t = 0.5, m_f = 1.2, m_s = 2.0, v = 0.4;
   TreeModel model = JgSlide(m_s);
@@ -317,9 +347,9 @@ struct JgMixed {
     rows[2].a = {RowSideKind::kBody, 0, -1};  // the tool on a floor, at rest on it
     rows[2].n_W = Vec3::UnitZ();
     rows[2].p_W = com_W[0] - Vec3(0, 0, 0.01);
-    rows[3].a = {RowSideKind::kBody, 1, -1};  // a wall left of the free body
-    rows[3].n_W = Vec3::UnitX();
-    rows[3].p_W = Vec3(-0.16, 0, 0.05);
+    rows[3].a = {RowSideKind::kBody, 1, -1};  // a stop left of the free body, on its x line:
+    rows[3].n_W = Vec3::UnitX();              // only a pull there could keep it still
+    rows[3].p_W = Vec3(-0.16, 0, 0);
     for (JointRow& row : rows) row.impulse_scale = 1.0;
   }
   double MomentumX() const {
@@ -335,7 +365,7 @@ TEST(JointGroupTest, MixedGroupImpulsesAreNonNegativeAndKeepMomentum) {
   const JointImpulseStats stats = mixed.solver.ApplyJointImpulses(mixed.group);
   ASSERT_EQ(stats.error, JointGroupError::kNone);
   for (const JointRow& row : mixed.rows) EXPECT_GE(row.impulse_Ns, 0.0);
-  // the wall would have to pull to keep the free body still: it gets no impulse, so no outside
+  // the stop would have to pull to keep the free body still: it gets no impulse, so no outside
   // impulse acts along x and the momentum is kept (1e-12 relative)
   EXPECT_EQ(mixed.rows[3].impulse_Ns, 0.0);
   EXPECT_NEAR(mixed.MomentumX(), p0, 1e-12 * std::abs(p0));
