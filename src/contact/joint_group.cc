@@ -294,7 +294,8 @@ bool JointGroupSolver::UpdateRowStates(const JointGroup& group, JointPenaltyStat
   return changed;
 }
 
-JointPenaltyStats JointGroupSolver::SolveJointPenalty(const JointGroup& group, double h_s) {
+JointPenaltyStats JointGroupSolver::SolveJointPenalty(const JointGroup& group,
+                                                      double h_s) noexcept {
   JointPenaltyStats stats;
   if (!(h_s > 0.0) || !std::isfinite(h_s)) {
     stats.error = JointGroupError::kNonFinite;
@@ -451,7 +452,7 @@ bool JointGroupSolver::SolveNonNegative(int m, int& iterations) {
   return false;
 }
 
-JointImpulseStats JointGroupSolver::ApplyJointImpulses(const JointGroup& group) {
+JointImpulseStats JointGroupSolver::ApplyJointImpulses(const JointGroup& group) noexcept {
   JointImpulseStats stats;
   const int nrows = static_cast<int>(group.rows.size());
   if (nrows > max_rows_) {

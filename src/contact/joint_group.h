@@ -128,19 +128,22 @@ class JointGroupSolver {
   /// slips (kinetic friction mu_kinetic f_n along its trial force, explicit) and the group is
   /// solved again; a slipping row's friction is kept within mu_kinetic times the normal force of
   /// the final solve. If the passes run out, the group is solved without friction. Writes each
-  /// row's forces and generalized_force.
-  JointPenaltyStats SolveJointPenalty(const JointGroup& group, double h_s);
+  /// row's forces and the trees' joint forces (TreeContactForce). M^-1 is (M + h D)^-1 for a
+  /// tree, the kept factor.
+  JointPenaltyStats SolveJointPenalty(const JointGroup& group, double h_s) noexcept;
 
   /// The group's collision impulses this tick: the rows with impulse_scale > 0, one non-negative
   /// plastic solve (min 1/2 p^T W p + p^T J u, p >= 0) per distinct scale s, smallest first, each
   /// applied as s p through M^-1 J^T (Eq. 2); s = 1 + e is Eq. 5, s = 1 / (N - i + 1) Eq. 8.
-  JointImpulseStats ApplyJointImpulses(const JointGroup& group);
+  JointImpulseStats ApplyJointImpulses(const JointGroup& group) noexcept;
 
   /// J^T f of the last SolveJointPenalty on tree `tree` (nv entries: N or N m per dof): the joint
   /// forces of the group's contact and limit forces.
   Eigen::Ref<const Eigen::VectorXd> TreeContactForce(int tree) const;
 
+  /// Capacity in rows (contacts and limits).
   int max_rows() const { return max_rows_; }
+  /// Capacity in stacked velocities.
   int max_dofs() const { return max_dofs_; }
 
  private:
