@@ -77,7 +77,8 @@ void RunBench(const BenchFlags& f) {
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
-  input.tool_wrench.force_N = tool_force;
+  // --tool none: no tool to push (the default force would only move the held placeholder)
+  input.tool_wrench.force_N = model.has_tool ? tool_force : Vec3::Zero();
   // the last warm-up steps are timed when the reference job is sized from them
   std::vector<double> warm_ns;
   for (long s = 0; s < f.warmup; ++s) {

@@ -112,8 +112,10 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--config", f.config,
                   "JSON file with rigidtouch parameters (tool, timestep_s, contact, render, "
                   "device; docs/config.md)");
-  app->add_option("--tool", f.tool,
-                  "name of the free body that is the tool (default: the config's, else tool)");
+  app->add_option(
+      "--tool", f.tool,
+      "name of the free body that is the tool, or none for a scene without a tool (default: the "
+      "config's, else tool)");
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");
   app->add_option("--renderer", f.renderer, "penalty | impulse | train | event")
       ->check(CLI::IsMember(text::RendererNames()));

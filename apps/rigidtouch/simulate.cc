@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "command.h"
+#include "dynamics/tree.h"
 #include "io/config.h"
 #include "scene_flags.h"
 #include "simulate_nonfinite.h"
@@ -18,6 +19,45 @@ struct SimulateFlags {
   bool json = false;
 };
 
+const char* JointKindName(JointKind k) {
+  switch (k) {
+    case JointKind::kFree:
+      return "free";
+    case JointKind::kBall:
+      return "ball";
+    case JointKind::kSlide:
+      return "slide";
+    case JointKind::kHinge:
+      break;
+  }
+  return "hinge";
+}
+
+// every joint of every tree: position (rad or m; a ball's quaternion w x y z; a free joint's
+// position and quaternion), velocity (rad/s or m/s; angular velocity of a ball), at-limit flag
+nlohmann::json JointsJson(const Model& model, const Data& data) {
+  nlohmann::json joints = nlohmann::json::array();
+  for (std::size_t t = 0; t < model.trees.size(); ++t) {
+    const ArticulatedTree& tree = model.trees[t];
+    const dynamics::TreeData& d = *data.trees[t];
+    for (std::size_t j = 0; j < tree.joints.size(); ++j) {
+      const JointModel& jm = tree.joints[j];
+      const int nq = jm.type == JointKind::kFree ? 7 : jm.type == JointKind::kBall ? 4 : 1;
+      const int nv = jm.type == JointKind::kFree ? 6 : jm.type == JointKind::kBall ? 3 : 1;
+      nlohmann::json q = nlohmann::json::array(), v = nlohmann::json::array();
+      for (int k = 0; k < nq; ++k) q.push_back(d.qpos[jm.qpos_adr + k]);
+      for (int k = 0; k < nv; ++k) v.push_back(d.qvel[jm.dof_adr + k]);
+      joints.push_back({{"name", jm.name},
+                        {"tree", tree.name},
+                        {"type", JointKindName(jm.type)},
+                        {"position", nq == 1 ? q[0] : q},
+                        {"velocity", nv == 1 ? v[0] : v},
+                        {"at_limit", data.joint_at_limit[t][j] != 0}});
+    }
+  }
+  return joints;
+}
+
 void RunSimulate(const SimulateFlags& f) {
   if (f.steps < 0) throw Error("--steps must be >= 0, got " + std::to_string(f.steps));
   const Vec3 tool_force = ToolForce(f.tool_force);
@@ -25,6 +65,9 @@ void RunSimulate(const SimulateFlags& f) {
   RefuseUnusedRender(settings, {settings.load.render.renderer});
   RefuseDeviceSettings(settings, "simulate");
   const Model model = LoadModel(f.scene.scene, settings.load);
+  if (!model.has_tool && !tool_force.isZero(0.0)) {
+    throw Error("--tool-force needs a tool; the scene is loaded with --tool none");
+  }
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
@@ -56,6 +99,7 @@ void RunSimulate(const SimulateFlags& f) {
   }
   nlohmann::json bodies = nlohmann::json::array();
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    if (!model.has_tool && static_cast<int>(i) == model.tool) continue;  // the placeholder
     const BodyState& s = data.bodies[i];
     bodies.push_back({{"name", model.bodies[i].name},
                       {"position_m", Json(s.x_W)},
@@ -72,6 +116,7 @@ void RunSimulate(const SimulateFlags& f) {
                                    {"interval_steps", model.schedule.interval_steps},
                                    {"impulses", model.schedule.impulses}}},
                                  {"bodies", bodies},
+                                 {"joints", JointsJson(model, data)},
                                  {"impulses", impulses},
                                  {"max_contacts", max_contacts},
                                  {"warnings", WarningsJson(data)},
@@ -87,9 +132,15 @@ void RunSimulate(const SimulateFlags& f) {
   std::cout << "impulses applied: " << impulses.size()
             << ", most contacts in a step: " << max_contacts << "\n";
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    if (!model.has_tool && static_cast<int>(i) == model.tool) continue;
     const BodyState& s = data.bodies[i];
     std::cout << "  " << model.bodies[i].name << ": position " << s.x_W.transpose()
               << " m, velocity " << s.v_W.transpose() << " m/s\n";
+  }
+  for (const nlohmann::json& j : result["joints"]) {
+    std::cout << "  joint " << j["name"].get<std::string>() << " (" << j["type"].get<std::string>()
+              << "): position " << j["position"].dump() << ", velocity " << j["velocity"].dump()
+              << (j["at_limit"].get<bool>() ? ", at its limit" : "") << "\n";
   }
   PrintWarnings(result["warnings"], std::cout);
   ThrowIfNonFinite(report);

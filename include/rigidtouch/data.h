@@ -103,6 +103,14 @@ struct WarningStat {
   std::int64_t last_step = -1;  // the last of them; -1: never
 };
 
+namespace dynamics {
+struct TreeData;  // src/dynamics/tree.h: one tree's state, kinematics and scratch
+}  // namespace dynamics
+/// Deleter so Data can own trees' state without exposing its definition.
+struct TreeDataDeleter {
+  void operator()(dynamics::TreeData* d) const;
+};
+
 struct Workspace;  // solver scratch, defined in src/engine/workspace.h
 /// Deleter so Data can own a Workspace without exposing it.
 struct WorkspaceDeleter {
@@ -144,6 +152,12 @@ struct Data {
 
   // POSITION and VELOCITY state, per body
   std::vector<BodyState> bodies;  // (nbody)
+
+  // POSITION and VELOCITY state, per articulated tree (Model::trees): qpos (nq) and qvel (nv) in
+  // MuJoCo's coordinates, with the tree's kinematics, mass matrix, factor and scratch
+  std::vector<std::unique_ptr<dynamics::TreeData, TreeDataDeleter>> trees;  // (ntree)
+  // per tree and joint, written by the trees stage: the joint is at or beyond a limit of its range
+  std::vector<std::vector<unsigned char>> joint_at_limit;  // (ntree) x (njoint of the tree)
 
   // POSITION dependent, written by the kinematics stage before collision detection and read by
   // every later stage until the positions are integrated

@@ -13,6 +13,10 @@ struct mjModel_;
 
 namespace rigidtouch {
 
+namespace dynamics {
+struct TreeModel;  // src/dynamics/tree.h: the joint-space dynamics of one kinematic tree
+}  // namespace dynamics
+
 /// Geometric primitive of a collision geom (the MJCF geom types rigidtouch accepts).
 /// kMesh also stands for the other convex shapes that MuJoCo's pair functions collide (cylinder,
 /// ellipsoid): GeomModel::mj_type says which.
@@ -57,11 +61,19 @@ struct BodyModel {
   int mj_qvel_adr = -1;              // freejoint qvel address (6 numbers)
 };
 
-/// A collision geom. `body` is an index into Model::bodies, or -1 for static world geometry.
+/// A collision geom. `body` is an index into Model::bodies, or -1 for static world geometry and for
+/// the geoms of a tree's links. A link geom has `tree` >= 0 (Model::trees) and `link` (the tree's
+/// body): the tick's trees stage moves its pose every step; until contacts on links land, the
+/// collision stages see it as static geometry at that pose (docs/decisions.md, "Articulated
+/// trees in the Model").
 struct GeomModel {
   std::string name;
   GeomType type = GeomType::kSphere;
   int body = -1;
+  int tree = -1;                     // index into Model::trees, -1 if not on a link
+  int link = -1;                     // body of that tree the geom is fixed to
+  Vec3 pos_L = Vec3::Zero();         // centre in the link's body frame (link geoms only)
+  Quat quat_L = Quat::Identity();    // orientation in the link's body frame (link geoms only)
   double friction = 0.0;             // MJCF sliding friction coefficient
   Vec3 size = Vec3::Zero();          // MuJoCo size: radius, (radius, half-length), half-extents
   double rbound_m = 0.0;             // radius of a bounding sphere about the geom centre
@@ -75,6 +87,58 @@ struct GeomModel {
   int condim = 3;
   double mjcf_friction = 0.0;  // the MJCF sliding friction as written, before condim
   int mj_type = -1;            // MuJoCo's geom type (mjtGeom) in the compiled model
+};
+
+/// Joint kinds of an articulated tree, with MuJoCo's coordinates (dynamics::JointType).
+enum class JointKind { kFree, kBall, kSlide, kHinge };
+
+/// One joint of an articulated tree: its name, coordinates and limit (MJCF <joint>).
+struct JointModel {
+  std::string name;
+  JointKind type = JointKind::kHinge;
+  int link = -1;      // the tree body the joint moves
+  int qpos_adr = -1;  // into the tree's qpos: 1 number (hinge, slide), 4 (ball), 7 (free)
+  int dof_adr = -1;   // into the tree's qvel: 1, 3 or 6 numbers
+  /// MJCF range with limited (or the compiler's autolimits): hinge [rad], slide [m]; a ball's
+  /// limit is the rotation angle, range_hi_rad_or_m (range_lo is 0). Reported by the trees stage
+  /// (Data::joint_at_limit); to be enforced as unilateral contacts by the contact stages.
+  bool limited = false;
+  double range_lo_rad_or_m = 0.0;
+  double range_hi_rad_or_m = 0.0;
+};
+
+/// One actuator on a hinge or slide joint at a constant control (MJCF <actuator>: motor, position,
+/// velocity, damper, general with fixed or affine gain and bias, no activation state). With
+/// length l = gear q and velocity v = gear qdot (MuJoCo's joint transmission), the actuator force
+/// is f = (g0 + g1 l + g2 v) ctrl + (b0 + b1 l + b2 v), clamped to the force range when
+/// force_limited, and the joint force is gear f. ctrl is clamped once, at load, to the control
+/// range when ctrl_limited.
+struct ActuatorModel {
+  std::string name;
+  int joint = -1;     // index into ArticulatedTree::joints
+  double gear = 1.0;  // joint force per actuator force (MJCF gear[0])
+  double ctrl = 0.0;  // the constant control: keyframe 'initial' ctrl, default 0, clamped
+  double gain[3] = {1.0, 0.0, 0.0};  // g0, g1 [1/(m or rad)], g2 [s/(m or rad)]
+  double bias[3] = {0.0, 0.0, 0.0};  // b0 [N or N m], b1, b2
+  bool force_limited = false;
+  double force_lo = 0.0, force_hi = 0.0;  // N (slide) or N m (hinge), before the gear
+};
+
+/// An articulated tree of MJCF bodies: a body with joints whose parent is static (welded to the
+/// world), with every body below it. Bodies without joints below it are welded into their
+/// nearest jointed ancestor (masses and inertias merged), as MuJoCo's body_weldid groups them.
+struct ArticulatedTree {
+  std::string name;                     // the root body's MJCF name
+  std::vector<std::string> link_names;  // per tree body: the MJCF body it is
+  std::vector<int> link_mj_body;        // per tree body: its id in the compiled MuJoCo model
+  std::vector<JointModel> joints;       // in the tree's joint order (MuJoCo's)
+  std::vector<ActuatorModel> actuators;
+  /// Joint-space dynamics: bodies, joints, damping, armature, springs, gravity. Shared by copies
+  /// of the Model (it is constant); dynamics::TreeModel is complete in src/dynamics/tree.h.
+  std::shared_ptr<const dynamics::TreeModel> dynamics;
+  int nq = 0, nv = 0;
+  std::vector<double> initial_qpos;  // (nq) keyframe 'initial', else the MJCF defaults (qpos0)
+  std::vector<double> initial_qvel;  // (nv) keyframe 'initial', else zero
 };
 
 /// Penalty contact law (tick stage 4). Stiffness and damping are per geom pair; a manifold of n
@@ -159,10 +223,15 @@ struct Model {
   std::string source;         // scene file it was loaded from
   double timestep_s = 0.001;  // h
   Vec3 gravity_W = Vec3(0, 0, -9.81);
-  std::vector<BodyModel> bodies;   // dynamic bodies (MJCF freejoint bodies)
-  std::vector<GeomModel> geoms;    // collision geoms, static (body -1) and dynamic
-  std::vector<BodyState> initial;  // per body, from keyframe "initial" or the MJCF defaults
-  int tool = 0;                    // index of the tool in `bodies` (the method's body 1)
+  std::vector<BodyModel> bodies;       // dynamic bodies (MJCF freejoint bodies)
+  std::vector<GeomModel> geoms;        // collision geoms, static (body -1) and dynamic
+  std::vector<BodyState> initial;      // per body, from keyframe "initial" or the MJCF defaults
+  std::vector<ArticulatedTree> trees;  // articulated trees (MJCF bodies with joints other than a
+                                       // lone top-level freejoint), stepped by the trees stage
+  int tool = 0;                        // index of the tool in `bodies` (the method's body 1)
+  /// false for a scene loaded without a tool (LoadOptions::tool_name "none"): `tool` is then a
+  /// placeholder body without geoms that the trees stage holds at its initial state
+  bool has_tool = true;
   ContactParams contact;
   RenderParams render;
   Schedule schedule;  // derived by Configure from render and timestep_s

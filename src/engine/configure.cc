@@ -203,6 +203,7 @@ void SceneContactDefaults(Model& model, std::vector<std::string>& warnings) {
 // hold the tool under gravity (no device: nothing compensates it) or is unstable for a body the
 // tool can push is reported.
 void ToolContactWarnings(const Model& model, std::vector<std::string>& warnings) {
+  if (!model.has_tool) return;  // --tool none: no tool contacts
   const ContactParams& c = model.contact;
   if (model.device.coupling == Coupling::kNone) {
     CheckHold(model, model.tool, "stiffness_N_per_m", c.stiffness_N_per_m, warnings);
@@ -364,6 +365,9 @@ void Configure(Model& model) {
   std::vector<std::string> warnings;
   SceneContactDefaults(model, warnings);
   ToolContactWarnings(model, warnings);
+  if (!model.has_tool && model.device.coupling != Coupling::kNone) {
+    throw Error("a device needs a tool; the scene is loaded with --tool none");
+  }
   for (std::string& w : warnings) {
     // Configure may run again on the same model (serve sets the device's law): no repeats
     if (std::find(model.load_warnings.begin(), model.load_warnings.end(), w) ==

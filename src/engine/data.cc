@@ -4,12 +4,18 @@
 
 #include "dynamics/kinematics.h"
 #include "dynamics/rigid_body.h"
+#include "dynamics/tree.h"
+#include "dynamics/tree_stage.h"
 #include "engine/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
 void WorkspaceDeleter::operator()(Workspace* w) const {
   delete w;
+}
+
+void TreeDataDeleter::operator()(dynamics::TreeData* d) const {
+  delete d;
 }
 
 const char* WarningName(Warning w) {
@@ -55,6 +61,8 @@ Data MakeData(const Model& model) {
   ws.contact.Reserve(nbody, ncap);
   ws.velocity.Reserve(nbody, ncap, model.max_group_bodies, model.threads);
   ws.impulse.Reserve(model);
+  ws.trees.Reserve(model);
+  dynamics::MakeTreesData(model, data);
   ws.made_for = model.collision;
   if (model.threads == 2) {
     ws.collision.ReserveTwoThreads(model);
@@ -76,7 +84,7 @@ bool DataFitsModel(const Model& model, const Data& data) {
   return same_scene && data.bodies.size() == nbody && data.window.size() == nbody &&
          data.contacts.size() == ncap && data.previous.size() == ncap &&
          data.workspace->collision.poses.size() == model.geoms.size() &&
-         model.initial.size() == nbody;
+         model.initial.size() == nbody && data.trees.size() == model.trees.size();
 }
 
 void ResetState(const Model& model, Data& data) {
@@ -102,6 +110,7 @@ void ResetState(const Model& model, Data& data) {
   if (data.workspace) {
     data.workspace->collision.Reset(model);
     data.workspace->velocity.ForgetFactors();
+    dynamics::ResetTrees(model, data, data.workspace->collision);
   }
 }
 

@@ -4,6 +4,7 @@
 #include "contact/contact_forces.h"
 #include "contact/impulse_stage.h"
 #include "dynamics/kinematics.h"
+#include "dynamics/tree_stage.h"
 #include "dynamics/velocities.h"
 #include "engine/workspace.h"
 #include "geometry/collision.h"
@@ -44,7 +45,11 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   // 6. integrate positions with the new velocities
   dynamics::IntegratePositions(model, data);
 
-  // 7. render: penalty (or coupling) + Eq. 9, the device's force limit, the passivity
+  // 7. trees: each articulated tree stepped in joint space with its actuators' forces; the
+  // links' geoms moved for the next collision stage
+  dynamics::StepTrees(model, data, ws.trees, ws.collision);
+
+  // 8. render: penalty (or coupling) + Eq. 9, the device's force limit, the passivity
   // controller, the safety guards; a non-finite state is put back to initial
   bool state_ok = true;
   DeviceCommand out =

@@ -5,6 +5,7 @@
 
 #include "contact/impulse_stage.h"
 #include "contact/phases.h"
+#include "dynamics/tree_stage.h"
 #include "dynamics/velocities.h"
 #include "geometry/collision.h"
 #include "parallel/worker.h"
@@ -17,7 +18,8 @@ struct Workspace {
   geometry::CollisionScratch collision;  // stage 2: broad and narrow phase
   contact::ContactScratch contact;       // stages 3-4: groups, laws, friction anchors
   dynamics::VelocityScratch velocity;    // stages 4-5: force sums, implicit contacts, group solver
-  contact::ImpulseScratch impulse;       // stage 6: solver rows and the impulse solvers
+  contact::ImpulseScratch impulse;       // stage 5: solver rows and the impulse solvers
+  dynamics::TreeStageScratch trees;      // stage 7: the trees' actuator forces
   // Model::threads 2: the second thread, shared by stages 2 (narrow phase) and 5 (group solves);
   // null with one thread
   std::unique_ptr<parallel::Worker> worker;

@@ -2,6 +2,7 @@
 
 #include <sstream>
 
+#include "io/mjcf_articulation.h"
 #include "rigidtouch/types.h"
 
 namespace rigidtouch {
@@ -194,13 +195,8 @@ void CheckElements(const mjModel* m, const std::string& path, std::vector<std::s
   for (int e = 0; e < m->neq; ++e) {
     r.Refuse(std::string("<equality> <") + EqualityName(m->eq_type[e]) + "> " +
              Name(m, mjOBJ_EQUALITY, e) +
-             ": rigidtouch simulates no equality constraints (free bodies and static geometry "
-             "only); weld parts by nesting bodies without a joint instead");
-  }
-  if (m->nu > 0) {
-    r.Refuse("<actuator> " + Name(m, mjOBJ_ACTUATOR, 0) + (m->nu > 1 ? " (and others)" : "") +
-             ": rigidtouch applies no actuator forces; the tool is driven by the device or "
-             "--tool-force");
+             ": rigidtouch simulates no equality constraints; weld parts by nesting bodies "
+             "without a joint instead");
   }
   for (int t = 0; t < m->ntendon; ++t) {
     if (m->tendon_limited[t] || m->tendon_stiffness[t] != 0.0 || m->tendon_damping[t] != 0.0) {
@@ -213,6 +209,9 @@ void CheckElements(const mjModel* m, const std::string& path, std::vector<std::s
            " ignored: rigidtouch has no tendons (they exert no force here)");
   }
   for (int d = 0; d < m->nv; ++d) {
+    const int j = m->dof_jntid[d];
+    if (!io::IsLoneFreeBody(m, m->jnt_bodyid[j]))
+      continue;  // a tree's joint: io::CopyTrees honours or refuses these
     if (m->dof_damping[d] != 0.0 || m->dof_armature[d] != 0.0 || m->dof_frictionloss[d] != 0.0) {
       r.Refuse("<joint> " + Name(m, mjOBJ_JOINT, m->dof_jntid[d]) +
                " has damping, armature or frictionloss: rigidtouch's free bodies move without "

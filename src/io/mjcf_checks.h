@@ -12,8 +12,9 @@
 namespace rigidtouch {
 
 /// Refuses (Error) the elements that change the motion rigidtouch computes: equality constraints,
-/// actuators, tendons with stiffness, damping or limits, fluid forces, contacts or constraints
-/// disabled, contact of predefined pairs only, damping, armature or friction loss on a free joint.
+/// tendons with stiffness, damping or limits, fluid forces, contacts or constraints disabled,
+/// contact of predefined pairs only, damping, armature or friction loss on a free body's joint
+/// (the joints and actuators of articulated trees are io::CopyTrees's).
 /// Appends a warning for those that only tune MuJoCo's own solver and soft contact, which
 /// rigidtouch replaces with its own (solver options, integrator, solref, solimp, margin, gap,
 /// priority, solmix), for torsional and rolling friction (condim 4 and 6), and for sensors and

@@ -20,6 +20,7 @@
 #include "dynamics/kinematics.h"
 #include "geometry/capacity.h"
 #include "geometry/collision.h"
+#include "io/mjcf_articulation.h"
 #include "io/mjcf_checks.h"
 #include "io/mjcf_compile.h"
 #include "rigidtouch/rigidtouch.h"
@@ -209,23 +210,9 @@ int CompositeInertia(const mjModel* m, int root, BodyModel& body) {
   return static_cast<int>(parts.size());
 }
 
-const char* MjJointTypeName(int type) {
-  switch (type) {
-    case mjJNT_FREE:
-      return "free";
-    case mjJNT_BALL:
-      return "ball";
-    case mjJNT_SLIDE:
-      return "slide";
-    case mjJNT_HINGE:
-      return "hinge";
-    default:
-      return "unknown";
-  }
-}
-
-// the free bodies: freejoint children of the world are dynamic, with the bodies welded into them
-// (no joint of their own) merged in; other joint-less bodies are static.
+// the free bodies: freejoint children of the world without jointed bodies below them are dynamic,
+// with the bodies welded into them (no joint of their own) merged in; other joint-less bodies are
+// static, or welded into a link of an articulated tree (io::CopyTrees).
 // Returns the index in model.bodies of every MuJoCo body (-1: static).
 std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& model) {
   std::vector<int> body_index(m->nbody, -1);
@@ -242,17 +229,7 @@ std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& mo
       continue;  // welded into a free body (merged below), or static, welded to the world
     }
     const int jnt = m->body_jntadr[b];
-    if (m->body_jntnum[b] != 1 || m->jnt_type[jnt] != mjJNT_FREE || m->body_parentid[b] != 0) {
-      int shown = jnt;
-      for (int j = jnt; j < jnt + m->body_jntnum[b]; ++j) {
-        if (m->jnt_type[j] != mjJNT_FREE) shown = j;
-      }
-      throw Error("scene file '" + path + "': body '" + name + "' has a " +
-                  MjJointTypeName(m->jnt_type[shown]) + " <joint> '" +
-                  MjName(m, mjOBJ_JOINT, shown) +
-                  "'; rigidtouch simulates free bodies (one <freejoint/> at the top level, with "
-                  "joint-less child bodies welded in) and static bodies only");
-    }
+    if (!io::IsLoneFreeBody(m, b)) continue;  // a link of an articulated tree (io::CopyTrees)
     BodyModel body;
     body.name = name;
     const int merged = CompositeInertia(m, b, body);
@@ -274,9 +251,6 @@ std::vector<int> CopyBodies(const mjModel* m, const std::string& path, Model& mo
              "m");
     body_index[b] = static_cast<int>(model.bodies.size());
     model.bodies.push_back(body);
-  }
-  if (model.bodies.empty()) {
-    throw Error("scene file '" + path + "': no free bodies (<freejoint/>); nothing to simulate");
   }
   return body_index;
 }
@@ -320,7 +294,7 @@ void CheckGeomNumbers(const mjModel* m, const std::string& path, int g, const Ge
 }
 
 void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>& body_index,
-               Model& model) {
+               const std::vector<io::LinkOf>& link_of, Model& model) {
   for (int g = 0; g < m->ngeom; ++g) {
     GeomModel geom;
     geom.name = MjName(m, mjOBJ_GEOM, g);
@@ -331,9 +305,10 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
                   "box, cylinder, ellipsoid, mesh (convex)");
     }
     geom.body = body_index[m->body_weldid[m->geom_bodyid[g]]];
-    if (geom.type == GeomType::kPlane && geom.body >= 0) {
+    const io::LinkOf link = link_of[m->geom_bodyid[g]];
+    if (geom.type == GeomType::kPlane && (geom.body >= 0 || link.tree >= 0)) {
       throw Error("scene file '" + path + "': geom '" + geom.name +
-                  "' is a plane on a free body; planes must be static (in the worldbody)");
+                  "' is a plane on a moving body; planes must be static (in the worldbody)");
     }
     CheckGeomNumbers(m, path, g, geom);
     geom.mj_type = m->geom_type[g];
@@ -345,6 +320,14 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
     geom.contype = m->geom_contype[g];
     geom.conaffinity = m->geom_conaffinity[g];
     GeomPose(m, model, g, geom);
+    if (link.tree >= 0) {  // its pose on the link; the world pose at the start is set later
+      geom.tree = link.tree;
+      geom.link = link.link;
+      const int owner = model.trees[link.tree].link_mj_body[link.link];
+      geom.pos_L = Vec3(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]);
+      geom.quat_L = MjQuat(m->geom_quat + 4 * g).normalized();
+      ToAncestor(m, m->geom_bodyid[g], owner, &geom.pos_L, &geom.quat_L);
+    }
     // the pose composed over its bodies: each body's offset may be in range and the sum not (a
     // static body 1e300 m out, a welded chain reaching 1e7 m)
     CheckVec(path,
@@ -374,7 +357,29 @@ void CopyGeoms(const mjModel* m, const std::string& path, const std::vector<int>
   excluded.erase(std::unique(excluded.begin(), excluded.end()), excluded.end());
 }
 
-int FindTool(const Model& model, const std::string& path, const std::string& tool_name) {
+int FindTool(Model& model, const std::string& path, const std::string& tool_name) {
+  if (tool_name == "none") {  // a placeholder the trees stage holds still (Model::has_tool)
+    BodyModel placeholder;
+    placeholder.name = "(no tool)";
+    placeholder.mass_kg = 1.0;
+    placeholder.inertia_kgm2 = Vec3::Constant(1e-3);
+    model.has_tool = false;
+    model.bodies.push_back(placeholder);
+    return static_cast<int>(model.bodies.size()) - 1;
+  }
+  for (const ArticulatedTree& tree : model.trees) {
+    for (const std::string& link : tree.link_names) {
+      if (link != tool_name) continue;
+      throw Error("scene file '" + path + "': body '" + tool_name +
+                  "' is a link of the articulated body '" + tree.name +
+                  "'; the tool must be a free body (one <freejoint/> at the top level, no joint "
+                  "below it), or pass --tool none for a scene without a tool");
+    }
+  }
+  if (model.bodies.empty()) {
+    throw Error("scene file '" + path + "': no free bodies (<freejoint/>) to use as the tool '" +
+                tool_name + "'; pass --tool none for a scene without a tool");
+  }
   const auto tool = std::find_if(model.bodies.begin(), model.bodies.end(),
                                  [&](const BodyModel& b) { return b.name == tool_name; });
   if (tool == model.bodies.end()) {
@@ -411,6 +416,7 @@ void InitialState(const mjModel* m, const std::string& path, Model& model) {
   }
   const std::string from = key >= 0 ? "keyframe 'initial'" : "the default pose";
   for (const auto& b : model.bodies) {
+    if (b.mj_body < 0) continue;  // the placeholder tool: at rest at the origin
     const std::string who = " of body '" + b.name + "' in " + from;
     const mjtNum* q = qpos.data() + b.mj_qpos_adr;
     const mjtNum* v = qvel.data() + b.mj_qvel_adr;
@@ -422,8 +428,9 @@ void InitialState(const mjModel* m, const std::string& path, Model& model) {
     CheckVec(path, "the angular velocity" + who, v + 3, 3, kMaxAngularSpeed, "rad/s");
   }
   for (const auto& b : model.bodies) {
-    model.initial.push_back(
-        StateFromFreejoint(b, qpos.data() + b.mj_qpos_adr, qvel.data() + b.mj_qvel_adr));
+    model.initial.push_back(b.mj_body < 0 ? BodyState{}
+                                          : StateFromFreejoint(b, qpos.data() + b.mj_qpos_adr,
+                                                               qvel.data() + b.mj_qvel_adr));
   }
 }
 
@@ -558,10 +565,17 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   }
 
   if (m->opt.disableflags & mjDSBL_GRAVITY) model.gravity_W.setZero();  // <flag gravity="disable"/>
-  // joints first: a scene of hinged bodies is refused for them, not for their actuators
+  // bodies and joints first: an actuator or element is then refused naming what it acts on
   const std::vector<int> body_index = CopyBodies(m, path, model);
+  const std::vector<io::LinkOf> link_of = io::CopyTrees(m, path, model);
+  if (model.bodies.empty() && model.trees.empty()) {
+    throw Error("scene file '" + path +
+                "': no free bodies (<freejoint/>) and no joints; nothing "
+                "to simulate");
+  }
   CheckElements(m, path, model.load_warnings);
-  CopyGeoms(m, path, body_index, model);
+  CopyGeoms(m, path, body_index, link_of, model);
+  io::PlaceLinkGeomsAtStart(model);
   CheckPairs(m, path, model.load_warnings);
   model.tool = FindTool(model, path, options.tool_name);
   InitialState(m, path, model);

@@ -350,16 +350,17 @@ std::vector<ElementCase> RefusedCases() {
              "<site site=\"b\"/></spatial></tendon>",
              "<site name=\"a\" pos=\"0 0 0.5\"/>", "<site name=\"b\"/>"),
        "<tendon> 'rope' has a limit"},
-      {"hinge",
+      {"frictionloss",
        Scene("",
-             "<body name=\"door\" pos=\"0.3 0 0.1\"><joint name=\"hinge\" type=\"hinge\"/>"
-             "<geom type=\"box\" size=\"0.01 0.01 0.01\" mass=\"0.1\"/></body>"),
-       "body 'door' has a hinge <joint> 'hinge'"},
-      {"nested_joint",
+             "<body name=\"door\" pos=\"0.3 0 0.1\"><joint name=\"hinge\" type=\"hinge\" "
+             "frictionloss=\"0.1\"/><geom type=\"box\" size=\"0.01 0.01 0.01\" mass=\"0.1\"/>"
+             "</body>"),
+       "<joint> 'hinge' of body 'door' has frictionloss"},
+      {"tool_with_a_joint_below",
        Scene("", "",
              "<body name=\"arm\" pos=\"0.05 0 0\"><joint name=\"elbow\"/>"
              "<geom type=\"box\" size=\"0.01 0.01 0.01\" mass=\"0.1\"/></body>"),
-       "body 'arm' has a hinge <joint> 'elbow'"},
+       "body 'tool' is a link of the articulated body 'tool'"},
       {"joint_damping",
        "<mujoco><worldbody><body name=\"tool\" pos=\"0 0 0.1\">"
        "<joint name=\"slow\" type=\"free\" damping=\"1\"/>"

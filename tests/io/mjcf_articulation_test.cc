@@ -1,0 +1,200 @@
+// Articulated trees from MJCF (src/io/mjcf_articulation.cc): what becomes a tree, its links,
+// joints, limits, actuators and initial state; each refused input named in its error.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "dynamics/tree.h"
+#include "rigidtouch/rigidtouch.h"
+#include "test_util.h"
+
+namespace rigidtouch {
+namespace {
+
+Model LoadTreeXml(const std::string& xml) {
+  LoadOptions o;
+  o.tool_name = "none";
+  return LoadModel(test::WriteTempFile("articulated.xml", xml), o);
+}
+
+std::string TreeXmlError(const std::string& xml) {
+  try {
+    LoadTreeXml(xml);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// a world with `body` in it, `after` after the worldbody
+std::string World(const std::string& body, const std::string& after = "") {
+  return "<mujoco><compiler angle=\"radian\"/><worldbody><geom name=\"floor\" type=\"plane\" "
+         "size=\"1 1 0.1\"/>" +
+         body + "</worldbody>" + after + "</mujoco>";
+}
+
+const char kLink[] = "<geom type=\"box\" size=\"0.05 0.05 0.05\" mass=\"1\"/>";
+
+TEST(MjcfArticulationTest, DoorSceneBecomesTwoTreesWithLinksJointsAndInitialState) {
+  const Model m = LoadModel(test::TestScene("articulated/door.xml"), [] {
+    LoadOptions o;
+    o.tool_name = "none";
+    return o;
+  }());
+  ASSERT_EQ(m.trees.size(), 2u);  // the door (handle welded in) and the drawer
+  const ArticulatedTree& door = m.trees[0];
+  EXPECT_EQ(door.name, "door");
+  ASSERT_EQ(door.link_names.size(), 1u);  // the handle is welded into the door
+  ASSERT_EQ(door.joints.size(), 1u);
+  EXPECT_EQ(door.joints[0].name, "hinge");
+  EXPECT_EQ(door.joints[0].type, JointKind::kHinge);
+  EXPECT_TRUE(door.joints[0].limited);
+  EXPECT_NEAR(door.joints[0].range_lo_rad_or_m, -100.0 * M_PI / 180.0, 1e-12);  // degrees
+  EXPECT_DOUBLE_EQ(door.joints[0].range_hi_rad_or_m, 0.0);
+  EXPECT_DOUBLE_EQ(door.initial_qpos[0], -0.5);  // keyframe 'initial'
+  EXPECT_DOUBLE_EQ(door.initial_qvel[0], 1.0);
+  EXPECT_NEAR(door.dynamics->bodies[0].mass_kg, 10.2, 1e-12);  // panel + handle
+  EXPECT_DOUBLE_EQ(m.trees[1].dynamics->joint(0).stiffness, 20.0);
+  EXPECT_DOUBLE_EQ(m.trees[1].dynamics->joint(0).spring_ref, -0.1);
+  int handle = -1;
+  for (int g = 0; g < static_cast<int>(m.geoms.size()); ++g) {
+    if (m.geoms[g].name == "handle") handle = g;
+  }
+  ASSERT_GE(handle, 0);
+  EXPECT_EQ(m.geoms[handle].body, -1);
+  EXPECT_EQ(m.geoms[handle].tree, 0);
+  EXPECT_EQ(m.geoms[handle].link, 0);
+  // its world pose at the keyframe: the hinge at (0, 0, 1) turned by -0.5 rad about z
+  const Vec3 on_door(0.75, -0.05, 0.0);
+  const Vec3 expected = Vec3(0, 0, 1) + Eigen::AngleAxisd(-0.5, Vec3::UnitZ()) * on_door;
+  EXPECT_LT((m.geoms[handle].pos_B - expected).norm(), 1e-12);
+  EXPECT_FALSE(m.has_tool);
+}
+
+TEST(MjcfArticulationTest, ActuatorsAtTheKeyframeControlWithMuJoCosGainsAndClamps) {
+  const Model m = LoadModel(test::TestScene("articulated/arm.xml"), [] {
+    LoadOptions o;
+    o.tool_name = "none";
+    return o;
+  }());
+  ASSERT_EQ(m.trees.size(), 1u);
+  const ArticulatedTree& arm = m.trees[0];
+  ASSERT_EQ(arm.actuators.size(), 4u);
+  const ActuatorModel& shoulder = arm.actuators[1];
+  EXPECT_EQ(shoulder.name, "shoulder");
+  EXPECT_DOUBLE_EQ(shoulder.gain[0], 200.0);   // position: gain kp
+  EXPECT_DOUBLE_EQ(shoulder.bias[1], -200.0);  // bias -kp length
+  EXPECT_DOUBLE_EQ(shoulder.ctrl, -0.4);
+  EXPECT_TRUE(arm.actuators[2].force_limited);
+  EXPECT_DOUBLE_EQ(arm.actuators[2].force_hi, 20.0);
+  EXPECT_DOUBLE_EQ(arm.actuators[3].ctrl, 0.5);  // the motor, within its ctrlrange
+  EXPECT_EQ(arm.joints[arm.actuators[3].joint].type, JointKind::kSlide);
+}
+
+TEST(MjcfArticulationTest, ControlOutsideItsRangeIsClampedAsMuJoCoDoes) {
+  const Model m =
+      LoadTreeXml(World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>",
+                        "<actuator><motor name=\"m\" joint=\"j\" ctrlrange=\"-1 1\" "
+                        "ctrllimited=\"true\"/></actuator><keyframe><key "
+                        "name=\"initial\" ctrl=\"3\"/></keyframe>"));
+  EXPECT_DOUBLE_EQ(m.trees[0].actuators[0].ctrl, 1.0);
+}
+
+struct Refused {
+  const char* name;
+  std::string xml;
+  std::string expected;
+};
+
+std::vector<Refused> RefusedInputs() {
+  const std::string body = "<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>";
+  return {
+      {"frictionloss",
+       World("<body name=\"b\"><joint name=\"j\" frictionloss=\"1\"/>" + std::string(kLink) +
+             "</body>"),
+       "<joint> 'j' of body 'b' has frictionloss=\"1\""},
+      {"ball_stiffness",
+       World("<body name=\"b\"><joint name=\"j\" type=\"ball\" stiffness=\"3\"/>" +
+             std::string(kLink) + "</body>"),
+       "<joint> 'j' of body 'b' is a ball joint with stiffness=\"3\""},
+      {"range_min_above_max",
+       World("<body name=\"b\"><joint name=\"j\" limited=\"true\" range=\"1 -1\"/>" +
+             std::string(kLink) + "</body>"),
+       "range[0] should be smaller than range[1] in joint 'j'"},  // MuJoCo's compiler
+      {"keyframe_outside_range",
+       World("<body name=\"b\"><joint name=\"j\" limited=\"true\" range=\"-0.5 0.5\"/>" +
+                 std::string(kLink) + "</body>",
+             "<keyframe><key name=\"initial\" qpos=\"0.6\"/></keyframe>"),
+       "<joint> 'j' of body 'b': its position 0.6 in keyframe 'initial' is outside its range"},
+      {"activation_state",
+       World(body,
+             "<actuator><general name=\"act\" joint=\"j\" dyntype=\"integrator\"/>"
+             "</actuator>"),
+       "<actuator> 'act' has activation dynamics"},
+      {"muscle",
+       World(body, "<actuator><muscle name=\"mus\" joint=\"j\" lengthrange=\"-1 1\"/></actuator>"),
+       "<actuator> 'mus' has activation dynamics"},
+      {"user_gain",
+       World(body, "<actuator><general name=\"usr\" joint=\"j\" gaintype=\"user\"/></actuator>"),
+       "<actuator> 'usr' has a muscle or user gain"},
+      {"tendon_transmission",
+       World(body,
+             "<tendon><fixed name=\"t\"><joint joint=\"j\" coef=\"1\"/></fixed></tendon>"
+             "<actuator><motor name=\"pull\" tendon=\"t\"/></actuator>"),
+       "<actuator> 'pull' drives a tendon"},
+      {"actuator_on_a_ball",
+       World("<body name=\"b\"><joint name=\"j\" type=\"ball\"/>" + std::string(kLink) + "</body>",
+             "<actuator><motor name=\"twist\" joint=\"j\"/></actuator>"),
+       "<actuator> 'twist' drives <joint> 'j' of body 'b'"},
+      {"free_joint_below_the_top",
+       World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) +
+             "<body name=\"loose\" pos=\"0.2 0 0\"><freejoint name=\"f\"/>" + std::string(kLink) +
+             "</body></body>"),
+       "free joint can only be used on top level"},  // MuJoCo's compiler
+      {"equality",
+       World(body + "<body name=\"c\" pos=\"0.5 0 0\"><joint name=\"k\"/>" + std::string(kLink) +
+                 "</body>",
+             "<equality><joint name=\"couple\" joint1=\"j\" joint2=\"k\"/></equality>"),
+       "<equality> <joint> 'couple'"},
+      {"plane_on_a_link",
+       World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) +
+             "<geom name=\"flap\" type=\"plane\" size=\"1 1 0.1\"/></body>"),
+       "plane and hfield only allowed in static bodies: geom 'flap'"},  // MuJoCo's compiler
+  };
+}
+
+class RefusedArticulationTest : public ::testing::TestWithParam<Refused> {};
+
+TEST_P(RefusedArticulationTest, ErrorNamesTheElement) {
+  const std::string e = TreeXmlError(GetParam().xml);
+  EXPECT_NE(e.find(GetParam().expected), std::string::npos) << e;
+  EXPECT_NE(e.find("scene file '"), std::string::npos) << e;  // the project's scene-error style
+}
+
+INSTANTIATE_TEST_SUITE_P(MjcfArticulation, RefusedArticulationTest,
+                         ::testing::ValuesIn(RefusedInputs()),
+                         [](const ::testing::TestParamInfo<Refused>& info) {
+                           return std::string(info.param.name);
+                         });
+
+// a zero joint axis: MuJoCo's compiler refuses it first; the error names the scene either way
+TEST(MjcfArticulationTest, ZeroAxisIsRefused) {
+  const std::string e = TreeXmlError(World("<body name=\"b\"><joint name=\"j\" axis=\"0 0 0\"/>" +
+                                           std::string(kLink) + "</body>"));
+  EXPECT_NE(e.find("scene file '"), std::string::npos) << e;
+  EXPECT_NE(e.find("axis"), std::string::npos) << e;
+}
+
+// a keyframe within 1e-6 of a limit is accepted (MuJoCo prints keyframes to a few digits)
+TEST(MjcfArticulationTest, KeyframeWithinTheToleranceOfALimitIsAccepted) {
+  const Model m =
+      LoadTreeXml(World("<body name=\"b\"><joint name=\"j\" limited=\"true\" "
+                        "range=\"-0.5 0.5\"/>" +
+                            std::string(kLink) + "</body>",
+                        "<keyframe><key name=\"initial\" qpos=\"0.5000005\"/></keyframe>"));
+  EXPECT_DOUBLE_EQ(m.trees[0].initial_qpos[0], 0.5000005);
+}
+
+}  // namespace
+}  // namespace rigidtouch
