@@ -18,6 +18,7 @@ struct BenchFlags {
   long steps = 5000;
   long warmup = 2000;
   std::vector<double> tool_force{0.0, 0.0, -2.0};
+  bool tool_force_given = false;  // --tool-force on the command line (its default is not)
   bool json = false;
   bool reference = false;
 };
@@ -77,7 +78,11 @@ void RunBench(const BenchFlags& f) {
   PrintLoadWarnings(model);
   Data data = MakeData(model);
   TickInput input;
-  // --tool none: no tool to push (the default force would only move the held placeholder)
+  // --tool none: no tool to push (the default force would only move the held placeholder), and a
+  // force the user gave is refused rather than dropped
+  if (!model.has_tool && f.tool_force_given) {
+    throw Error("--tool-force needs a tool; the scene is loaded with --tool none");
+  }
   input.tool_wrench.force_N = model.has_tool ? tool_force : Vec3::Zero();
   // the last warm-up steps are timed when the reference job is sized from them
   std::vector<double> warm_ns;
@@ -181,7 +186,10 @@ void RegisterBench(CLI::App& root) {
                 "steps: the tail the machine adds to work that never varies "
                 "(docs/performance.md)");
   // an error about a parameter the user wrote says where it was written
-  app->callback([f] { WithOrigins(ResolveSettings(f->scene), [&] { RunBench(*f); }); });
+  app->callback([f, app] {
+    f->tool_force_given = app->count("--tool-force") > 0;
+    WithOrigins(ResolveSettings(f->scene), [&] { RunBench(*f); });
+  });
 }
 
 const CommandRegistrar bench_registrar("bench", &RegisterBench);

@@ -68,10 +68,13 @@ TEST(ArticulatedCliTest, DoorReportsItsHingeAtTheLimit) {
 }
 
 TEST(ArticulatedCliTest, ToolForceWithoutAToolIsRefused) {
-  const CliResult r = RunCli("simulate --scene " + std::string(RIGIDTOUCH_SOURCE_DIR) +
-                             "/tests/scenes/articulated/door.xml --tool none --tool-force 0 0 1");
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.err.find("--tool-force needs a tool"), std::string::npos) << r.err;
+  for (const std::string command : {"simulate", "bench"}) {
+    const CliResult r = RunCli(command + " --scene " + std::string(RIGIDTOUCH_SOURCE_DIR) +
+                               "/tests/scenes/articulated/door.xml --tool none --tool-force 0 0 1");
+    EXPECT_EQ(r.exit_code, 2) << command;
+    EXPECT_NE(r.err.find("rigidtouch: error: --tool-force needs a tool"), std::string::npos)
+        << command << ": " << r.err;
+  }
 }
 
 TEST(ArticulatedCliTest, BenchRunsASceneWithoutATool) {
@@ -79,7 +82,9 @@ TEST(ArticulatedCliTest, BenchRunsASceneWithoutATool) {
       RunCli("bench --scene " + std::string(RIGIDTOUCH_SOURCE_DIR) +
              "/tests/scenes/articulated/arm.xml --tool none --steps 200 --warmup 10 --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NO_THROW(nlohmann::json::parse(r.out));
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["steps"], 200);
+  EXPECT_GT(j["median_ns"].get<double>(), 0.0);
 }
 
 }  // namespace
