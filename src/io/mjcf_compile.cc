@@ -19,6 +19,20 @@ bool StartsWith(const std::string& s, std::size_t at, const char* prefix) {
   return s.compare(at, std::strlen(prefix), prefix) == 0;
 }
 
+// markup at `pos` ('<') whose text may hold '<' or '>' that are not tags (a comment, CDATA, a
+// processing instruction or a declaration): the offset just after it, std::string::npos when it is
+// unterminated, or `pos` itself when `pos` starts a tag
+std::size_t AfterMarkup(const std::string& xml, std::size_t pos) {
+  const char* close = StartsWith(xml, pos, "<!--")        ? "-->"
+                      : StartsWith(xml, pos, "<![CDATA[") ? "]]>"
+                      : StartsWith(xml, pos, "<?")        ? "?>"
+                      : StartsWith(xml, pos, "<!")        ? ">"
+                                                          : nullptr;
+  if (close == nullptr) return pos;
+  const std::size_t end = xml.find(close, pos + 2);
+  return end == std::string::npos ? end : end + std::strlen(close);
+}
+
 // the stack the compiler gets at most: 2^27 numbers (1 GB); a file needing more is refused by
 // MuJoCo's own "Stack overflow" message
 constexpr long kMaxStack = 1L << 27;
@@ -67,15 +81,9 @@ void VisitAttributes(const std::string& xml, Visit&& visit) {
   };
   std::size_t pos = 0;
   while ((pos = xml.find('<', pos)) != std::string::npos) {
-    const char* close = StartsWith(xml, pos, "<!--")        ? "-->"
-                        : StartsWith(xml, pos, "<![CDATA[") ? "]]>"
-                        : StartsWith(xml, pos, "<?")        ? "?>"
-                        : StartsWith(xml, pos, "<!")        ? ">"
-                                                            : nullptr;
-    if (close != nullptr) {
-      const std::size_t end = xml.find(close, pos + 2);
-      if (end == std::string::npos) return;
-      pos = end + std::strlen(close);
+    if (const std::size_t after = AfterMarkup(xml, pos); after != pos) {
+      if (after == std::string::npos) return;  // unterminated: MuJoCo's parser says so
+      pos = after;
       continue;
     }
     std::size_t i = pos + 1;
@@ -136,16 +144,9 @@ std::size_t RootEndTag(const std::string& xml) {
   std::size_t last = std::string::npos;
   std::size_t pos = 0;
   while ((pos = xml.find('<', pos)) != std::string::npos) {
-    // markup whose text may hold '<' or '>' that are not tags
-    const char* close = StartsWith(xml, pos, "<!--")        ? "-->"
-                        : StartsWith(xml, pos, "<![CDATA[") ? "]]>"
-                        : StartsWith(xml, pos, "<?")        ? "?>"
-                        : StartsWith(xml, pos, "<!")        ? ">"
-                                                            : nullptr;
-    if (close != nullptr) {
-      const std::size_t end = xml.find(close, pos + 2);
-      if (end == std::string::npos) return last;  // unterminated: MuJoCo's parser says so
-      pos = end + std::strlen(close);
+    if (const std::size_t after = AfterMarkup(xml, pos); after != pos) {
+      if (after == std::string::npos) return last;  // unterminated: MuJoCo's parser says so
+      pos = after;
       continue;
     }
     if (StartsWith(xml, pos, "</mujoco")) {
