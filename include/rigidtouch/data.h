@@ -42,8 +42,8 @@ struct Contact {
   double depth_m = 0.0;         // penetration, > 0 when the geoms overlap
   Vec3 p_B = Vec3::Zero();      // contact point in b's frame (world frame when b is static)
   double normal_force_N = 0.0;  // penalty force this tick
-  Vec3 friction_force_W = Vec3::Zero();  // on a
-  double impulse_Ns = 0.0;               // normal impulse this tick
+  Vec3 friction_force_N_W = Vec3::Zero();  // on a
+  double impulse_Ns = 0.0;                 // normal impulse this tick
 };
 
 /// The contiguous run of one geom pair's points in a contact list (for grouping the bodies, and
@@ -75,8 +75,8 @@ struct ImpulseEvent {
   bool tool = false;  // the tool is in the group
   double kinetic_energy_before_J = 0.0;
   double kinetic_energy_after_J = 0.0;
-  double impulse_norm_Ns = 0.0;        // |p|, Euclidean norm over the group's rows
-  Vec3 tool_impulse_W = Vec3::Zero();  // linear impulse on the tool  [N s]
+  double impulse_norm_Ns = 0.0;           // |p|, Euclidean norm over the group's rows
+  Vec3 tool_impulse_Ns_W = Vec3::Zero();  // linear impulse on the tool  [N s]
 };
 
 /// Conditions Tick counts instead of throwing (MuJoCo's mjtWarning). Each is counted once per tick
@@ -180,9 +180,9 @@ struct Data {
   std::vector<WindowState> window;  // (nbody) collision-window state of each body's group
 
   // FORCE outputs of the last tick
-  Vec3 tool_penalty_force_W = Vec3::Zero();   // contact penalty on the tool
-  Vec3 tool_coupling_force_W = Vec3::Zero();  // virtual coupling on the tool
-  Vec3 tool_impulse_W = Vec3::Zero();         // linear impulse on the tool this tick
+  Vec3 tool_penalty_force_N_W = Vec3::Zero();   // contact penalty on the tool
+  Vec3 tool_coupling_force_N_W = Vec3::Zero();  // virtual coupling on the tool
+  Vec3 tool_impulse_Ns_W = Vec3::Zero();        // linear impulse on the tool this tick
   double tool_penetration_m = 0.0;
   Vec3 tool_normal_W = Vec3::UnitZ();
   int tool_contacts = 0;

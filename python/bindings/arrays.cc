@@ -88,7 +88,7 @@ py::dtype ContactDtype() {
       {"is_new", "?", OffsetOf(c, c.is_new)},
       {"sticking", "?", OffsetOf(c, c.sticking)},
       {"normal_force_N", "f8", OffsetOf(c, c.normal_force_N)},
-      {"friction_force_W", "(3,)f8", OffsetOf(c, c.friction_force_W)},
+      {"friction_force_N_W", "(3,)f8", OffsetOf(c, c.friction_force_N_W)},
       {"impulse_Ns", "f8", OffsetOf(c, c.impulse_Ns)},
       {"group", "i4", OffsetOf(c, c.group)},
   };

@@ -22,7 +22,7 @@ py::array ContactView(const std::vector<Contact>& contacts, int count, py::handl
 
 /// The structured dtype of a contact: id, geom_a, geom_b, body_a, body_b, p_W (3), n_W (3),
 /// depth_m, pair_points, phase (0 colliding, 1 resting), is_new, sticking, normal_force_N,
-/// friction_force_W (3), impulse_Ns, group.
+/// friction_force_N_W (3), impulse_Ns, group.
 py::dtype ContactDtype();
 
 /// The structured dtype of a trace sample: the trace CSV's columns, same names and units.

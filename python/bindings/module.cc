@@ -372,15 +372,15 @@ void DefineData(py::module_& m) {
             return ContactView(d.contacts, d.ncontact, self);
           },
           "this tick's contacts, a read-only structured view (positions [m], normal from b to "
-          "a, depth_m [m], normal_force_N [N], friction_force_W [N], impulse_Ns [N s])")
+          "a, depth_m [m], normal_force_N [N], friction_force_N_W [N], impulse_Ns [N s])")
       .def_property_readonly(
-          "tool_penalty_force_W", [](const Data& d) { return Vec3(d.tool_penalty_force_W); },
+          "tool_penalty_force_N_W", [](const Data& d) { return Vec3(d.tool_penalty_force_N_W); },
           "contact penalty force on the tool, last tick [N]")
       .def_property_readonly(
-          "tool_coupling_force_W", [](const Data& d) { return Vec3(d.tool_coupling_force_W); },
+          "tool_coupling_force_N_W", [](const Data& d) { return Vec3(d.tool_coupling_force_N_W); },
           "virtual coupling force on the tool, last tick [N]")
       .def_property_readonly(
-          "tool_impulse_W", [](const Data& d) { return Vec3(d.tool_impulse_W); },
+          "tool_impulse_Ns_W", [](const Data& d) { return Vec3(d.tool_impulse_Ns_W); },
           "linear impulse on the tool, last tick [N s]")
       .def_readonly("tool_penetration_m", &Data::tool_penetration_m, "deepest tool penetration [m]")
       .def_readonly("tool_contacts", &Data::tool_contacts, "tool contacts this tick")
@@ -396,7 +396,7 @@ void DefineData(py::module_& m) {
                                   "kinetic_energy_before_J"_a = e.kinetic_energy_before_J,
                                   "kinetic_energy_after_J"_a = e.kinetic_energy_after_J,
                                   "impulse_norm_Ns"_a = e.impulse_norm_Ns,
-                                  "tool_impulse_W"_a = Vec3(e.tool_impulse_W)));
+                                  "tool_impulse_Ns_W"_a = Vec3(e.tool_impulse_Ns_W)));
             }
             return out;
           },

@@ -48,7 +48,7 @@ void ExplicitContact(Data& data, const PenaltyLaw& law, int ci, dynamics::Veloci
     c.sticking = false;
   }
   c.normal_force_N = fn;
-  c.friction_force_W = ft;
+  c.friction_force_N_W = ft;
   forces.AddContactForce(c, fn * c.n_W + ft, r_a, r_b);
 }
 
@@ -63,7 +63,7 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
   const PenaltyLaw& law = scratch.laws[ci];
   const double h = model.timestep_s;
   c.normal_force_N = 0.0;
-  c.friction_force_W.setZero();
+  c.friction_force_N_W.setZero();
   if (!(c.depth_m > 0.0)) {
     c.anchor_A = c.p_A;
     c.anchor_B = c.p_B;
@@ -86,7 +86,7 @@ bool LinearizeContact(const Model& model, Data& data, const ContactScratch& scra
   ic.patch = patch;
   ic.active = true;
   ic.normal_force_N = 0.0;
-  ic.friction_force_W.setZero();
+  ic.friction_force_N_W.setZero();
   // stick or slip was decided for the whole geom pair in stage 3 (DecidePatchFriction) from the
   // anchor springs; a sticking patch whose forces at the new velocities leave the friction cone
   // slips too (SolveGroupVelocities, EnforceFrictionCones), so sliding starts Coulomb-bounded

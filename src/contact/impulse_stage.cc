@@ -86,8 +86,8 @@ void Apply(const Model& model, Data& data, const Groups& G, int g, int index, bo
     Contact& c = data.contacts[G.contacts[G.contact_start[g] + k]];
     c.impulse_Ns = p[k];
     norm2 += p[k] * p[k];
-    if (c.body_a == model.tool) ev.tool_impulse_W += p[k] * c.n_W;
-    if (c.body_b == model.tool) ev.tool_impulse_W -= p[k] * c.n_W;
+    if (c.body_a == model.tool) ev.tool_impulse_Ns_W += p[k] * c.n_W;
+    if (c.body_b == model.tool) ev.tool_impulse_Ns_W -= p[k] * c.n_W;
   }
   ev.impulse_norm_Ns = std::sqrt(norm2);
   for (int k = 0; k < nb; ++k) {
@@ -220,7 +220,7 @@ void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseS
       continue;
     }
     data.impulses[data.nimpulse++] = d.event;
-    data.tool_impulse_W += d.event.tool_impulse_W;
+    data.tool_impulse_Ns_W += d.event.tool_impulse_Ns_W;
     data.window[G.bodies[G.body_start[d.group]]].impulses_done = d.index;
   }
   // a group's window is its first body's; every body of the group takes it on

@@ -71,7 +71,7 @@ struct ImpulseScratch {
 
 /// Stage 6 over every group: the impulse that is due, if any (Warning::kSolverFailed and none
 /// when a solver fails), recorded in data.impulses, the contacts' impulse_Ns and
-/// data.tool_impulse_W, and the group's window advanced. With a worker, the groups with an
+/// data.tool_impulse_Ns_W, and the group's window advanced. With a worker, the groups with an
 /// impulse due are shared with it when there are enough of them.
 void CollisionImpulses(const Model& model, Data& data, const Groups& groups,
                        ImpulseScratch& scratch, parallel::Worker* worker = nullptr);

@@ -367,8 +367,8 @@ JointPenaltyStats JointGroupSolver::SolveJointPenalty(const JointGroup& group,
     Vec3 t1, t2;
     JointTangents(row.n_W, t1, t2);
     row.normal_force_N = active_[c0] ? phi_[c0] + lambda_[c0] * inv_h_ : 0.0;
-    row.friction_force_W = (phi_[c0 + 1] + lambda_[c0 + 1] * inv_h_) * t1 +
-                           (phi_[c0 + 2] + lambda_[c0 + 2] * inv_h_) * t2;
+    row.friction_force_N_W = (phi_[c0 + 1] + lambda_[c0 + 1] * inv_h_) * t1 +
+                             (phi_[c0 + 2] + lambda_[c0 + 2] * inv_h_) * t2;
   }
   Scatter(group);
   return stats;

@@ -71,10 +71,10 @@ struct JointRow {
   // [0, 2]; 0: no impulse on this row this tick
   double impulse_scale = 0.0;
   // outputs
-  double normal_force_N = 0.0;           // SolveJointPenalty, >= 0
-  Vec3 friction_force_W = Vec3::Zero();  // SolveJointPenalty, |f_t| <= mu normal_force_N
-  bool slipped = false;                  // SolveJointPenalty: the row's friction slipped
-  double impulse_Ns = 0.0;               // ApplyJointImpulses, >= 0 (N m s for a hinge limit)
+  double normal_force_N = 0.0;             // SolveJointPenalty, >= 0
+  Vec3 friction_force_N_W = Vec3::Zero();  // SolveJointPenalty, |f_t| <= mu normal_force_N
+  bool slipped = false;                    // SolveJointPenalty: the row's friction slipped
+  double impulse_Ns = 0.0;                 // ApplyJointImpulses, >= 0 (N m s for a hinge limit)
 };
 
 /// One group: its members and rows. Bodies' velocities and trees' qvel are read and written.

@@ -331,13 +331,13 @@ bool PatchForces(GroupAssembly& g, const BlockCholesky& factor, const Data& data
       const double tx = c.phi_t_W.x() - ct * (ux - un * nx);
       const double ty = c.phi_t_W.y() - ct * (uy - un * ny);
       const double tz = c.phi_t_W.z() - ct * (uz - un * nz);
-      c.friction_force_W = Vec3(tx, ty, tz);
+      c.friction_force_N_W = Vec3(tx, ty, tz);
       fx += tx;
       fy += ty;
       fz += tz;
     } else {
       // slipping: the kinetic friction, independent of the new velocity
-      c.friction_force_W = c.phi_t_W;
+      c.friction_force_N_W = c.phi_t_W;
       c.slip_power_W = c.phi_t_W.x() * ux + c.phi_t_W.y() * uy + c.phi_t_W.z() * uz;
       fx += c.phi_t_W.x();
       fy += c.phi_t_W.y();
@@ -398,7 +398,7 @@ int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) 
       const ImplicitContact& c = contacts[k];
       if (!c.active) continue;
       fn += std::max(0.0, c.normal_force_N);
-      ft += c.friction_force_W.norm();
+      ft += c.friction_force_N_W.norm();
       phi_n += std::max(0.0, c.phi_n_N);
     }
     // a sticking patch slips only if its friction exceeds the cone by more than rounding of its
@@ -409,7 +409,7 @@ int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) 
       // direction for a point without one); the resultant is summed only here, where it is used
       Vec3 resultant = Vec3::Zero();
       for (int k = begin; k < end; ++k) {
-        if (contacts[k].active) resultant += contacts[k].friction_force_W;
+        if (contacts[k].active) resultant += contacts[k].friction_force_N_W;
       }
       const double rn = resultant.norm();
       const Vec3 fallback = rn > 0.0 ? Vec3(resultant / rn) : Vec3::Zero();
@@ -417,8 +417,8 @@ int EnforceFrictionCones(std::span<ImplicitContact> contacts, bool last_chance) 
         ImplicitContact& c = contacts[k];
         c.stick = false;
         c.c_t_Ns_per_m = 0.0;
-        const double f = c.friction_force_W.norm();
-        const Vec3 dir = f > 0.0 ? Vec3(c.friction_force_W / f) : fallback;
+        const double f = c.friction_force_N_W.norm();
+        const Vec3 dir = f > 0.0 ? Vec3(c.friction_force_N_W / f) : fallback;
         c.phi_t_W = c.mu_kinetic * std::max(0.0, c.phi_n_N) * dir;
       }
       changed |= kFrictionSlipped;

@@ -65,7 +65,7 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
       if (!s.factor.Solve(nb, g.x)) return false;
       for (ImplicitContact& c : contacts) {
         c.normal_force_N = 0.0;
-        c.friction_force_W.setZero();
+        c.friction_force_N_W.setZero();
       }
       bool pulled = false;
       for (int q = 0; q < g.npatch; ++q) {
@@ -96,7 +96,7 @@ bool SolveGroupVelocities(const Model& model, Data& data, std::span<const int> b
         if (c.active && c.normal_force_N < 0.0) {
           c.active = false;
           c.normal_force_N = 0.0;
-          c.friction_force_W.setZero();
+          c.friction_force_N_W.setZero();
           dropped = true;
         }
       }

@@ -44,7 +44,7 @@ struct ImplicitContact {
   // output at the solved velocities (zero for a dropped contact): the normal force (negative only
   // if it still pulls after the last pass) and the tangential force on a
   double normal_force_N = 0.0;
-  Vec3 friction_force_W = Vec3::Zero();
+  Vec3 friction_force_N_W = Vec3::Zero();
   // a slipping contact's kinetic friction times its new relative velocity  [W]: negative while
   // the friction opposes the slip; positive when one step of it reversed the slip (0: sticking)
   double slip_power_W = 0.0;

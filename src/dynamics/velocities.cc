@@ -83,7 +83,7 @@ void SolveGroup(const Model& model, Data& data, const GroupBodies& groups, Veloc
       for (const ImplicitContact& ic : implicit) {
         Contact& c = data.contacts[ic.contact];
         c.normal_force_N = std::max(0.0, ic.normal_force_N);
-        c.friction_force_W += ic.friction_force_W;
+        c.friction_force_N_W += ic.friction_force_N_W;
       }
     } else {
       ++scratch.failed_solves[side];

@@ -98,9 +98,9 @@ void ResetState(const Model& model, Data& data) {
   data.ngroup = 0;
   std::fill(data.body_group.begin(), data.body_group.end(), -1);
   std::fill(data.window.begin(), data.window.end(), WindowState{});
-  data.tool_penalty_force_W.setZero();
-  data.tool_coupling_force_W.setZero();
-  data.tool_impulse_W.setZero();
+  data.tool_penalty_force_N_W.setZero();
+  data.tool_coupling_force_N_W.setZero();
+  data.tool_impulse_Ns_W.setZero();
   data.tool_penetration_m = 0.0;
   data.tool_normal_W = Vec3::UnitZ();
   data.tool_contacts = 0;

@@ -17,8 +17,8 @@ namespace rigidtouch {
 DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   Workspace& ws = *data.workspace;
   data.nimpulse = 0;
-  data.tool_impulse_W.setZero();
-  data.tool_coupling_force_W.setZero();
+  data.tool_impulse_Ns_W.setZero();
+  data.tool_coupling_force_N_W.setZero();
 
   // 1. coupling: the device's state sets the tool's pose (direct) or pulls it (virtual), and
   // says whether the reading carries new motion (the stale-reading policy, new_motion)

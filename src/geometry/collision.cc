@@ -283,7 +283,7 @@ void WriteContact(Contact& c, const PairWriter& w, const Vec3& p_W, const Vec3& 
   c.p_A = w.body_a >= 0 ? Vec3(w.R_WA->transpose() * (p_W - w.x_A)) : p_W;
   c.p_B = w.body_b >= 0 ? Vec3(w.R_WB->transpose() * (p_W - w.x_B)) : p_W;
   c.normal_force_N = 0.0;
-  c.friction_force_W.setZero();
+  c.friction_force_N_W.setZero();
   c.impulse_Ns = 0.0;
   c.group = -1;
 }

@@ -64,7 +64,7 @@ CouplingResult Couple(const Model& model, Data& data, const TickInput& input) {
       // the spring-damper couples the position
       r.user.force_N = model.device.coupling_stiffness_N_per_m * (x_dev - t.x_W) +
                        model.device.coupling_damping_Ns_per_m * (dev.velocity_mps - t.v_W);
-      data.tool_coupling_force_W = r.user.force_N;
+      data.tool_coupling_force_N_W = r.user.force_N;
     }
   }
   if (!r.device_ok) {

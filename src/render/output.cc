@@ -84,7 +84,7 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, const contact::Contac
   const int tool = model.tool;
   DeviceCommand out;
   out.sequence = sequence;
-  data.tool_penalty_force_W.setZero();
+  data.tool_penalty_force_N_W.setZero();
   data.tool_penetration_m = 0.0;
   data.tool_contacts = 0;
   Vec3 tool_torque = Vec3::Zero();
@@ -97,8 +97,8 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, const contact::Contac
     const Contact& c = data.contacts[G.contacts[k]];
     if (c.body_a != tool && c.body_b != tool) continue;
     const double sign = c.body_a == tool ? 1.0 : -1.0;
-    const Vec3 f = sign * (c.normal_force_N * c.n_W + c.friction_force_W);
-    data.tool_penalty_force_W += f;
+    const Vec3 f = sign * (c.normal_force_N * c.n_W + c.friction_force_N_W);
+    data.tool_penalty_force_N_W += f;
     tool_torque += (c.p_W - data.bodies[tool].x_W).cross(f);
     ++data.tool_contacts;
     if (c.depth_m > data.tool_penetration_m) {
@@ -107,32 +107,32 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, const contact::Contac
     }
   }
   if (model.device.coupling == Coupling::kVirtual) {
-    out.penalty_force_N = -data.tool_coupling_force_W;  // the coupling spring pulls the device
+    out.penalty_force_N = -data.tool_coupling_force_N_W;  // the coupling spring pulls the device
   } else {
-    out.penalty_force_N = data.tool_penalty_force_W;
+    out.penalty_force_N = data.tool_penalty_force_N_W;
     out.torque_Nm = tool_torque;
   }
   // Eq. 9, or the event renderer's open-loop transient (no impulses there)
-  out.impulsive_force_N =
-      data.tool_impulse_W / model.timestep_s + EventTransient(model, data, contact.normal_velocity);
+  out.impulsive_force_N = data.tool_impulse_Ns_W / model.timestep_s +
+                          EventTransient(model, data, contact.normal_velocity);
   out.force_N = out.penalty_force_N + out.impulsive_force_N;
   const double max_force_N = model.device.max_force_N;
   if (out.force_N.allFinite()) {
     out.clipped = LimitForce(max_force_N, out.force_N, out.torque_Nm);
   } else if (max_force_N > 0.0 && out.penalty_force_N.allFinite() &&
-             data.tool_impulse_W.allFinite()) {
+             data.tool_impulse_Ns_W.allFinite()) {
     // the impulse over h or the sum overflowed: add the parts in units of the larger, so the
     // clipped force keeps the direction of the finite answer instead of becoming zero
     const double m = std::max(out.penalty_force_N.cwiseAbs().maxCoeff(),
-                              data.tool_impulse_W.cwiseAbs().maxCoeff());
-    const Vec3 u = out.penalty_force_N / m + (data.tool_impulse_W / m) / model.timestep_s;
+                              data.tool_impulse_Ns_W.cwiseAbs().maxCoeff());
+    const Vec3 u = out.penalty_force_N / m + (data.tool_impulse_Ns_W / m) / model.timestep_s;
     out.clipped = ClampScaled(u, m, max_force_N, out.force_N, out.torque_Nm);
     if (out.clipped) RoundDownToLimit(max_force_N, out.force_N, out.torque_Nm);
   }
   // anything still non-finite (no limit to clip to) becomes the safe zero wrench in Safeguard
   if (out.clipped) {
     data.Warn(Warning::kForceClipped);
-    if (data.tool_impulse_W.squaredNorm() > 0.0) data.Warn(Warning::kImpulseClipped);
+    if (data.tool_impulse_Ns_W.squaredNorm() > 0.0) data.Warn(Warning::kImpulseClipped);
   }
   return out;
 }

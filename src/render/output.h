@@ -19,7 +19,7 @@ bool LimitForce(double max_force_N, Vec3& force_N, Vec3& torque_Nm);
 /// no torque) makes the torque zero without counting it as clipped. Returns whether it clipped.
 bool LimitTorque(double max_torque_Nm, Vec3& torque_Nm);
 
-/// Sums the tool's contact forces into data (tool_penalty_force_W, penetration, normal, count;
+/// Sums the tool's contact forces into data (tool_penalty_force_N_W, penetration, normal, count;
 /// the contacts of the tool's group, as this tick's stage 3 built the groups) and returns the
 /// command: penalty (or coupling) + Eq. 9 impulsive force, clipped to
 /// DeviceParams::max_force_N (Warning::kForceClipped, and kImpulseClipped when it held an

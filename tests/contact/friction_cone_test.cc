@@ -25,8 +25,8 @@ std::vector<ImplicitContact> Face(int patch, bool stick, double friction_N, doub
     c.mu_static = 0.5;
     c.mu_kinetic = 0.4;
     c.normal_force_N = normal_N * (0.7 + 0.2 * k);
-    c.friction_force_W = Vec3(-friction_N * (1.0 + 0.1 * k), 0.0, 0.0);
-    if (!stick) c.phi_t_W = c.friction_force_W;
+    c.friction_force_N_W = Vec3(-friction_N * (1.0 + 0.1 * k), 0.0, 0.0);
+    if (!stick) c.phi_t_W = c.friction_force_N_W;
   }
   return face;
 }
@@ -34,7 +34,7 @@ std::vector<ImplicitContact> Face(int patch, bool stick, double friction_N, doub
 double Sum(const std::vector<ImplicitContact>& cs, bool tangential) {
   double s = 0.0;
   for (const ImplicitContact& c : cs) {
-    if (c.active) s += tangential ? c.friction_force_W.norm() : c.normal_force_N;
+    if (c.active) s += tangential ? c.friction_force_N_W.norm() : c.normal_force_N;
   }
   return s;
 }
@@ -66,11 +66,11 @@ TEST(FrictionConeTest, APointWithoutTrialForceSlipsAlongTheActivePointsResultant
   // dropped point 3 whose stale (0, 30, 0) must not count: the resultant is (-10, -10, 0), so
   // point 2's kinetic friction mu_k k d points along (-1, -1, 0) / sqrt(2)
   std::vector<ImplicitContact> cs = Face(0, true, 10.0, 1.0);
-  cs[0].friction_force_W = Vec3(-10.0, 0.0, 0.0);
-  cs[1].friction_force_W = Vec3(0.0, -10.0, 0.0);
-  cs[2].friction_force_W = Vec3::Zero();
+  cs[0].friction_force_N_W = Vec3(-10.0, 0.0, 0.0);
+  cs[1].friction_force_N_W = Vec3(0.0, -10.0, 0.0);
+  cs[2].friction_force_N_W = Vec3::Zero();
   cs[3].active = false;
-  cs[3].friction_force_W = Vec3(0.0, 30.0, 0.0);
+  cs[3].friction_force_N_W = Vec3(0.0, 30.0, 0.0);
   EXPECT_EQ(EnforceFrictionCones(cs, false), kFrictionSlipped);
   const double f = 0.4 * cs[2].phi_n_N / std::sqrt(2.0);
   EXPECT_NEAR(cs[2].phi_t_W.x(), -f, 1e-15);
@@ -125,7 +125,7 @@ TEST(FrictionConeTest, PatchesAreJudgedApartAndDroppedOrPullingContactsCountForN
   cs[4].active = false;
   cs[5].active = false;
   cs[6].normal_force_N = -1.0;
-  cs[6].friction_force_W = Vec3(-1.0, 0.0, 0.0);
+  cs[6].friction_force_N_W = Vec3(-1.0, 0.0, 0.0);
   EXPECT_EQ(EnforceFrictionCones(cs, false), kFrictionSlipped);
   for (int k = 0; k < 4; ++k) EXPECT_TRUE(cs[k].stick);
   for (int k = 4; k < 8; ++k) EXPECT_FALSE(cs[k].stick);

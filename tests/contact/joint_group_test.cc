@@ -291,7 +291,7 @@ TEST(JointGroupTest, ToolPressingAChainLinkGivesJointTorquesJTransposeF) {
   EXPECT_GT(press.row.normal_force_N, 0.0);
   EXPECT_FALSE(press.row.slipped);
   // the force on the link (side b) is -(f_n n + f_t)
-  const Vec3 f_link_N = -(press.row.normal_force_N * press.row.n_W + press.row.friction_force_W);
+  const Vec3 f_link_N = -(press.row.normal_force_N * press.row.n_W + press.row.friction_force_N_W);
   Eigen::MatrixXd jt(3, 3), jr(3, 3);
   dynamics::TreePointJacobian(press.model, press.data, 2, press.row.p_W, jt, jr);
   const Eigen::VectorXd expected = jt.transpose() * f_link_N;
@@ -316,8 +316,8 @@ TEST(JointGroupTest, ChainLinkFrictionStaysInsideTheCone) {
   const double fn = press.row.normal_force_N;
   EXPECT_GT(fn, 0.0);
   // kinetic friction once slipping: |f_t| <= mu_k f_n up to 1e-12 relative
-  EXPECT_LE(press.row.friction_force_W.norm(), press.row.mu_kinetic * fn * (1.0 + 1e-12));
-  EXPECT_GT(press.row.friction_force_W.norm(), 0.0);
+  EXPECT_LE(press.row.friction_force_N_W.norm(), press.row.mu_kinetic * fn * (1.0 + 1e-12));
+  EXPECT_GT(press.row.friction_force_N_W.norm(), 0.0);
 }
 
 // tool -> free body -> a block on a slide along x, plus the tool resting on a floor and the free

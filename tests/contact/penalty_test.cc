@@ -122,11 +122,11 @@ TEST(PenaltyTest, StickingContactHoldsWithTheAnchorSpringInsideTheCone) {
   const Contact& c = t.data.contacts[0];
   EXPECT_TRUE(c.sticking);
   EXPECT_NEAR(c.normal_force_N, 2.0, 1e-12);
-  EXPECT_NEAR(c.friction_force_W.x(), -0.5, 1e-12);
-  EXPECT_NEAR(c.friction_force_W.y(), 0.0, 1e-12);
-  EXPECT_NEAR(c.friction_force_W.z(), 0.0, 1e-12);
+  EXPECT_NEAR(c.friction_force_N_W.x(), -0.5, 1e-12);
+  EXPECT_NEAR(c.friction_force_N_W.y(), 0.0, 1e-12);
+  EXPECT_NEAR(c.friction_force_N_W.z(), 0.0, 1e-12);
   // the body gets the force and its moment about the centre of mass
-  const Vec3 f = c.normal_force_N * c.n_W + c.friction_force_W;
+  const Vec3 f = c.normal_force_N * c.n_W + c.friction_force_N_W;
   EXPECT_TRUE(t.forces.force_W[0].isApprox(f, 1e-12));
   const Vec3 r = c.p_W - t.data.bodies[0].x_W;
   EXPECT_TRUE(t.forces.torque_W[0].isApprox(r.cross(f), 1e-12));
@@ -140,8 +140,8 @@ TEST(PenaltyTest, SlidingContactIsOnTheConesEdgeAndItsAnchorFollows) {
   const Contact& c = t.data.contacts[0];
   EXPECT_FALSE(c.sticking);
   EXPECT_NEAR(c.normal_force_N, 2.0, 1e-12);
-  EXPECT_NEAR(c.friction_force_W.norm(), 0.5 * 2.0, 1e-12);
-  EXPECT_NEAR(c.friction_force_W.y(), -1.0, 1e-12);
+  EXPECT_NEAR(c.friction_force_N_W.norm(), 0.5 * 2.0, 1e-12);
+  EXPECT_NEAR(c.friction_force_N_W.y(), -1.0, 1e-12);
   // the anchor slid: the spring alone now exerts the kinetic force, kt |s| = mu fn
   const Vec3 s = AnchorDisplacement(t.data, c);
   EXPECT_NEAR(t.law.kt_N_per_m * s.norm(), 1.0, 1e-12);
@@ -153,7 +153,7 @@ TEST(PenaltyTest, UnloadedContactReleasesItsAnchor) {
   ExplicitContact(t.data, t.law, 0, t.forces);
   const Contact& c = t.data.contacts[0];
   EXPECT_EQ(c.normal_force_N, 0.0);
-  EXPECT_EQ(c.friction_force_W, Vec3::Zero());
+  EXPECT_EQ(c.friction_force_N_W, Vec3::Zero());
   EXPECT_FALSE(c.sticking);
   EXPECT_EQ(c.anchor_B, c.p_B);
   EXPECT_EQ(t.forces.force_W[0], Vec3::Zero());

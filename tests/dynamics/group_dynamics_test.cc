@@ -292,7 +292,7 @@ TEST(GroupDynamics, PullingContactIsDroppedWithItsFriction) {
     EXPECT_EQ(c.active, !upper);
     if (upper) {
       EXPECT_EQ(c.normal_force_N, 0.0);
-      EXPECT_EQ(c.friction_force_W, Vec3::Zero());
+      EXPECT_EQ(c.friction_force_N_W, Vec3::Zero());
     } else {
       EXPECT_GT(c.normal_force_N, 0.0);  // the floor still pushes
     }
@@ -327,7 +327,7 @@ TEST(GroupDynamics, DroppedContactsBetweenKeptOnesReportNoForce) {
     ASSERT_EQ(c.active, c.body_b < 0);
     if (!c.active) {
       EXPECT_EQ(c.normal_force_N, 0.0);
-      EXPECT_EQ(c.friction_force_W, Vec3::Zero());
+      EXPECT_EQ(c.friction_force_N_W, Vec3::Zero());
       continue;
     }
     const Vec3 u = PointVelocity(f.data.bodies[c.body_a], Offset(f, c.body_a, c));
@@ -359,7 +359,7 @@ TEST(GroupDynamics, ReportsContactForcesAtTheNewVelocities) {
     const Vec3 t1 = c.n_W.unitOrthogonal(), t2 = c.n_W.cross(t1);
     const Vec3 ft = (c.phi_t_W.dot(t1) - c.c_t_Ns_per_m * u.dot(t1)) * t1 +
                     (c.phi_t_W.dot(t2) - c.c_t_Ns_per_m * u.dot(t2)) * t2;
-    EXPECT_LE((c.friction_force_W - ft).norm(), 1e-12 * c.phi_n_N);
+    EXPECT_LE((c.friction_force_N_W - ft).norm(), 1e-12 * c.phi_n_N);
   }
 }
 

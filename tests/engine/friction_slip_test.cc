@@ -58,7 +58,7 @@ BoxContact BoxContacts(const Data& d, int box) {
     if (c.body_a != box && c.body_b != box) continue;
     ++out.n;
     out.normal_N += c.normal_force_N;
-    out.friction_W += c.body_a == box ? c.friction_force_W : Vec3(-c.friction_force_W);
+    out.friction_W += c.body_a == box ? c.friction_force_N_W : Vec3(-c.friction_force_N_W);
   }
   return out;
 }

@@ -51,7 +51,7 @@ BallContact ContactOf(const Data& d, int body) {
     const Contact& c = d.contacts[ci];
     if (c.body_a != body && c.body_b != body) continue;
     ++out.n;
-    out.friction_W += c.body_a == body ? c.friction_force_W : Vec3(-c.friction_force_W);
+    out.friction_W += c.body_a == body ? c.friction_force_N_W : Vec3(-c.friction_force_N_W);
     out.r_W = c.p_W - d.bodies[body].x_W;
   }
   return out;

@@ -117,7 +117,7 @@ TEST(SimulationTest, VirtualCouplingDragsTheToolWithSteadyKineticFriction) {
     if (t_s < 2.0) continue;
     ASSERT_EQ(d.ncontact, 1);
     ASSERT_GT(d.contacts[0].normal_force_N, 0.5);
-    const double ratio = d.tool_coupling_force_W.x() / d.contacts[0].normal_force_N;
+    const double ratio = d.tool_coupling_force_N_W.x() / d.contacts[0].normal_force_N;
     lowest = std::min(lowest, ratio);
     highest = std::max(highest, ratio);
   }
@@ -143,7 +143,7 @@ TEST(SimulationTest, PressedSphereSettlesAtForceOverStiffness) {
     const double expected = 2.0 / m.contact.stiffness_N_per_m;
     EXPECT_NEAR(d.tool_penetration_m, expected, 0.01 * expected);
     // and the device is shown the force that holds it: 2 N up
-    EXPECT_NEAR(d.tool_penalty_force_W.z(), 2.0, 0.02);
+    EXPECT_NEAR(d.tool_penalty_force_N_W.z(), 2.0, 0.02);
   }
 }
 

@@ -50,7 +50,7 @@ TEST(TickTest, SphereOnPlaneSingleImpulseRestitution) {
     const double mass = m.bodies[m.tool].mass_kg;
     // tolerance: 1e-9 relative, the solver's regularisation
     EXPECT_NEAR(d.bodies[m.tool].v_W.z(), -e * v_n, 1e-9) << "e = " << e;
-    EXPECT_NEAR(d.impulses[0].tool_impulse_W.z(), -(1.0 + e) * mass * v_n, 1e-9) << "e = " << e;
+    EXPECT_NEAR(d.impulses[0].tool_impulse_Ns_W.z(), -(1.0 + e) * mass * v_n, 1e-9) << "e = " << e;
     EXPECT_EQ(d.impulses[0].contacts, 1);
     EXPECT_LE(d.impulses[0].kinetic_energy_after_J, d.impulses[0].kinetic_energy_before_J + 1e-15);
   }
@@ -131,7 +131,7 @@ TEST(TickTest, StrikeOnStackIsAsHardAsTheFloor) {
     EXPECT_NEAR(d.bodies[i].w_W.norm(), 0.0, 1e-9) << m.bodies[i].name;
   }
   // the tool felt the whole plastic impulse m v
-  EXPECT_NEAR(d.impulses[0].tool_impulse_W.z(), 0.1 * 0.3, 1e-9);
+  EXPECT_NEAR(d.impulses[0].tool_impulse_Ns_W.z(), 0.1 * 0.3, 1e-9);
 }
 
 // penalty renderer: never an impulse

@@ -328,12 +328,12 @@ bool SameImpulses(const Data& d1, const Data& d2, std::string* why) {
         std::memcmp(&a.kinetic_energy_before_J, &b.kinetic_energy_before_J, 8) != 0 ||
         std::memcmp(&a.kinetic_energy_after_J, &b.kinetic_energy_after_J, 8) != 0 ||
         std::memcmp(&a.impulse_norm_Ns, &b.impulse_norm_Ns, 8) != 0 ||
-        !SameVec3Bits(a.tool_impulse_W, b.tool_impulse_W)) {
+        !SameVec3Bits(a.tool_impulse_Ns_W, b.tool_impulse_Ns_W)) {
       *why = "event " + std::to_string(k);
       return false;
     }
   }
-  if (!SameVec3Bits(d1.tool_impulse_W, d2.tool_impulse_W)) {
+  if (!SameVec3Bits(d1.tool_impulse_Ns_W, d2.tool_impulse_Ns_W)) {
     *why = "tool impulse";
     return false;
   }

@@ -118,7 +118,7 @@ TEST(DeviceLimitsTest, OverflowingForceIsClippedNotLost) {
     const Model m = DirectModel(RendererKind::kTrain, 0.0, limit);
     Data d = MakeData(m);
     d.ncontact = 0;
-    d.tool_impulse_W = Vec3(0.0, 1e306, 1e306);
+    d.tool_impulse_Ns_W = Vec3(0.0, 1e306, 1e306);
     DeviceCommand out = render::DeviceWrench(m, d, d.workspace->contact, 0);
     render::Safeguard(d, true, out);
     EXPECT_TRUE(out.force_N.allFinite());
