@@ -168,8 +168,8 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
   const double k = direct ? m.contact.stiffness_N_per_m : m.device.coupling_stiffness_N_per_m;
   const double b = direct ? m.contact.damping_Ns_per_m : m.device.coupling_damping_Ns_per_m;
   const auto within = [](double value, double limit) { return !(limit > 0.0) || value <= limit; };
-  const bool displayable =
-      within(k, run.device.max_stiffness_N_per_m) && within(b, run.device.max_damping_Ns_per_m);
+  const bool displayable = within(k, run.device.max_stiffness_N_per_m) &&
+                           within(b, run.device.max_damping_Ns_per_m);
   return {
       {"renderer", text::RendererName(m.render.renderer)},
       {"restitution", m.render.restitution},
@@ -462,8 +462,8 @@ void RunTap(const TapFlags& f) {
     try {
       RunPlotScript(
           "python/plot_tap.py",
-          {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N), "--title",
-           std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
+          {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N),
+           "--title", std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
           f.json);
     } catch (...) {
       if (temporary) std::filesystem::remove(trace, ignored);

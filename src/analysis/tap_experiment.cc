@@ -225,7 +225,7 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   const device::DeviceSpec spec = device::ParseDeviceSpec(config.device_preset);
   setup.device = spec.limits;
   if (config.max_force_N) setup.device.max_force_N = *config.max_force_N;
-  const device::DeviceLimits& limits = setup.device;
+  const DeviceLimits& limits = setup.device;
   const double h = 1.0 / config.rate_hz;
 
   LoadOptions load = config.load;
@@ -238,7 +238,7 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
       device::DefaultWall(limits, h, load.contact.stiffness_N_per_m).stiffness_N_per_m);
   load.contact.damping_Ns_per_m = config.damping_Ns_per_m.value_or(
       device::DefaultDamping(limits, h, load.contact.stiffness_N_per_m));
-  load.device.max_force_N = limits.max_force_N;
+  load.device.limits.max_force_N = limits.max_force_N;
   load.device.position_resolution_m = config.device_model.value_or(spec.model).encoder_resolution_m;
   if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;
   if (load.device.coupling == Coupling::kVirtual) {

@@ -58,7 +58,7 @@ struct TapExperimentConfig {
 struct TapRun {
   Model model;  // as rendered (tool mass, stiffness, schedule)
   Wall wall;    // where the taps were aimed
-  device::DeviceLimits device;
+  DeviceLimits device;
   std::vector<TraceSample> trace;          // one sample per tick
   std::vector<TapMetrics> taps;            // one per scripted tap
   double energy_to_user_J = 0.0;           // the device's own bookkeeping over the whole run
@@ -90,7 +90,7 @@ void UseDeviceAndHandMass(Model& model, const device::DeviceModelParams& device,
 struct TapSetup {
   Model model;
   Wall wall;
-  device::DeviceLimits device;
+  DeviceLimits device;
   std::unique_ptr<device::SimulatedDevice> simulated;
 };
 

@@ -449,9 +449,7 @@ void CheckInitialOverlap(const Model& model, const std::string& path) {
   data.R_WB.resize(model.bodies.size());
   dynamics::ComputeKinematics(data);
   data.contacts.resize(model.max_contacts);
-  data.previous.resize(model.max_contacts);
   data.runs.resize(model.max_contacts);
-  data.previous_runs.resize(model.max_contacts);
   geometry::CollisionScratch scratch;
   scratch.Reserve(model);
   geometry::DetectContacts(model, data, scratch);
