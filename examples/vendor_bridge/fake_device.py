@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A device server for the rigidtouch UDP device protocol, version 2, in plain Python.
+"""A device server for the rigidtouch UDP device protocol, version 3, in plain Python.
 
 It simulates a hand that taps downwards along -z and streams its state to the one renderer that
 holds the session; the newest command's force, clamped to this device's limit, pushes back on the
@@ -12,7 +12,8 @@ Python's sleep is not a real-time clock: expect jitter. Standard library only.
                            [--duration S] [--json]
 
 With --json it prints one JSON object when it ends (--duration, SIGINT or SIGTERM): the largest
-force it displayed, the sessions it accepted, and the datagrams it took and dropped.
+force it displayed, the sessions it accepted, the datagrams it took and dropped, and the
+handshake packets it refused as replays.
 """
 import argparse, hashlib, hmac, json, math, os, signal, socket, stat, struct, time
 
@@ -118,8 +119,12 @@ def main():
     h, mass_kg, z_m, vz_mps = 1.0 / args.rate, 0.1, 0.05, 0.0
     # the session: peer address, both nonces, counters, newest command
     peer, client_nonce, server_nonce, sent, received = None, 0, 0, 0, 0
+    # the handshake: challenges in flight {(address, client nonce): (server nonce, sent at)},
+    # and every client nonce challenged so far (a hello seen before is a replay: refused)
+    challenges, seen_hellos = {}, set()
     last_heard, newest, force_N, fresh_at = -1.0, -1, (0.0, 0.0, 0.0), -1.0
-    summary = {"max_displayed_force_N": 0.0, "sessions": 0, "commands": 0, "dropped": 0}
+    summary = {"max_displayed_force_N": 0.0, "sessions": 0, "commands": 0, "dropped": 0,
+               "replayed_handshakes": 0}
     start = time.monotonic()
     tick = 0
     try:
@@ -144,16 +149,31 @@ def main():
                     continue
                 kind, cn, sn, counter, payload = opened
                 if kind == HELLO:
-                    if peer is not None and source != peer:
+                    if cn == 0 or (peer is not None and source != peer):
                         summary["dropped"] += 1  # one renderer at a time: no takeover
                         continue
-                    if peer is None or cn != client_nonce:  # a new session
-                        peer, client_nonce, server_nonce = source, cn, random_nonce()
-                        sent, received, newest, fresh_at = 0, 0, -1, -1.0
-                        summary["sessions"] += 1
+                    if sn == 0:  # asks for a session: challenge it, open nothing
+                        if (source, cn) in challenges:  # our challenge was lost: resend it
+                            challenge = challenges[(source, cn)][0]
+                        elif cn in seen_hellos:  # a hello seen before: a replay
+                            summary["replayed_handshakes"] += 1
+                            continue
+                        else:
+                            challenge = random_nonce()
+                            seen_hellos.add(cn)
+                            challenges[(source, cn)] = (challenge, now)
+                        sock.sendto(seal(key, HELLO_REPLY, limits, cn, challenge, 0), source)
+                        continue
+                    # confirms a challenge: only the holder of the key can, once, and in time
+                    pending = challenges.pop((source, cn), None)
+                    if (pending is None or pending[0] != sn
+                            or now - pending[1] > args.session_timeout):
+                        summary["replayed_handshakes"] += 1
+                        continue
+                    peer, client_nonce, server_nonce = source, cn, sn  # a new session
+                    sent, received, newest, fresh_at = 0, 0, -1, -1.0
                     last_heard = now
-                    sock.sendto(seal(key, HELLO_REPLY, limits, client_nonce, server_nonce, 0),
-                                peer)
+                    summary["sessions"] += 1
                     continue
                 if (source != peer or (cn, sn) != (client_nonce, server_nonce)
                         or counter <= received):

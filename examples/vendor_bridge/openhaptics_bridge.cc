@@ -4,7 +4,7 @@
 // declarations it uses.
 //
 // Bridges a 3D Systems Touch / Phantom (OpenHaptics HD API) to the rigidtouch UDP device
-// protocol, version 2: the HD servo scheduler calls UdpDeviceServer::Step once per servo tick
+// protocol, version 3: the HD servo scheduler calls UdpDeviceServer::Step once per servo tick
 // (1 kHz), which reads the device, streams its state to the one authenticated renderer, and
 // displays that renderer's newest force, clamped to the device's limit.
 //

@@ -1,4 +1,4 @@
-// The device side of the UDP device link (docs/device-protocol.md, version 2): streams a local
+// The device side of the UDP device link (docs/device-protocol.md, version 3): streams a local
 // Device's state to one authenticated renderer and applies that renderer's newest command to it,
 // clamped to the device's own force limit. Used by `rigidtouch device-sim` and by vendor bridges
 // (examples/vendor_bridge/), which link the installed rigidtouch::rigidtouch and implement
@@ -98,9 +98,10 @@ struct PacketLoss {
 struct UdpCounters {
   /// Datagrams read from the socket, valid or not.
   std::uint64_t received = 0;
-  /// Decoded packets that became the newest state or command.
+  /// Decoded packets that became the newest state or command (client: at most one per Read).
   std::uint64_t accepted = 0;
-  /// Valid packets older than the newest sequence, dropped.
+  /// Valid packets older than the newest sequence, dropped; client side also the valid states
+  /// one Read took before the newest it took (only the newest is rendered).
   std::uint64_t stale = 0;
   /// Valid states with the same sequence as the newest one, dropped (client side).
   std::uint64_t duplicate = 0;
@@ -115,11 +116,19 @@ struct UdpCounters {
   /// Authenticated states or commands outside the established session (no session yet, an old
   /// session's, or a hello-reply to a hello we no longer wait for), dropped.
   std::uint64_t no_session = 0;
-  /// Sessions established (client: hello-replies accepted; server: hellos answered with a new
-  /// session).
+  /// Sessions established (client: hello-replies accepted; server: confirming hellos that
+  /// answered its challenge).
   std::uint64_t handshakes = 0;
   /// Server side: authenticated hellos refused because another address holds a live session.
   std::uint64_t hellos_refused = 0;
+  /// Authenticated handshake packets refused as replays: server side, a hello whose client
+  /// nonce it challenged before, or a confirming hello that answers no challenge in flight;
+  /// client side, a hello-reply to a hello it no longer waits for, or the same reply again. A
+  /// replay never opens, extends or ends a session.
+  std::uint64_t replayed_handshakes = 0;
+  /// Client side: states that waited in the socket while the renderer did not read (a stall
+  /// longer than max_state_age_s), dropped before the MAC check and never rendered.
+  std::uint64_t expired = 0;
   /// Server side: sessions ended because the peer sent nothing authenticated for
   /// session_timeout_s.
   std::uint64_t session_timeouts = 0;
@@ -186,9 +195,10 @@ struct UdpDeviceServerOptions {
 /// newest command to the device with its force clamped to device.limits().max_force_N (and the
 /// torque scaled with it), or zero
 /// force flagged safe-fallback when there is none yet or the watchdog has tripped. A session
-/// starts with an authenticated hello; while it is live, hellos from other addresses are
-/// refused. Step never blocks, allocates or throws. Not thread-safe: call every member from the
-/// thread that drives it.
+/// starts with an authenticated hello that the server challenges with a fresh nonce and a
+/// confirming hello that answers the challenge; a hello seen before is refused as a replay, and
+/// while a session is live, hellos from other addresses are refused. Step never blocks, allocates
+/// or throws. Not thread-safe: call every member from the thread that drives it.
 class UdpDeviceServer {
  public:
   /// Validates the options, resolves the key and binds. Throws Error naming the option when an

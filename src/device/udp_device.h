@@ -1,7 +1,8 @@
 // The renderer side of the UDP device link: a Device whose state arrives from a device server
 // (UdpDeviceServer, or any program speaking docs/device-protocol.md) and whose commands go back
-// to it, within one authenticated session. Newest wins; a watchdog marks the state invalid when
-// it goes stale and asks the server for a new session.
+// to it, within one authenticated session. Newest wins, and only a state read soon enough after
+// it arrived is rendered; a watchdog marks the state invalid when it goes stale and asks the
+// server for a new session.
 #pragma once
 
 #include <array>
@@ -11,6 +12,7 @@
 
 #include "device/udp_link.h"
 #include "device/udp_protocol.h"
+#include "device/udp_session.h"
 #include "device/udp_socket.h"
 #include "rigidtouch/device.h"
 
@@ -20,7 +22,11 @@ namespace rigidtouch::device {
 struct UdpDeviceOptions {
   std::string server = "udp://127.0.0.1:47000";  // the device server to talk to
   std::string local = "udp://127.0.0.1:0";       // address to bind; port 0 picks a free port
-  double watchdog_s = 0.05;         // no fresh state for this long: state invalid, zero force
+  double watchdog_s = 0.05;  // no fresh state for this long: state invalid, zero force
+  // a Read renders a state only when the previous Read that emptied the socket started at most
+  // this long before it, so a rendered state waited at most this long; in (0, 10] s, and
+  // watchdog_s when larger (docs/device-protocol.md, "A stalled renderer")
+  double max_state_age_s = 0.01;
   bool allow_non_loopback = false;  // required for any address outside 127.0.0.0/8
   DeviceLimits limits;  // own limits; limits() combines them with the server's announced ones
   std::optional<DeviceKey> key;    // the pre-shared key; when unset, key_file is read
@@ -31,7 +37,9 @@ struct UdpDeviceOptions {
 
 /// Device client over UDP. Read and Write never block, allocate or throw; problems are counted
 /// in counters(). Read drains every pending datagram and keeps the newest valid state of the
-/// session; without a session it (re)sends a hello every hello_interval_s.
+/// session (older ones it took are `stale`); after a stall longer than max_state_age_s it drops
+/// the backlog unread (`expired`) and reports the state invalid for that Read. Without a
+/// session it (re)sends a hello every hello_interval_s, and confirms the server's challenge.
 class UdpDevice final : public Device {
  public:
   /// Validates the options, resolves the key, binds the local socket and sends a hello with a
@@ -50,9 +58,9 @@ class UdpDevice final : public Device {
   /// the newest session's hello-reply (0 counts as no limit).
   const DeviceLimits& limits() const override { return limits_; }
 
-  /// True while a session is established (a hello-reply was accepted and the watchdog has not
-  /// ended it since).
-  bool has_session() const { return session_; }
+  /// True while a session is established (a hello-reply was accepted and confirmed, and the
+  /// watchdog has not ended it since).
+  bool has_session() const { return session_.live(); }
   /// The limits the server announced in the newest session; zero before the first.
   const DeviceLimits& announced_limits() const { return announced_; }
 
@@ -67,6 +75,7 @@ class UdpDevice final : public Device {
 
  private:
   void SendHello(std::int64_t now_ns, bool new_handshake);
+  void SendConfirm(std::int64_t now_ns);
   void HandleReply(const PacketHeader& header, std::span<const std::uint8_t> datagram,
                    std::int64_t now_ns);
   void HandleState(const PacketHeader& header, std::span<const std::uint8_t> datagram,
@@ -78,22 +87,21 @@ class UdpDevice final : public Device {
   UdpEndpoint server_;
   std::int64_t watchdog_ns_ = 0;
   std::int64_t hello_interval_ns_ = 0;
+  std::int64_t max_state_age_ns_ = 0;
   DeviceKey key_;
   UdpSocket socket_;
   LossSimulator loss_;
   UdpCounters counters_;
   // session: our nonce (fresh per handshake), the server's, and the per-direction counters
-  bool session_ = false;
-  std::uint64_t client_nonce_ = 0;
-  std::uint64_t server_nonce_ = 0;
-  std::uint64_t sent_counter_ = 0;
-  std::uint64_t received_counter_ = 0;
-  std::int64_t last_hello_ns_ = 0;
-  DeviceState state_;  // newest accepted state
+  UdpSession session_;
+  std::uint64_t client_nonce_ = 0;  // of the handshake in progress or of the session
+  std::int64_t last_hello_ns_ = 0;  // the newest hello or confirming hello sent
+  DeviceState state_;               // newest accepted state
   bool has_state_ = false;
-  bool has_session_state_ = false;  // a state of the current session was accepted
   bool tripped_ = false;
-  std::int64_t last_fresh_ns_ = 0;  // newest accepted state, or the session's start
+  std::int64_t last_fresh_ns_ = 0;    // newest accepted state, or the session's start
+  std::int64_t last_emptied_ns_ = 0;  // start of the newest Read that emptied the socket
+  int states_this_read_ = 0;          // states this Read took (only the newest is rendered)
   std::array<std::uint8_t, kMaxDatagramBytes> buffer_{};
 };
 

@@ -7,6 +7,7 @@
 
 #include "device/udp_link.h"
 #include "device/udp_protocol.h"
+#include "device/udp_session.h"
 #include "device/udp_socket.h"
 #include "render/output.h"
 
@@ -59,9 +60,10 @@ struct UdpDeviceServer::Impl {
   void SendState();
   void DrainDatagrams(std::int64_t now_ns);
   void HandleHello(const PacketHeader& header, const UdpEndpoint& source, std::int64_t now_ns);
+  void HandleConfirm(const PacketHeader& header, const UdpEndpoint& source, std::int64_t now_ns);
   void HandleCommand(const PacketHeader& header, const UdpEndpoint& source,
                      std::span<const std::uint8_t> datagram, std::int64_t now_ns);
-  void SendReply();
+  void SendReply(const UdpEndpoint& to, std::uint64_t client_nonce, std::uint64_t server_nonce);
 
   Device& device;
   std::int64_t watchdog_ns = 0;
@@ -72,15 +74,12 @@ struct UdpDeviceServer::Impl {
   UdpSocket socket;
   LossSimulator loss;
   UdpCounters counters;
-  // the session: pinned to the client's address and both nonces
-  bool session = false;
+  // the session: pinned to the client's address and both nonces; the challenges in flight
+  UdpSession session;
+  HandshakeMemory handshakes;
   bool had_peer = false;
   UdpEndpoint peer;
-  std::uint64_t client_nonce = 0;
-  std::uint64_t server_nonce = 0;
-  std::uint64_t sent_counter = 0;
-  std::uint64_t received_counter = 0;
-  std::int64_t last_peer_ns = 0;  // newest authenticated hello or command from the peer
+  std::int64_t last_peer_ns = 0;  // the session's confirmation or newest command
   std::uint64_t sequence = 0;     // the server numbers states itself: strictly increasing
   DeviceCommand command;          // newest accepted command, already clamped
   bool has_command = false;
@@ -111,7 +110,7 @@ const UdpEndpoint& UdpDeviceServer::local_endpoint() const {
   return impl_->socket.local();
 }
 bool UdpDeviceServer::has_peer() const {
-  return impl_->session;
+  return impl_->session.live();
 }
 const UdpEndpoint& UdpDeviceServer::peer() const {
   return impl_->peer;
@@ -122,9 +121,9 @@ std::uint64_t UdpDeviceServer::last_sequence() const {
 
 void UdpDeviceServer::Impl::Step() {
   const std::int64_t now_ns = MonotonicNowNs();
-  if (session && now_ns - last_peer_ns > session_timeout_ns) {
+  if (session.live() && now_ns - last_peer_ns > session_timeout_ns) {
     // the peer is gone; another client holding the key may now start a session
-    session = false;
+    session.Close();
     ++counters.session_timeouts;
   }
   // Device order: Read, (renderer computes), Write
@@ -134,7 +133,7 @@ void UdpDeviceServer::Impl::Step() {
     tripped = true;
     ++counters.watchdog_trips;
   }
-  if (session && has_command && !tripped) {
+  if (session.live() && has_command && !tripped) {
     device.Write(command);
     return;
   }
@@ -162,92 +161,98 @@ void UdpDeviceServer::Impl::SendState() {
     ++counters.invalid_device_states;
     return;
   }
-  if (!session) return;
+  if (!session.live()) return;
   state.sequence = ++sequence;
-  const PacketHeader header{PacketType::kState, client_nonce, server_nonce, ++sent_counter};
-  const StatePacket packet = EncodeState(state, header, key);
+  const StatePacket packet = EncodeState(state, session.NextHeader(PacketType::kState), key);
   SendCounted(socket, loss, counters, packet, peer);
 }
 
-void UdpDeviceServer::Impl::SendReply() {
+void UdpDeviceServer::Impl::SendReply(const UdpEndpoint& to, std::uint64_t client_nonce,
+                                      std::uint64_t server_nonce) {
   const HelloReplyPacket packet =
       EncodeHelloReply(device.limits(), client_nonce, server_nonce, key);
-  SendCounted(socket, loss, counters, packet, peer);
+  SendCounted(socket, loss, counters, packet, to);
 }
 
 void UdpDeviceServer::Impl::DrainDatagrams(std::int64_t now_ns) {
   const LinkInbox inbox{socket, buffer, loss, counters, key};
-  DrainAuthenticated(inbox, fixed_peer ? &allowed_peer : nullptr, PacketType::kHello,
-                     PacketType::kCommand,
-                     [&](const PacketHeader& header, std::span<const std::uint8_t> bytes,
-                         const UdpEndpoint& source) {
-                       if (header.type == PacketType::kHello) {
-                         HandleHello(header, source, now_ns);
-                       } else {
-                         HandleCommand(header, source, bytes, now_ns);
-                       }
-                     });
+  DrainAuthenticated(
+      inbox, fixed_peer ? &allowed_peer : nullptr, PacketType::kHello, PacketType::kCommand,
+      DrainBudget{}, [](const PacketHeader&) { return false; },
+      [&](const PacketHeader& header, std::span<const std::uint8_t> bytes,
+          const UdpEndpoint& source) {
+        if (header.type == PacketType::kCommand) {
+          HandleCommand(header, source, bytes, now_ns);
+        } else if (header.server_nonce == 0) {
+          HandleHello(header, source, now_ns);
+        } else {
+          HandleConfirm(header, source, now_ns);
+        }
+      });
 }
 
+// a hello asks for a session: it opens nothing, but is challenged with a fresh server nonce
+// that only a holder of the key can confirm; a hello seen before is a replay, refused
 void UdpDeviceServer::Impl::HandleHello(const PacketHeader& header, const UdpEndpoint& source,
                                         std::int64_t now_ns) {
   if (header.client_nonce == 0) {
     ++counters.no_session;
     return;
   }
-  if (session && source != peer) {
+  if (session.live() && source != peer) {
     // one renderer at a time: a live session is never taken over
     ++counters.hellos_refused;
     return;
   }
-  if (session && header.client_nonce == client_nonce) {
-    // the same hello again: our reply was lost; answer it the same way
-    last_peer_ns = now_ns;
-    SendReply();
+  if (const auto* challenge = handshakes.Pending(source, header.client_nonce)) {
+    // the same hello again from its address: our challenge was lost; the same one again
+    SendReply(source, challenge->client_nonce, challenge->server_nonce);
+    return;
+  }
+  if (handshakes.Seen(header.client_nonce)) {
+    ++counters.replayed_handshakes;
+    return;
+  }
+  const auto& challenge = handshakes.Remember(source, header.client_nonce, RandomNonce(), now_ns);
+  SendReply(source, challenge.client_nonce, challenge.server_nonce);
+}
+
+// a confirming hello answers a challenge in flight: a new session, counters and sequencing
+// from scratch, zero force until its first command
+void UdpDeviceServer::Impl::HandleConfirm(const PacketHeader& header, const UdpEndpoint& source,
+                                          std::int64_t now_ns) {
+  if (session.live() && source != peer) {
+    ++counters.hellos_refused;
+    return;
+  }
+  if (!handshakes.Confirm(source, header.client_nonce, header.server_nonce, now_ns,
+                          session_timeout_ns)) {
+    // a confirmation replayed, repeated, or of a challenge long gone: opens and extends nothing
+    ++counters.replayed_handshakes;
     return;
   }
   if (!had_peer || source != peer) ++counters.peer_changes;
-  // a new session: fresh nonce, counters and sequencing from scratch, zero force until its
-  // first command
-  session = true;
   had_peer = true;
   peer = source;
-  client_nonce = header.client_nonce;
-  server_nonce = RandomNonce();
-  sent_counter = 0;
-  received_counter = 0;
+  session.Open(header.client_nonce, header.server_nonce);
   sequence = 0;
   has_command = false;
   tripped = false;
   last_peer_ns = now_ns;
   ++counters.handshakes;
-  SendReply();
 }
 
 void UdpDeviceServer::Impl::HandleCommand(const PacketHeader& header, const UdpEndpoint& source,
                                           std::span<const std::uint8_t> datagram,
                                           std::int64_t now_ns) {
-  if (!session || header.client_nonce != client_nonce || header.server_nonce != server_nonce) {
-    ++counters.no_session;
-    return;
-  }
-  if (source != peer) {
+  if (session.live() && source != peer) {
     ++counters.wrong_source;
     return;
   }
-  if (header.counter <= received_counter) {
-    ++counters.replayed;
-    return;
-  }
   DeviceCommand decoded;
-  const DecodeResult result = DecodeCommandPayload(datagram, &decoded);
-  if (result != DecodeResult::kOk) {
-    ++counters.malformed[static_cast<std::size_t>(result)];
-    return;
-  }
-  received_counter = header.counter;
+  if (!session.Receive(header, datagram, &DecodeCommandPayload, &decoded, counters)) return;
   last_peer_ns = now_ns;
-  if (has_command && !tripped && decoded.sequence < command.sequence) {
+  if (has_command && !tripped && session.Order(decoded.sequence) == SequenceOrder::kOlder) {
     ++counters.stale;
     return;
   }
@@ -263,6 +268,7 @@ void UdpDeviceServer::Impl::HandleCommand(const PacketHeader& header, const UdpE
   // an equal sequence replaces the command: a renderer ticking faster than the device answers
   // one state several times, and the later answer is the newer one
   command = decoded;
+  session.Accept(decoded.sequence);
   has_command = true;
   ++counters.accepted;
   last_fresh_ns = now_ns;

@@ -22,6 +22,8 @@ nlohmann::json ToJson(const UdpCounters& counters) {
       {"no_session", counters.no_session},
       {"handshakes", counters.handshakes},
       {"hellos_refused", counters.hellos_refused},
+      {"replayed_handshakes", counters.replayed_handshakes},
+      {"expired", counters.expired},
       {"session_timeouts", counters.session_timeouts},
       {"clamped_commands", counters.clamped_commands},
       {"malformed", malformed},

@@ -61,24 +61,39 @@ struct LinkInbox {
   const DeviceKey& key;
 };
 
-/// Takes up to kMaxDatagramsPerPeriod datagrams off the socket and calls
-/// `admit(header, bytes, source)` for each that comes from `required_source` (any source when it
-/// is null), survives the test-only loss, arrived whole, is framed as `first` or `second` and
-/// carries a valid MAC; every other one is counted in `counters` by why it was refused. Stops at
-/// the first EAGAIN or socket error (counted: a persistent error must not spin the loop). Never
-/// blocks or allocates; throws only what `admit` throws.
-template <typename Admit>
-void DrainAuthenticated(const LinkInbox& inbox, const UdpEndpoint* required_source,
-                        PacketType first, PacketType second, Admit&& admit) {
+/// Most datagrams one client Read takes off its socket, so that a backlog queued while the
+/// renderer stalled (a few hundred states at most: the socket's default buffer holds about 250)
+/// is emptied in one or two periods. Those beyond kMaxDatagramsPerPeriod cost a receive but no
+/// MAC: only datagrams from the server, framed and not expired, are verified.
+inline constexpr int kMaxBacklogDatagrams = 512;
+
+/// What one drain may take: receives and MAC verifications.
+struct DrainBudget {
+  int receives = kMaxDatagramsPerPeriod;
+  int verifications = kMaxDatagramsPerPeriod;
+};
+
+/// Takes datagrams off the socket, within `budget`, and calls `admit(header, bytes, source)`
+/// for each that comes from `required_source` (any source when it is null), survives the
+/// test-only loss, arrived whole, is framed as `first` or `second`, is not `expired(header)`
+/// (counted in `counters.expired` and dropped before the MAC) and carries a valid MAC; every
+/// other one is counted in `counters` by why it was refused. Stops at the first EAGAIN or socket
+/// error (counted: a persistent error must not spin the loop). Returns true when it stopped at
+/// EAGAIN: the socket was emptied. Never blocks or allocates; throws only what `admit` throws.
+template <typename Expired, typename Admit>
+bool DrainAuthenticated(const LinkInbox& inbox, const UdpEndpoint* required_source,
+                        PacketType first, PacketType second, DrainBudget budget, Expired&& expired,
+                        Admit&& admit) {
   UdpCounters& counters = inbox.counters;
-  for (int taken = 0; taken < kMaxDatagramsPerPeriod; ++taken) {
+  int verified = 0;
+  for (int taken = 0; taken < budget.receives && verified < budget.verifications; ++taken) {
     Datagram datagram;
     const int status = inbox.socket.Receive(inbox.buffer, &datagram);
-    if (status == EAGAIN) return;
+    if (status == EAGAIN) return true;
     if (status != 0) {
       ++counters.receive_errors;
       counters.last_errno = status;
-      return;
+      return false;
     }
     ++counters.received;
     if (required_source != nullptr && datagram.source != *required_source) {
@@ -100,12 +115,18 @@ void DrainAuthenticated(const LinkInbox& inbox, const UdpEndpoint* required_sour
       ++counters.malformed[static_cast<std::size_t>(framing)];
       continue;
     }
+    if (expired(header)) {
+      ++counters.expired;
+      continue;
+    }
+    ++verified;
     if (!VerifyMac(bytes, inbox.key)) {
       ++counters.unauthenticated;
       continue;
     }
     admit(header, bytes, datagram.source);
   }
+  return false;
 }
 
 /// Sends one datagram unless the test-only loss drops it, and counts the outcome in `counters`

@@ -262,10 +262,11 @@ CommandPacket EncodeCommand(const DeviceCommand& command, const PacketHeader& he
   return packet;
 }
 
-HelloPacket EncodeHello(std::uint64_t client_nonce, const DeviceKey& key) {
+HelloPacket EncodeHello(std::uint64_t client_nonce, const DeviceKey& key,
+                        std::uint64_t server_nonce) {
   HelloPacket packet{};
   PutHeader(packet.data(), PacketType::kHello, kHelloPayloadBytes,
-            PacketHeader{PacketType::kHello, client_nonce, 0, 0});
+            PacketHeader{PacketType::kHello, client_nonce, server_nonce, 0});
   Seal(packet, key);
   return packet;
 }

@@ -1,4 +1,4 @@
-// The rigidtouch device protocol over UDP, version 2: fixed-size little-endian packets (hello,
+// The rigidtouch device protocol over UDP, version 3: fixed-size little-endian packets (hello,
 // hello-reply, state, command), each closed by an HMAC-SHA-256 under a pre-shared key over
 // everything before it. docs/device-protocol.md is the reference; the offsets below and the state's
 // and command's in io/record_fields.h must match its tables.
@@ -19,7 +19,7 @@ namespace rigidtouch::device {
 /// Magic number at offset 0; on the wire (little-endian) its bytes read "RTCH".
 inline constexpr std::uint32_t kProtocolMagic = 0x48435452u;
 /// Protocol version at offset 4. Any change of layout or meaning increments it.
-inline constexpr std::uint16_t kProtocolVersion = 2;
+inline constexpr std::uint16_t kProtocolVersion = 3;
 /// Header bytes before every payload: magic, version, type, payload size, reserved, the two
 /// session nonces and the counter.
 inline constexpr std::size_t kHeaderBytes = 40;
@@ -54,8 +54,9 @@ inline constexpr std::uint32_t kCommandFlagClipped = io::kWireFlagClipped;
 enum class PacketType : std::uint16_t {
   kState = 1,       // device -> renderer, in a session
   kCommand = 2,     // renderer -> device, in a session
-  kHello = 3,       // renderer -> device: asks for a session
-  kHelloReply = 4,  // device -> renderer: grants it and announces the device's limits
+  kHello = 3,       // renderer -> device: asks for a session (server nonce 0), or confirms the
+                    // device's challenge (the hello-reply's server nonce)
+  kHelloReply = 4,  // device -> renderer: challenges a hello and announces the device's limits
 };
 
 // DecodeResult and kDecodeResultCount are in rigidtouch/bridge.h: the server's counters use them.
@@ -67,8 +68,9 @@ inline constexpr double kQuaternionNormTolerance = 1e-3;
 std::string_view ToString(DecodeResult result);
 
 /// The session fields of the header. A hello carries the client's fresh nonce and server_nonce
-/// 0; every later packet of the session carries both nonces. `counter` is strictly increasing
-/// per direction within a session (hellos and hello-replies send 0).
+/// 0, the hello-reply both, the confirming hello both again; every later packet of the session
+/// carries both nonces. `counter` is strictly increasing per direction within a session (hellos
+/// and hello-replies send 0).
 struct PacketHeader {
   PacketType type = PacketType::kState;
   std::uint64_t client_nonce = 0;
@@ -94,10 +96,12 @@ StatePacket EncodeState(const DeviceState& state, const PacketHeader& header, co
 CommandPacket EncodeCommand(const DeviceCommand& command, const PacketHeader& header,
                             const DeviceKey& key);
 
-/// Encodes a hello with the client's nonce.
-HelloPacket EncodeHello(std::uint64_t client_nonce, const DeviceKey& key);
+/// Encodes a hello with the client's nonce: server_nonce 0 asks for a session; the server nonce
+/// of the device's hello-reply confirms it (docs/device-protocol.md, "Sessions").
+HelloPacket EncodeHello(std::uint64_t client_nonce, const DeviceKey& key,
+                        std::uint64_t server_nonce = 0);
 
-/// Encodes a hello-reply granting the session (client_nonce, server_nonce) and announcing the
+/// Encodes a hello-reply challenging the hello of client_nonce with server_nonce and announcing the
 /// device's force, stiffness and damping limits (its name and torque limit are not sent).
 HelloReplyPacket EncodeHelloReply(const DeviceLimits& limits, std::uint64_t client_nonce,
                                   std::uint64_t server_nonce, const DeviceKey& key);

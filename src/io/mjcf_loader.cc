@@ -23,6 +23,7 @@
 #include "io/mjcf_articulation.h"
 #include "io/mjcf_checks.h"
 #include "io/mjcf_compile.h"
+#include "io/mjcf_errors.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch {
@@ -530,13 +531,15 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   char error[1024] = "";
   std::vector<std::string> mujoco_warnings;
   mjModel* raw = nullptr;
+  std::string qhull_report;
   {
     const CompileWarnings kept(&mujoco_warnings);
-    // compiled without MuJoCo's solver sizes (nconmax, njmax, nstack): rigidtouch sizes its own
-    raw = io::CompileWithoutSolverSizes(path, error, sizeof(error));
+    // without MuJoCo's solver sizes (rigidtouch sizes its own); Qhull's stderr report kept
+    qhull_report = io::WithStderrCaptured(
+        [&] { raw = io::CompileWithoutSolverSizes(path, error, sizeof(error)); });
   }
   if (raw == nullptr) {
-    throw Error("scene file '" + path + "': MuJoCo could not compile it: " + error);
+    throw Error("scene file '" + path + "': " + io::TranslateCompileError(error, qhull_report));
   }
   Model model;
   for (const std::string& w : mujoco_warnings) {

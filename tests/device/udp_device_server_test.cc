@@ -4,6 +4,7 @@
 #include <sodium.h>
 
 #include <array>
+#include <cerrno>
 #include <chrono>
 #include <random>
 #include <string>
@@ -114,7 +115,17 @@ struct Client {
     server_nonce = header.server_nonce;
     sent_counter = 0;
     EXPECT_EQ(DecodeHelloReplyPayload(bytes, &announced), DecodeResult::kOk);
-    return true;
+    // the challenge answered under the key: the session opens
+    const std::uint64_t before = server.counters().handshakes;
+    Confirm(server);
+    return PollUntil([&] {
+      server.Step();
+      return server.counters().handshakes > before;
+    });
+  }
+  // the confirming hello: the client's nonce and the server's challenge
+  void Confirm(UdpDeviceServer& server) {
+    Send(server, EncodeHello(client_nonce, key, server_nonce));
   }
 
   UdpSocket socket;
@@ -307,12 +318,12 @@ TEST(UdpDeviceServer, AnotherAddressCannotTakeOverALiveSession) {
   // even a client holding the key waits: one renderer at a time
   Client other;
   other.Hello(server, 2);
-  StepUntilReceived(server, 2);
+  StepUntilReceived(server, 3);
   EXPECT_EQ(server.counters().hellos_refused, 1u);
   EXPECT_EQ(server.peer(), renderer.socket.local());
   EXPECT_EQ(server.counters().handshakes, 1u);
   renderer.Command(server, 1, 1.0);
-  StepUntilReceived(server, 3);
+  StepUntilReceived(server, 4);
   EXPECT_EQ(device.last.force_N.x(), 1.0);
 
   // the renderer goes silent: its session ends after session_timeout_s, then another may start
@@ -327,29 +338,81 @@ TEST(UdpDeviceServer, AnotherAddressCannotTakeOverALiveSession) {
   EXPECT_EQ(server.counters().peer_changes, 2u);
   // the old renderer's session is gone for good
   renderer.Command(server, 2, 2.0);
-  StepUntilReceived(server, 5);
+  StepUntilReceived(server, 7);
   EXPECT_EQ(server.counters().no_session, 1u);
   EXPECT_TRUE(device.last.safe_fallback);
 }
 
-TEST(UdpDeviceServer, TheSameClientRenewsItsSessionAndARepeatedHelloGetsTheSameReply) {
+// the renderer's current address and key, but each handshake is challenged: a hello repeated
+// before its confirmation gets the same challenge; one repeated after it is a replay
+TEST(UdpDeviceServer, TheSameClientRenewsItsSessionAndARepeatedHelloGetsTheSameChallenge) {
   FakeDevice device;
   UdpDeviceServer server(device, ServerOptions());
   Client client;
-  ASSERT_TRUE(client.Handshake(server, 10));
-  const std::uint64_t first = client.server_nonce;
-  ASSERT_TRUE(client.Handshake(server, 10));  // the reply was lost: the hello again
-  EXPECT_EQ(client.server_nonce, first);
+  client.Hello(server, 10);
+  std::vector<std::uint8_t> bytes;
+  PacketHeader first;
+  ASSERT_TRUE(client.ReceiveFrom(server, PacketType::kHelloReply, &bytes, &first));
+  EXPECT_FALSE(server.has_peer()) << "a hello alone opens nothing";
+  client.Hello(server, 10);  // the reply was lost: the hello again
+  PacketHeader again;
+  ASSERT_TRUE(client.ReceiveFrom(server, PacketType::kHelloReply, &bytes, &again));
+  EXPECT_EQ(again.server_nonce, first.server_nonce);
+  client.server_nonce = first.server_nonce;
+  client.Confirm(server);
+  ASSERT_TRUE(PollUntil([&] {
+    server.Step();
+    return server.has_peer();
+  }));
   EXPECT_EQ(server.counters().handshakes, 1u);
   client.Command(server, 1, 1.0);
+  client.Hello(server, 10);  // seen before: refused, and the session goes on
+  client.Confirm(server);    // confirms no challenge in flight any more
+  StepUntilReceived(server, 6);
+  EXPECT_EQ(server.counters().replayed_handshakes, 2u);
+  EXPECT_EQ(server.counters().handshakes, 1u);
+  EXPECT_EQ(device.last.force_N.x(), 1.0);
   ASSERT_TRUE(client.Handshake(server, 11));  // after its watchdog: a new handshake
-  EXPECT_NE(client.server_nonce, first);
+  EXPECT_NE(client.server_nonce, first.server_nonce);
   EXPECT_EQ(server.counters().handshakes, 2u);
   EXPECT_EQ(server.counters().peer_changes, 1u);
   EXPECT_TRUE(device.last.safe_fallback) << "a new session starts from zero force";
   client.Command(server, 1, 4.0);
-  StepUntilReceived(server, 5);
+  StepUntilReceived(server, 9);
   EXPECT_EQ(device.last.force_N.x(), 4.0);
+}
+
+// a process without the key replays a renderer's hello and confirmation after its session ended:
+// no session opens for it, nothing is streamed to it, and the next renderer connects
+TEST(UdpDeviceServer, AReplayedHelloOrConfirmationOpensNoSession) {
+  FakeDevice device;
+  UdpDeviceServer server(device, ServerOptions(0.05, 0.1));
+  Client renderer;
+  ASSERT_TRUE(renderer.Handshake(server, 21));
+  const HelloPacket hello = EncodeHello(21, renderer.key);
+  const HelloPacket confirm = EncodeHello(21, renderer.key, renderer.server_nonce);
+  ASSERT_TRUE(PollUntil([&] {
+    server.Step();
+    return !server.has_peer();
+  }));
+  Client replayer(KeyOf(1));  // holds no key: it can only resend what it recorded
+  const std::uint64_t received = server.counters().received;
+  for (int k = 0; k < 5; ++k) {
+    replayer.Send(server, hello);
+    replayer.Send(server, confirm);
+  }
+  StepUntilReceived(server, received + 10);
+  for (int k = 0; k < 20; ++k) server.Step();
+  EXPECT_FALSE(server.has_peer());
+  EXPECT_EQ(server.counters().replayed_handshakes, 10u);
+  EXPECT_EQ(server.counters().handshakes, 1u);
+  std::array<std::uint8_t, kMaxDatagramBytes> buffer{};
+  Datagram datagram;
+  EXPECT_EQ(replayer.socket.Receive(buffer, &datagram), EAGAIN) << "nothing sent to it";
+  Client next;
+  ASSERT_TRUE(next.Handshake(server, 22));
+  EXPECT_EQ(server.peer(), next.socket.local());
+  EXPECT_EQ(server.counters().handshakes, 2u);
 }
 
 TEST(UdpDeviceServer, CommandsOutsideTheSessionAreDropped) {
@@ -607,6 +670,7 @@ TEST(UdpDeviceServer, StepDoesNotAllocate) {
   PacketHeader header;
   ASSERT_TRUE(client.ReceiveFrom(server, PacketType::kHelloReply, &reply, &header));
   client.server_nonce = header.server_nonce;
+  client.Confirm(server);
   client.Command(server, 1, 1.0);
   client.Command(server, 2, 200.0);  // clamped
   const std::vector<std::uint8_t> replay = client.CommandBytes(2, 2.0, 2);
@@ -614,7 +678,7 @@ TEST(UdpDeviceServer, StepDoesNotAllocate) {
   test::LimitMalloc guard;
   const bool all = PollUntil([&] {
     server.Step();
-    return server.counters().received >= 6;
+    return server.counters().received >= 7;
   });
   server.Step();
   const long allocations = guard.allocations();
@@ -661,7 +725,10 @@ TEST(UdpDeviceServer, EndToEndWithFivePercentLoss) {
   const UdpCounters& c = client.counters();
   EXPECT_EQ(client.limits().max_force_N, 40.0) << "the device announced a stricter limit";
   // nothing is lost on loopback except what the simulation drops, nothing is forged
-  EXPECT_EQ(c.accepted + c.stale + c.duplicate + c.handshakes + c.replayed + c.no_session, s.sent);
+  EXPECT_EQ(c.accepted + c.stale + c.duplicate + c.handshakes + c.replayed_handshakes + c.replayed +
+                c.no_session + c.expired,
+            s.sent)
+      << c.accepted << " " << c.stale << " " << c.duplicate << " " << c.expired;
   EXPECT_EQ(c.MalformedTotal() + c.unauthenticated, 0u);
   EXPECT_EQ(s.MalformedTotal() + s.unauthenticated + s.no_session + s.replayed, 0u);
   EXPECT_EQ(c.handshakes, 1u);

@@ -29,13 +29,17 @@ void ResealWith(std::vector<std::uint8_t>& datagram, const DeviceKey& key) {
 
 // a raw socket playing the device server, so tests control every byte that reaches the client
 struct Fixture {
-  explicit Fixture(double watchdog_s = 0.5, double hello_interval_s = 0.02)
+  // max_state_age_s: generous by default, so that a slow test machine's pauses between Reads
+  // do not expire the states a test sends (ABacklogFromAStallIsNeverRendered sets its own)
+  explicit Fixture(double watchdog_s = 0.5, double hello_interval_s = 0.02,
+                   double max_state_age_s = 10.0)
       : server(Loopback0(), "test server"), key(KeyOf(7)) {
     UdpDeviceOptions options;
     options.server = server.local().ToString();
     options.local = "udp://127.0.0.1:0";
     options.watchdog_s = watchdog_s;
     options.hello_interval_s = hello_interval_s;
+    options.max_state_age_s = max_state_age_s;
     options.limits.name = "udp-test";
     options.limits.max_force_N = 3.3;
     options.key = key;
@@ -77,11 +81,20 @@ struct Fixture {
     this->server_nonce = server_nonce;
     counter = 0;
     const std::uint64_t before = device->counters().handshakes;
-    SendRaw(EncodeHelloReply(limits, client_nonce, server_nonce, key));
+    reply = EncodeHelloReply(limits, client_nonce, server_nonce, key);
+    SendRaw(reply);
     EXPECT_TRUE(PollUntil([&] {
       device->Read();
       return device->counters().handshakes > before;
     }));
+    // the client confirms the challenge: a hello with both nonces, under the key
+    const std::vector<std::uint8_t> confirm = FromClient();
+    PacketHeader header;
+    EXPECT_EQ(CheckFraming(confirm, PacketType::kHello, PacketType::kCommand, &header),
+              DecodeResult::kOk);
+    EXPECT_TRUE(VerifyMac(confirm, key));
+    EXPECT_EQ(header.client_nonce, client_nonce);
+    EXPECT_EQ(header.server_nonce, server_nonce);
   }
 
   std::vector<std::uint8_t> StateBytes(std::uint64_t sequence, std::uint64_t packet_counter) {
@@ -113,6 +126,7 @@ struct Fixture {
   std::uint64_t client_nonce = 0;
   std::uint64_t server_nonce = 0;
   std::uint64_t counter = 0;  // server -> client, this session
+  HelloReplyPacket reply{};   // the newest hello-reply sent
 };
 
 TEST(UdpDevice, StartsWithAnAuthenticatedHelloAndSendsNoCommandWithoutASession) {
@@ -224,9 +238,11 @@ TEST(UdpDevice, NewestSequenceWinsWithinTheSession) {
   const DeviceState state = f.ReadUntilReceived(1 + arrivals.size());
   EXPECT_TRUE(state.valid);
   EXPECT_EQ(state.sequence, 5u);
+  // 1, 3 and 5 each became the newest; a Read renders only its newest (accepted), the ones it
+  // took before are stale, as are 2 and 4
   const UdpCounters& counters = f.device->counters();
-  EXPECT_EQ(counters.accepted, 3u);
-  EXPECT_EQ(counters.stale, 2u);
+  EXPECT_GE(counters.accepted, 1u);
+  EXPECT_EQ(counters.accepted + counters.stale, 5u);
   EXPECT_EQ(counters.duplicate, 2u);
   EXPECT_EQ(counters.MalformedTotal(), 0u);
 }
@@ -239,10 +255,10 @@ TEST(UdpDevice, StatesOutsideTheSessionAreDropped) {
   f.SendRaw(f.StateBytes(1, 1));
   f.ReadUntilReceived(1);
   EXPECT_EQ(f.device->counters().no_session, 1u);
-  // a reply to a hello the client never sent (or an old one): no session either
+  // a reply to a hello the client never sent (or an old one, recorded): no session either
   f.SendRaw(EncodeHelloReply(DeviceLimits{}, f.client_nonce ^ 1, kServerNonce, f.key));
   f.ReadUntilReceived(2);
-  EXPECT_EQ(f.device->counters().no_session, 2u);
+  EXPECT_EQ(f.device->counters().replayed_handshakes, 1u);
   EXPECT_FALSE(f.device->has_session());
 
   f.Handshake(DeviceLimits{}, kServerNonce, /*receive_hello=*/false);
@@ -256,7 +272,8 @@ TEST(UdpDevice, StatesOutsideTheSessionAreDropped) {
   // a second reply in the session, with another server nonce, does not replace it
   f.SendRaw(EncodeHelloReply(DeviceLimits{}, nonce, kServerNonce + 2, f.key));
   const DeviceState state = f.ReadUntilReceived(6);
-  EXPECT_EQ(f.device->counters().no_session, 5u);
+  EXPECT_EQ(f.device->counters().no_session, 3u);
+  EXPECT_EQ(f.device->counters().replayed_handshakes, 2u);
   EXPECT_FALSE(state.valid);
   EXPECT_EQ(f.device->counters().accepted, 0u);
   EXPECT_EQ(f.device->counters().handshakes, 1u);
@@ -393,14 +410,97 @@ TEST(UdpDevice, WatchdogTripsStartsANewHandshakeAndRecovers) {
   EXPECT_EQ(f.device->counters().stale, 0u);
 }
 
+TEST(UdpDevice, ARecordedHelloReplyOpensNoSession) {
+  Fixture f(0.02);
+  f.Handshake();
+  const HelloReplyPacket recorded = f.reply;
+  f.SendRaw(recorded);  // the same reply again, in the session
+  f.ReadUntilReceived(2);
+  EXPECT_EQ(f.device->counters().replayed_handshakes, 1u);
+  // the session ends (no state: the watchdog); the recorded reply answers no hello of the next
+  ASSERT_TRUE(PollUntil([&] {
+    f.device->Read();
+    return !f.device->has_session();
+  }));
+  f.SendRaw(recorded);
+  f.ReadUntilReceived(3);
+  EXPECT_FALSE(f.device->has_session());
+  EXPECT_EQ(f.device->counters().replayed_handshakes, 2u);
+  EXPECT_EQ(f.device->counters().handshakes, 1u);
+}
+
+// the renderer stalls 0.3 s while the device streams at 1 kHz: on resume nothing from the
+// backlog is rendered; the next state is, and each rendered state is at most max_state_age old
+TEST(UdpDevice, ABacklogFromAStallIsNeverRendered) {
+  constexpr double kMaxAge_s = 0.01;
+  Fixture f(0.5, 0.02, kMaxAge_s);
+  f.Handshake();
+  using Clock = std::chrono::steady_clock;
+  std::vector<Clock::time_point> sent_at(1);
+  const auto send = [&](std::uint64_t sequence) {
+    sent_at.push_back(Clock::now());
+    f.SendState(sequence);
+  };
+  send(1);
+  ASSERT_EQ(f.ReadUntilReceived(2).sequence, 1u);
+  std::uint64_t sequence = 1;
+  const auto stalled_at = Clock::now();
+  while (Clock::now() - stalled_at < std::chrono::milliseconds(300)) {
+    send(++sequence);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const UdpCounters before = f.device->counters();
+  const DeviceState resumed = f.device->Read();
+  EXPECT_FALSE(resumed.valid) << "sequence " << resumed.sequence << " of " << sequence;
+  const UdpCounters& c = f.device->counters();
+  EXPECT_GT(c.expired, 100u) << "the backlog is dropped unread";
+  EXPECT_EQ(c.accepted, before.accepted);
+  EXPECT_EQ(c.unauthenticated, 0u);
+  // the device goes on: every state rendered from now on is the newest sent, and recent
+  for (int k = 0; k < 20; ++k) {
+    send(++sequence);
+    DeviceState state;
+    ASSERT_TRUE(PollUntil([&] {
+      state = f.device->Read();
+      return state.valid && state.sequence == sequence;
+    }));
+    const double age_s = std::chrono::duration<double>(Clock::now() - sent_at[sequence]).count();
+    EXPECT_LE(age_s, kMaxAge_s + 0.05) << "a loaded machine's scheduling aside";
+  }
+  EXPECT_EQ(f.device->counters().expired, c.expired);
+}
+
+TEST(UdpDevice, OnlyTheNewestStateOfAReadIsRenderedTheOthersAreStale) {
+  Fixture f;
+  f.Handshake();
+  for (std::uint64_t sequence = 1; sequence <= 5; ++sequence) f.SendState(sequence);
+  // wait until all five are queued, then take them in one Read
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const DeviceState state = f.device->Read();
+  EXPECT_TRUE(state.valid);
+  EXPECT_EQ(state.sequence, 5u);
+  EXPECT_EQ(f.device->counters().accepted, 1u);
+  EXPECT_EQ(f.device->counters().stale, 4u);
+}
+
 TEST(UdpDevice, AFloodIsTakenAtMostAFewDozenDatagramsPerRead) {
   Fixture f;
-  const std::vector<std::uint8_t> forged(kStatePacketBytes, 0);
+  // framed but under another key: each costs a MAC, and a Read verifies at most 64
+  const StatePacket forged =
+      EncodeState(DeviceState{}, PacketHeader{PacketType::kState, 1, 2, 3}, KeyOf(3));
   for (int i = 0; i < kMaxDatagramsPerPeriod + 36; ++i) f.SendRaw(forged);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
   f.device->Read();
   EXPECT_EQ(f.device->counters().received, static_cast<std::uint64_t>(kMaxDatagramsPerPeriod));
   f.device->Read();
   EXPECT_EQ(f.device->counters().received, kMaxDatagramsPerPeriod + 36u);
+  EXPECT_EQ(f.device->counters().unauthenticated, kMaxDatagramsPerPeriod + 36u);
+  // unframed ones cost a receive and no MAC: a Read takes up to kMaxBacklogDatagrams
+  const std::vector<std::uint8_t> junk(kStatePacketBytes, 0);
+  for (int i = 0; i < 200; ++i) f.SendRaw(junk);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  f.device->Read();
+  EXPECT_EQ(f.device->counters().received, kMaxDatagramsPerPeriod + 236u);
 }
 
 TEST(UdpDevice, ReadAndWriteDoNotAllocate) {

@@ -17,27 +17,30 @@
 namespace rigidtouch::device {
 namespace {
 
-// golden datagrams written independently with Python's struct.pack('<...') and
+// golden datagrams (version 3) written independently with Python's struct.pack('<...') and
 // hmac.new(key, header + payload, hashlib.sha256), key = bytes(range(32)), client nonce
 // 0x1111111111111111, server nonce 0x2222222222222222: they pin the little-endian layout and the
 // MAC of docs/device-protocol.md
 constexpr const char* kGoldenStateHex =
-    "52544348020001007c0000000000000011111111111111112222222222222222070000000000000008070605"
+    "52544348030001007c0000000000000011111111111111112222222222222222070000000000000008070605"
     "040302010000000000002940000000000000f03f00000000000000c0000000000000d03f000000000000e03f"
     "000000000000e0bf000000000000e03f000000000000e03f000000000000c03f000000000000b0bf00000000"
-    "00000840000000000000f8bf00000000000004400000000000001040a50000007f8433503a83d488d5d5e9c2"
-    "6eda7e39adb944639d59a1861d68639d2c514923";
+    "00000840000000000000f8bf00000000000004400000000000001040a50000005221b903c88e381440527131"
+    "e0a3b09e03928a9129b105cd1ae2a2df863a62c2";
 constexpr const char* kGoldenCommandHex =
-    "52544348020002003c000000000000001111111111111111222222222222222209000000000000002a000000"
+    "52544348030002003c000000000000001111111111111111222222222222222209000000000000002a000000"
     "00000000000000000000f83f00000000000002c000000000000008400000000000000000000000000000e03f"
-    "000000000000e8bf030000000b05231e8e123892dfb3318fedbfc8854862b6127257dff82fd7cf40a390c4b9";
+    "000000000000e8bf030000000c4bea31c99f70f3cd11bb6053d706da3d0ddca4a5f3889557f31ecf4a1927b3";
 constexpr const char* kGoldenHelloHex =
-    "525443480200030000000000000000001111111111111111000000000000000000000000000000009e77dc3d"
-    "4fc144e29cf75469df24403d0898ad88bf890052528b409f67025bef";
+    "52544348030003000000000000000000111111111111111100000000000000000000000000000000697a3dd8"
+    "187de69d7a51e7d4b3bdf30ea3f31fb7a8c74fe24ee32a6478ed94f3";
 constexpr const char* kGoldenHelloReplyHex =
-    "525443480200040018000000000000001111111111111111222222222222222200000000000000006666666666"
-    "660a400000000000408f40000000000000044058f98ba3d131aab17c2fead31edb4b4ae593e23de2a29ace685d"
-    "e261d8609522";
+    "525443480300040018000000000000001111111111111111222222222222222200000000000000006666666666"
+    "660a400000000000408f400000000000000440a55adc0e19cd70208bb18aca181d100bef4478f925de2628d603"
+    "5e11bece5fa7";
+constexpr const char* kGoldenConfirmHex =
+    "5254434803000300000000000000000011111111111111112222222222222222000000000000000099b46594"
+    "90d1ebb9c4fdc5dffed987b62818e1427c1200b82ed76a8a73cf5209";
 // a version 1 state as version 1 senders put it on the wire (CRC-32, 16-byte header)
 constexpr const char* kVersion1StateHex =
     "52544348010001007c00000068fe2a8208070605040302010000000000002940000000000000f03f0000000000"
@@ -138,6 +141,8 @@ TEST(UdpProtocol, EncodingsMatchGoldenBytes) {
   EXPECT_EQ(CommandBytes().size(), kCommandPacketBytes);
   const HelloPacket hello = EncodeHello(kClientNonce, TestKey());
   EXPECT_EQ(std::vector<std::uint8_t>(hello.begin(), hello.end()), FromHex(kGoldenHelloHex));
+  const HelloPacket confirm = EncodeHello(kClientNonce, TestKey(), kProtocolServerNonce);
+  EXPECT_EQ(std::vector<std::uint8_t>(confirm.begin(), confirm.end()), FromHex(kGoldenConfirmHex));
   const HelloReplyPacket reply = EncodeHelloReply(DeviceLimits{"", 3.3, 1000.0, 2.5}, kClientNonce,
                                                   kProtocolServerNonce, TestKey());
   EXPECT_EQ(std::vector<std::uint8_t>(reply.begin(), reply.end()), FromHex(kGoldenHelloReplyHex));
@@ -289,7 +294,7 @@ TEST(UdpProtocol, BadMagicWrongVersionWrongType) {
   bytes[0] ^= 0x01;
   EXPECT_EQ(Framing(bytes), DecodeResult::kBadMagic);
 
-  for (const std::uint8_t version : {0, 1, 3, 255}) {
+  for (const std::uint8_t version : {0, 1, 2, 255}) {
     bytes = StateBytes();
     bytes[4] = version;
     Reseal(bytes);
