@@ -17,7 +17,7 @@ handshake packets it refused as replays.
 """
 import argparse, hashlib, hmac, json, math, os, signal, socket, stat, struct, time
 
-MAGIC, VERSION = 0x48435452, 2
+MAGIC, VERSION = 0x48435452, 3
 STATE, COMMAND, HELLO, HELLO_REPLY = 1, 2, 3, 4
 HEADER = struct.Struct("<IHHIIQQQ")  # magic, version, type, payload bytes, reserved,
 #                                      client nonce, server nonce, counter

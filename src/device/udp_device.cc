@@ -10,12 +10,7 @@ namespace {
 constexpr std::string_view kUdpDeviceWhat = "udp device";
 
 UdpEndpoint ParseServer(const UdpDeviceOptions& options) {
-  const UdpEndpoint server = ParseUdpAddress(options.server, "udp device: server");
-  if (server.port == 0) {
-    throw Error("udp device: server '" + options.server + "' needs a port in [1, 65535]");
-  }
-  RequireLoopbackUnlessAllowed(server, "udp device: server", options.allow_non_loopback);
-  return server;
+  return ParseRemoteAddress(options.server, "udp device: server", options.allow_non_loopback);
 }
 
 UdpEndpoint ParseLocal(const UdpDeviceOptions& options) {
@@ -37,8 +32,7 @@ std::int64_t HelloIntervalNs(double interval_s) {
 std::int64_t MaxStateAgeNs(const UdpDeviceOptions& options) {
   const double age_s = options.max_state_age_s;
   if (!(std::isfinite(age_s) && age_s > 0.0 && age_s <= 10.0)) {
-    throw Error("udp device: max_state_age_s = " + std::to_string(age_s) +
-                " is outside (0, 10] s");
+    throw Error("udp device: max_state_age_s = " + std::to_string(age_s) + " is outside (0, 10] s");
   }
   // a state older than the watchdog is never fresh anyway
   return std::llround(std::min(age_s, options.watchdog_s) * 1e9);

@@ -25,12 +25,7 @@ UdpEndpoint ParseListen(const UdpDeviceServerOptions& options) {
 
 UdpEndpoint ParsePeer(const UdpDeviceServerOptions& options) {
   if (options.peer.empty()) return UdpEndpoint{};
-  const UdpEndpoint peer = ParseUdpAddress(options.peer, "udp device server: peer");
-  if (peer.port == 0) {
-    throw Error("udp device server: peer '" + options.peer + "' needs a port in [1, 65535]");
-  }
-  RequireLoopbackUnlessAllowed(peer, "udp device server: peer", options.allow_non_loopback);
-  return peer;
+  return ParseRemoteAddress(options.peer, "udp device server: peer", options.allow_non_loopback);
 }
 
 }  // namespace
@@ -57,6 +52,7 @@ struct UdpDeviceServer::Impl {
 
   void Step();
   void Release();
+  void WriteZero();
   void SendState();
   void DrainDatagrams(std::int64_t now_ns);
   void HandleHello(const PacketHeader& header, const UdpEndpoint& source, std::int64_t now_ns);
@@ -137,16 +133,16 @@ void UdpDeviceServer::Impl::Step() {
     device.Write(command);
     return;
   }
-  DeviceCommand zero;
-  zero.sequence = sequence;
-  zero.safe_fallback = true;
-  device.Write(zero);
-  ++counters.fallback_writes;
+  WriteZero();
 }
 
 void UdpDeviceServer::Impl::Release() {
   // the command is dropped: Step writes zero until the renderer sends a new one
   has_command = false;
+  WriteZero();
+}
+
+void UdpDeviceServer::Impl::WriteZero() {
   DeviceCommand zero;
   zero.sequence = sequence;
   zero.safe_fallback = true;
@@ -245,8 +241,8 @@ void UdpDeviceServer::Impl::HandleConfirm(const PacketHeader& header, const UdpE
 void UdpDeviceServer::Impl::HandleCommand(const PacketHeader& header, const UdpEndpoint& source,
                                           std::span<const std::uint8_t> datagram,
                                           std::int64_t now_ns) {
-  if (session.live() && source != peer) {
-    ++counters.wrong_source;
+  if (session.Is(header.client_nonce, header.server_nonce) && source != peer) {
+    ++counters.wrong_source;  // the session's nonces from another address
     return;
   }
   DeviceCommand decoded;

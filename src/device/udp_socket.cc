@@ -73,6 +73,16 @@ void RequireLoopbackUnlessAllowed(const UdpEndpoint& endpoint, std::string_view 
               "docs/device-protocol.md, Security)");
 }
 
+UdpEndpoint ParseRemoteAddress(std::string_view text, std::string_view what,
+                               bool allow_non_loopback) {
+  const UdpEndpoint remote = ParseUdpAddress(text, what);
+  if (remote.port == 0) {
+    throw Error(std::string(what) + " '" + std::string(text) + "' needs a port in [1, 65535]");
+  }
+  RequireLoopbackUnlessAllowed(remote, what, allow_non_loopback);
+  return remote;
+}
+
 UdpSocket::UdpSocket(const UdpEndpoint& local, std::string_view what) : local_(local) {
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (fd_ < 0) {

@@ -19,6 +19,11 @@ namespace rigidtouch::device {
 /// [0, 65535]. Throws Error naming `what` (e.g. "--listen") and the text when it is malformed.
 UdpEndpoint ParseUdpAddress(std::string_view text, std::string_view what);
 
+/// Parses the address of the other end, as ParseUdpAddress does; it needs a port in [1, 65535]
+/// and, unless `allow_non_loopback`, a loopback address. Throws Error naming `what` otherwise.
+UdpEndpoint ParseRemoteAddress(std::string_view text, std::string_view what,
+                               bool allow_non_loopback);
+
 /// Throws Error naming `what` unless the endpoint is loopback or `allow_non_loopback` is set.
 void RequireLoopbackUnlessAllowed(const UdpEndpoint& endpoint, std::string_view what,
                                   bool allow_non_loopback);

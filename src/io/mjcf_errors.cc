@@ -28,6 +28,7 @@ std::string QhullCode(std::string_view report) {
 std::string TranslateCompileError(std::string_view error, std::string_view qhull_report) {
   std::string text = Trim(error);
   if (text.rfind("Error:", 0) == 0) text = Trim(std::string_view(text).substr(6));
+  if (text.rfind("XML Error:", 0) == 0) text = Trim(std::string_view(text).substr(10));
   // MuJoCo's trailer on the line after the reason: the object or element and its line
   std::string reason = text, where;
   if (const auto newline = text.find('\n'); newline != std::string::npos) {
