@@ -220,6 +220,9 @@ bool ServeUdp(const ServeRun& s, nlohmann::json& result, loop::HapticLoopResult&
   device::UdpDeviceOptions o;
   o.server = s.connect;
   o.watchdog_s = s.f.watchdog_s;
+  // a state waits at most this long in the socket before it is rendered; two periods at least,
+  // so that a loop at the lowest rates, whose Reads are one period apart, renders every state
+  o.max_state_age_s = std::max(o.max_state_age_s, 2.0 / s.rate_hz);
   o.limits = preset;
   o.key_file = s.f.key_file;
   o.test_loss.incoming_fraction = s.f.test_drop;
