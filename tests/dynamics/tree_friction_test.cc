@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,7 +21,6 @@
 namespace rigidtouch::dynamics::friction_test {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kG = 9.81;
 
 // a block of mass m on a vertical slide (axis z) under gravity -g z, with dry friction f
@@ -210,7 +210,7 @@ TEST(TreeFrictionTest, BallSpringOscillatesWithPeriodTwoPiSqrtInertiaOverStiffne
   TreeKinematics(model, data);
   const double E0 = TreePotentialEnergy(model, data);
   EXPECT_NEAR(E0, 0.5 * k * theta0 * theta0, 1e-15);
-  const double period_s = 2 * kPi * std::sqrt(I / k);
+  const double period_s = 2 * std::numbers::pi * std::sqrt(I / k);
   const Eigen::VectorXd tau = Eigen::VectorXd::Zero(3);
   std::vector<double> crossings_s;  // upward zero crossings of the angle along the axis
   double prev = theta0;
@@ -229,7 +229,7 @@ TEST(TreeFrictionTest, BallSpringOscillatesWithPeriodTwoPiSqrtInertiaOverStiffne
   std::printf("ball spring period error %.3g (bound 1e-3)\n", measured_s / period_s - 1.0);
 }
 
-mjModel* CompileXml(const std::string& xml) {
+mjModel* CompileBallXml(const std::string& xml) {
   auto vfs = std::make_unique<mjVFS>();
   mj_defaultVFS(vfs.get());
   mj_makeEmptyFileVFS(vfs.get(), "ball.xml", static_cast<int>(xml.size()));
@@ -245,7 +245,7 @@ mjModel* CompileXml(const std::string& xml) {
 // shorter way round), with a springref pose given by the body's own offset (MuJoCo's qpos_spring
 // of a ball is identity: the spring is relaxed at the body's pose in the file)
 TEST(TreeFrictionTest, BallSpringTorqueEqualsMujocosPassiveForce) {
-  mjModel* m = CompileXml(
+  mjModel* m = CompileBallXml(
       "<mujoco><worldbody><body name=\"a\" quat=\"0.9 0.1 0.3 0.2\"><joint type=\"ball\" "
       "stiffness=\"2.5\" damping=\"0.4\"/><geom type=\"box\" size=\"0.1 0.2 0.3\" pos=\"0.1 0 "
       "0\"/><body pos=\"0 0 -0.5\"><joint type=\"ball\" stiffness=\"1.5\"/><geom type=\"sphere\" "
