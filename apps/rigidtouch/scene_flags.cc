@@ -197,6 +197,7 @@ Settings ResolveSettings(const SceneFlags& f) {
   // scene's otherwise)
   o.contact.scene_stiffness_given = s.Given("contact.scene_stiffness_N_per_m");
   o.contact.scene_damping_given = s.Given("contact.scene_damping_Ns_per_m");
+  o.render.frequency_given = s.Given("render.frequency_hz") || !o.render.material.name.empty();
   return s;
 }
 

@@ -174,6 +174,10 @@ struct RenderParams {
   double t_collision_s = 0.1;     // t_c, collision-rendering window, at most 0.1 s
   double frequency_hz = 250.0;    // f, impulse-train frequency, in [1/t_c, 1/h]
   bool reference_solver = false;  // use the exact Eq. 5/8 pseudo-inverse (may pull) instead
+  /// The user gave f (flag, config or material): kept as given. Unset and equal to the default
+  /// 250 Hz, LoadModel lowers it to 1/h (one impulse per step) for a scene whose time step is
+  /// longer than 4 ms, with a load warning (docs/config.md).
+  bool frequency_given = false;
   /// Time-domain passivity observer and controller at the device port (Hannaford and Ryu 2002,
   /// render::PassivityControl), over any renderer; needs a device (direct or virtual coupling).
   bool passivity_control = false;
