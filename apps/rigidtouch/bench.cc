@@ -64,6 +64,16 @@ nlohmann::json ReferenceJson(long units, const std::vector<double>& job_sorted,
   return r;
 }
 
+// between steps, outside the timed part: every kProgressSteps steps a look at the clock and at
+// the stop request
+void LookAtProgress(Progress& progress, long done, long total, const char* phase) {
+  if (done % kProgressSteps != 0) return;
+  const std::string where =
+      std::string(phase) + " step " + std::to_string(done) + " of " + std::to_string(total);
+  progress.ThrowIfStopped(where, "nothing was measured");
+  if (progress.Due()) progress.Report(static_cast<double>(done) / total, where);
+}
+
 void RunBench(const BenchFlags& f) {
   if (f.steps < 1) throw Error("--steps must be >= 1, got " + std::to_string(f.steps));
   if (f.warmup < 0) throw Error("--warmup must be >= 0, got " + std::to_string(f.warmup));
@@ -89,15 +99,11 @@ void RunBench(const BenchFlags& f) {
   // the last warm-up steps are timed when the reference job is sized from them
   std::vector<double> warm_ns;
   const std::unique_ptr<Progress> progress = StartProgress("bench", f.quiet);
-  const double total = static_cast<double>(f.warmup + f.steps);
-  // between steps, outside the timed part: every kProgressSteps steps a look at the clock
+  const long total = f.warmup + f.steps;
   auto look = [&progress, total](long done, const char* phase) {
-    if (done % kProgressSteps != 0) return;
-    const std::string where = std::string(phase) + " step " + std::to_string(done) + " of " +
-                              std::to_string(static_cast<long>(total));
-    progress->ThrowIfStopped(where, "nothing was measured");
-    if (progress->Due()) progress->Report(static_cast<double>(done) / total, where);
+    LookAtProgress(*progress, done, total, phase);
   };
+
   for (long s = 0; s < f.warmup; ++s) {
     look(s, "warm-up");
     const auto t0 = std::chrono::steady_clock::now();
