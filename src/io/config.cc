@@ -82,10 +82,16 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
               {{"restitution", &r.restitution},
                {"t_collision_s", &r.t_collision_s},
                {"frequency_hz", &r.frequency_hz}},
-              given, {"renderer", "reference_solver", "passivity_control"},
+              given, {"renderer", "reference_solver", "passivity_control", "joint_limit_renderer"},
               [&r](const StrictObject& in) {
                 if (auto name = in.OneOf("renderer", text::RendererNames(), "renderer")) {
                   r.renderer = ParseRenderer(*name);
+                }
+                // a joint limit renders like a wall: penalty, impulse or train (Configure refuses
+                // event with the field named)
+                if (auto name = in.OneOf("joint_limit_renderer", text::RendererNames(),
+                                         "joint_limit_renderer")) {
+                  r.joint_limit_renderer = ParseRenderer(*name);
                 }
                 in.Read("reference_solver", r.reference_solver);
                 in.Read("passivity_control", r.passivity_control);
