@@ -180,7 +180,7 @@ struct Data {
   // (nbody) group of each body, -1 if in no contact; a body in a group with a tree (a contact on
   // a link) has a group from ngroup on (the groups with trees come after the others)
   std::vector<int> body_group;
-  int ngroup = 0;  // groups without a tree
+  int ngroup = 0;                   // groups without a tree
   std::vector<WindowState> window;  // (nbody) collision-window state of each body's group
 
   // FORCE outputs of the last tick

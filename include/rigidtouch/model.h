@@ -63,8 +63,8 @@ struct BodyModel {
 
 /// A collision geom. `body` is an index into Model::bodies, or -1 for static world geometry and for
 /// the geoms of a tree's links. A link geom has `tree` >= 0 (Model::trees) and `link` (the tree's
-/// body): the tick's trees stage moves its pose every step. Collision sees it as static geometry at that
-/// pose (so links collide with free bodies and the tool only); the contact stages make its
+/// body): the tick's trees stage moves its pose every step. Collision sees it as static geometry at
+/// that pose (so links collide with free bodies and the tool only); the contact stages make its
 /// contacts rows on the link of its tree's group (docs/decisions.md, "Contact groups over
 /// trees in the tick").
 struct GeomModel {

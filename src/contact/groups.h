@@ -29,13 +29,13 @@ struct Groups {
   // a group, alone when nothing touches it.
   int ntree = 0;
   int ntree_group = 0;
-  std::vector<int> geom_tree;        // (ngeom) the tree of a link geom, -1 for any other
-  std::vector<int> tree_start;       // (ntree + 1)
-  std::vector<int> trees;            // (ntree)
-  std::vector<int> tree_group;       // (ntree) each tree's group
-  std::vector<int> tree_slot;        // (ntree) its place among its group's trees
-  std::vector<int> node_group;       // (nbody + ntree) scratch
-  std::vector<char> node_has_tree;   // (nbody + ntree) scratch
+  std::vector<int> geom_tree;       // (ngeom) the tree of a link geom, -1 for any other
+  std::vector<int> tree_start;      // (ntree + 1)
+  std::vector<int> trees;           // (ntree)
+  std::vector<int> tree_group;      // (ntree) each tree's group
+  std::vector<int> tree_slot;       // (ntree) its place among its group's trees
+  std::vector<int> node_group;      // (nbody + ntree) scratch
+  std::vector<char> node_has_tree;  // (nbody + ntree) scratch
 
   /// Sizes every buffer; the only allocating call.
   void Reserve(int nbody, int max_contacts);

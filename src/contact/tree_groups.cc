@@ -118,8 +118,7 @@ int ClassifyTreeGroup(const Model& model, Data& data, ContactScratch& cs, int k)
     const int ci = G.contacts[i];
     Contact& c = data.contacts[ci];
     cs.laws[ci] = LawFor(model, c);
-    cs.normal_velocity[ci] =
-        c.is_new ? ContactVelocity(model, data, G, c).dot(c.n_W) : 0.0;
+    cs.normal_velocity[ci] = c.is_new ? ContactVelocity(model, data, G, c).dot(c.n_W) : 0.0;
     cs.anchor_displacement[ci].setZero();
     c.group = g;
     starts = starts || (model.render.renderer != RendererKind::kPenalty && c.is_new &&
@@ -181,8 +180,8 @@ int ClassifyTreeGroup(const Model& model, Data& data, ContactScratch& cs, int k)
 }
 
 // group k's members as JointGroup spans over the scratch (bodies packed from data.bodies)
-JointGroup PackTreeGroup(const Model& model, const Data& data, const Groups& G,
-                         TreeGroupScratch& s, int k, int nrows) {
+JointGroup PackTreeGroup(const Model& model, const Data& data, const Groups& G, TreeGroupScratch& s,
+                         int k, int nrows) {
   const int g = G.ngroup + k;
   const int nb = G.body_start[g + 1] - G.body_start[g];
   for (int i = 0; i < nb; ++i) {
@@ -300,8 +299,7 @@ void SolveTreeGroups(const Model& model, Data& data, ContactScratch& cs,
   }
 }
 
-void TreeGroupImpulses(const Model& model, Data& data, const Groups& G,
-                       TreeGroupScratch& s) {
+void TreeGroupImpulses(const Model& model, Data& data, const Groups& G, TreeGroupScratch& s) {
   const RenderParams& render = model.render;
   const double h = model.timestep_s;
   for (int k = 0; k < G.ntree_group; ++k) {

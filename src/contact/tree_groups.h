@@ -39,12 +39,12 @@ inline constexpr int kMaxTreeGroupRows = 128;
 /// Scratch of the tree groups, sized once by Reserve (nothing when the model has no tree).
 struct TreeGroupScratch {
   std::unique_ptr<JointGroupSolver> solver;
-  std::vector<SolverBody> bodies;   // (nbody) one group's bodies
-  std::vector<Vec3> body_com_W;     // (nbody) their centres of mass
-  std::vector<GroupTree> trees;     // (ntree) one group's trees
-  std::vector<JointRow> rows;       // (ntree x kMaxTreeGroupRows) every tree group's rows
-  std::vector<int> row_contact;     // (same) a row's contact, -1 for a limit
-  std::vector<int> row_start;       // (ntree + 1) tree group k's rows
+  std::vector<SolverBody> bodies;      // (nbody) one group's bodies
+  std::vector<Vec3> body_com_W;        // (nbody) their centres of mass
+  std::vector<GroupTree> trees;        // (ntree) one group's trees
+  std::vector<JointRow> rows;          // (ntree x kMaxTreeGroupRows) every tree group's rows
+  std::vector<int> row_contact;        // (same) a row's contact, -1 for a limit
+  std::vector<int> row_start;          // (ntree + 1) tree group k's rows
   std::vector<Eigen::VectorXd> force;  // (ntree) x (nv) the actuators' joint forces
   // (ntree) x (njoint): the limit a joint was at last step: +1 lower, -1 upper, 0 none
   std::vector<std::vector<signed char>> limit_engaged;
