@@ -60,7 +60,7 @@ struct TreeGroupScratch {
 /// freedom whose mass-matrix diagonal is m_jj (kg m^2 or kg): the spring that gives m_jj a
 /// natural period of kLimitPeriodSteps steps, critically damped (docs/decisions.md, "Joint
 /// limits as rows").
-inline constexpr int kLimitPeriodSteps = 10;
+inline constexpr int kLimitPeriodSteps = 40;
 void LimitLaw(double m_jj, double h_s, double& k, double& b);
 
 /// Stage 4 for the groups with trees (after the free-body groups; the force sums of
