@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "bench/engine.h"
+#include "engine/workspace.h"
 #include "io/config.h"
 #include "rigidtouch/rigidtouch.h"
 
@@ -80,7 +81,7 @@ class RigidtouchEngine final : public Engine {
     snapshot_.ncontact = data_->ncontact;
     snapshot_.window = data_->window;
     snapshot_.step = data_->step;
-    snapshot_.next_contact_id = data_->next_contact_id;
+    snapshot_.next_contact_id = data_->workspace->collision.matching.next_contact_id;
   }
 
   void RestoreSnapshot() override {
@@ -90,7 +91,7 @@ class RigidtouchEngine final : public Engine {
     std::copy(snapshot_.window.begin(), snapshot_.window.end(), data_->window.begin());
     data_->step = snapshot_.step;
     data_->time_s = static_cast<double>(snapshot_.step) * model_->timestep_s;
-    data_->next_contact_id = snapshot_.next_contact_id;
+    data_->workspace->collision.matching.next_contact_id = snapshot_.next_contact_id;
   }
 
   bool StateIsFinite() const override {

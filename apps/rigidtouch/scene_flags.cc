@@ -197,10 +197,11 @@ Settings ResolveSettings(const SceneFlags& f) {
   // scene's otherwise)
   o.contact.scene_stiffness_given = s.Given("contact.scene_stiffness_N_per_m");
   o.contact.scene_damping_given = s.Given("contact.scene_damping_Ns_per_m");
+  o.render.frequency_given = s.Given("render.frequency_hz") || !o.render.material.name.empty();
   return s;
 }
 
-void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double rate_hz) {
+void ApplyDevicePreset(Settings& s, const DeviceLimits& preset, double rate_hz) {
   LoadOptions& o = s.load;
   const double h = 1.0 / rate_hz;
   if (s.Given("timestep_s") && o.timestep_s && *o.timestep_s != h) {
@@ -218,7 +219,7 @@ void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double r
     o.contact.damping_Ns_per_m = device::DefaultDamping(preset, h, o.contact.stiffness_N_per_m);
   }
   if (s.Given("device.max_force_N")) {
-    const double mine = o.device.max_force_N;  // 0: no limit of the user's own
+    const double mine = o.device.limits.max_force_N;  // 0: no limit of the user's own
     if (preset.max_force_N > 0.0 && (mine == 0.0 || mine > preset.max_force_N)) {
       throw Error("device.max_force_N = " + text::FormatNumber(mine) + " N (" +
                   Where(s, "device.max_force_N") + ") is above the " + preset.name +
@@ -227,7 +228,7 @@ void ApplyDevicePreset(Settings& s, const device::DeviceLimits& preset, double r
                   "device preset");
     }
   } else {
-    o.device.max_force_N = preset.max_force_N;
+    o.device.limits.max_force_N = preset.max_force_N;
   }
 }
 
@@ -337,7 +338,7 @@ analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& 
   c.rate_hz = rate_hz;
   c.stiffness_N_per_m = s.load.contact.stiffness_N_per_m;
   c.damping_Ns_per_m = s.load.contact.damping_Ns_per_m;
-  c.max_force_N = s.load.device.max_force_N;
+  c.max_force_N = s.load.device.limits.max_force_N;
   if (s.Given("device.coupling_stiffness_N_per_m")) {
     c.coupling_stiffness_N_per_m = s.load.device.coupling_stiffness_N_per_m;
   }

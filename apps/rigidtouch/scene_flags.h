@@ -81,7 +81,7 @@ Settings ResolveSettings(const SceneFlags& flags);
 /// device cannot display it), naming where it was written; a lower one is used. In tap and serve
 /// the time step is the haptic period: a timestep_s the user wrote that differs from 1 / rate is
 /// refused.
-void ApplyDevicePreset(Settings& settings, const device::DeviceLimits& preset, double rate_hz);
+void ApplyDevicePreset(Settings& settings, const DeviceLimits& preset, double rate_hz);
 
 /// Refuses any of `fields` the user wrote: they have no effect here, for the reason `why`.
 void RefuseUnused(const Settings& settings, const std::vector<std::string>& fields,

@@ -85,9 +85,9 @@ nlohmann::json RenderJson(const Model& model, const Data& data) {
            {{"stiffness_N_per_m", model.contact.stiffness_N_per_m},
             {"damping_Ns_per_m", model.contact.damping_Ns_per_m}}},
           {"limits",
-           {{"max_force_N", d.max_force_N},
-            {"max_stiffness_N_per_m", d.max_stiffness_N_per_m},
-            {"max_damping_Ns_per_m", d.max_damping_Ns_per_m},
+           {{"max_force_N", d.limits.max_force_N},
+            {"max_stiffness_N_per_m", d.limits.max_stiffness_N_per_m},
+            {"max_damping_Ns_per_m", d.limits.max_damping_Ns_per_m},
             {"plausible_radius_m", d.plausible_radius_m},
             {"plausible_speed_mps", d.plausible_speed_mps}}},
           {"warnings", WarningsJson(data)}};
@@ -145,7 +145,7 @@ analysis::TapSetup PrepareServeTap(const ServeRun& s) {
 
 // replays a --record session through the model the simulated path builds
 nlohmann::json ServeReplay(const ServeRun& s, io::Record& recorded, loop::HapticLoopResult& r) {
-  const device::DeviceLimits& preset = s.choice.spec.limits;
+  const DeviceLimits& preset = s.choice.spec.limits;
   // the model is built as on the simulated path, so a session recorded there replays through
   // the same model; the tool starts where the recorded handle did
   analysis::TapSetup setup = PrepareServeTap(s);
@@ -179,7 +179,7 @@ nlohmann::json ServeReplay(const ServeRun& s, io::Record& recorded, loop::Haptic
 
 // the in-process simulated device: the preset's model and a simulated hand's taps
 nlohmann::json ServeSim(const ServeRun& s, loop::HapticLoopResult& r) {
-  const device::DeviceLimits& preset = s.choice.spec.limits;
+  const DeviceLimits& preset = s.choice.spec.limits;
   analysis::TapSetup setup = PrepareServeTap(s);
   Model& model = setup.model;
   device::TightenDeviceParams(model.device, setup.simulated->limits());
@@ -199,7 +199,7 @@ nlohmann::json ServeSim(const ServeRun& s, loop::HapticLoopResult& r) {
 
 // the UDP bridge to a device server; false when interrupted before the device answered
 bool ServeUdp(const ServeRun& s, nlohmann::json& result, loop::HapticLoopResult& r) {
-  const device::DeviceLimits& preset = s.choice.spec.limits;
+  const DeviceLimits& preset = s.choice.spec.limits;
   // the wall defaults to what the device can display, as on the simulated path (and the tap
   // experiment): the preset's stiffness, damping k h capped at the preset's
   Settings settings = ResolveSettings(s.f.scene);

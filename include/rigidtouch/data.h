@@ -168,15 +168,12 @@ struct Data {
   // CONTACT dependent, per tick
   std::vector<Contact> contacts;  // (max_contacts); the first ncontact are valid
   int ncontact = 0;
-  // (max_contacts) the runs of contacts[0 .. ncontact), one per geom pair, in list order: a compact
-  // index of the list (a Contact spans several cache lines), written with it by collision detection
+  // (max_contacts) the runs of contacts[0 .. ncontact), one per geom pair, in list order: the
+  // list's index by geom pair (a Contact spans several cache lines), written with it by collision
+  // detection and read by grouping. Last tick's contacts, which identity matching reads, are the
+  // collision stage's own (src/geometry/contact_matching.h)
   std::vector<PairRun> runs;
   int nruns = 0;
-  std::vector<Contact> previous;  // last tick's contacts, for identity matching
-  int nprevious = 0;
-  std::vector<PairRun> previous_runs;  // (max_contacts) their geom pairs, sorted by pair
-  int nprevious_runs = 0;
-  int next_contact_id = 0;
   // (nbody) group of each body, -1 if in no contact; a body in a group with a tree (a contact on
   // a link) has a group from ngroup on (the groups with trees come after the others)
   std::vector<int> body_group;

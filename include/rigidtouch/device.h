@@ -12,22 +12,6 @@
 
 namespace rigidtouch::device {
 
-/// Display limits of a device model. Values follow CHAI3D's device specifications.
-struct DeviceLimits {
-  /// Preset name, e.g. "touch".
-  std::string name;
-  /// Maximum continuous force [N]; 0 means unlimited.
-  double max_force_N = 0.0;
-  /// Maximum closed-loop linear stiffness [N/m]; 0 means unknown.
-  double max_stiffness_N_per_m = 0.0;
-  /// Maximum closed-loop linear damping [N s/m]; 0 means unknown.
-  double max_damping_Ns_per_m = 0.0;
-  /// Maximum continuous torque [N m]; 0 means the device displays no torque, and none is sent
-  /// (every preset is a 3-DoF force device). The loop's last guard and the bridge's device side
-  /// clip the torque's magnitude to it.
-  double max_torque_Nm = 0.0;
-};
-
 /// A haptic device. Implementations never throw from Read, Write or EndPeriod: errors are
 /// reported through DeviceState::valid and counters of the implementation. The driver calls
 /// them from one thread, once each per period, in the order Read, Write, EndPeriod; when it stops

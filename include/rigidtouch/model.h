@@ -176,6 +176,10 @@ struct RenderParams {
   double t_collision_s = 0.1;     // t_c, collision-rendering window, at most 0.1 s
   double frequency_hz = 250.0;    // f, impulse-train frequency, in [1/t_c, 1/h]
   bool reference_solver = false;  // use the exact Eq. 5/8 pseudo-inverse (may pull) instead
+  /// The user gave f (flag, config or material): kept as given. Unset and equal to the default
+  /// 250 Hz, LoadModel lowers it to 1/h (one impulse per step) for a scene whose time step is
+  /// longer than 4 ms, with a load warning (docs/config.md).
+  bool frequency_given = false;
   /// Time-domain passivity observer and controller at the device port (Hannaford and Ryu 2002,
   /// render::PassivityControl), over any renderer; needs a device (direct or virtual coupling).
   bool passivity_control = false;
@@ -199,15 +203,15 @@ struct Schedule {
 /// Device-side settings used by Tick's coupling and render stages.
 struct DeviceParams {
   Coupling coupling = Coupling::kNone;
-  double max_force_N = 0.0;                    // 0: no limit
+  /// What the device can display (a preset's or the device's own limits; 0: no force limit,
+  /// stiffness or damping unknown). The render stage clips the force to limits.max_force_N.
+  /// Configure refuses a rendered stiffness or damping above the limits: the contact law's under
+  /// direct coupling, the coupling's under virtual coupling (docs/decisions.md, "Device limits").
+  /// The torque limit is the device's: the loop's last guard and the bridge apply it.
+  DeviceLimits limits;
   double coupling_stiffness_N_per_m = 1000.0;  // virtual coupling
   double coupling_damping_Ns_per_m = 5.0;
   Vec3 workspace_offset_m = Vec3::Zero();  // tool position = device position + offset
-  /// What the device can display (a preset's or the device's own limits; 0: unknown). Configure
-  /// refuses a rendered stiffness or damping above them: the contact law's under direct coupling,
-  /// the coupling's under virtual coupling (docs/decisions.md, "Device limits").
-  double max_stiffness_N_per_m = 0.0;
-  double max_damping_Ns_per_m = 0.0;
   /// The device's position quantum (encoder resolution) [m]; 0: exact. The passivity observer
   /// keeps a reserve for the error it makes in the observed energy.
   double position_resolution_m = 0.0;

@@ -26,6 +26,24 @@ struct Wrench {
   Vec3 torque_Nm = Vec3::Zero();
 };
 
+/// What a haptic device can display: one type for a preset (values follow CHAI3D's device
+/// specifications), a device's own limits (device::Device::limits), the limits a network bridge
+/// announces (its name is not sent), and the limits the tick renders within (DeviceParams::limits).
+struct DeviceLimits {
+  /// Preset name, e.g. "touch".
+  std::string name;
+  /// Maximum continuous force [N]; 0 means unlimited.
+  double max_force_N = 0.0;
+  /// Maximum closed-loop linear stiffness [N/m]; 0 means unknown.
+  double max_stiffness_N_per_m = 0.0;
+  /// Maximum closed-loop linear damping [N s/m]; 0 means unknown.
+  double max_damping_Ns_per_m = 0.0;
+  /// Maximum continuous torque [N m]; 0 means the device displays no torque, and none is sent
+  /// (every preset is a 3-DoF force device). The loop's last guard and the bridge's device side
+  /// clip the torque's magnitude to it.
+  double max_torque_Nm = 0.0;
+};
+
 /// What a haptic device reports each tick (world frame, SI units). `valid` is false when the
 /// reading is stale or missing (e.g. a network watchdog fired); the tick then outputs zero force.
 /// `fresh` is false when the reading repeats the previous tick's (same sequence): the tick then

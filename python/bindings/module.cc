@@ -245,6 +245,8 @@ void DefineParams(py::module_& m) {
       .def_readwrite("restitution", &RenderParams::restitution, "restitution e in [0, 1]")
       .def_readwrite("t_collision_s", &RenderParams::t_collision_s,
                      "collision window t_c [s], at most 0.1")
+      .def_readwrite("frequency_given", &RenderParams::frequency_given,
+                     "keep frequency_hz even when it is the default and above 1/h")
       .def_readwrite("frequency_hz", &RenderParams::frequency_hz,
                      "impulse-train frequency f [Hz], in [1/t_c, 1/h]")
       .def_readwrite("reference_solver", &RenderParams::reference_solver,
@@ -257,17 +259,25 @@ void DefineParams(py::module_& m) {
           [](const DeviceParams& d) { return std::string(text::CouplingName(d.coupling)); },
           [](DeviceParams& d, const std::string& name) { d.coupling = io::ParseCoupling(name); },
           "none | direct | virtual")
-      .def_readwrite("max_force_N", &DeviceParams::max_force_N, "force limit [N]; 0: none")
+      .def_property(
+          "max_force_N", [](const DeviceParams& d) { return d.limits.max_force_N; },
+          [](DeviceParams& d, double v) { d.limits.max_force_N = v; }, "force limit [N]; 0: none")
       .def_readwrite("coupling_stiffness_N_per_m", &DeviceParams::coupling_stiffness_N_per_m,
                      "virtual coupling stiffness [N/m]")
       .def_readwrite("coupling_damping_Ns_per_m", &DeviceParams::coupling_damping_Ns_per_m,
                      "virtual coupling damping [N s/m]")
       .def_readwrite("workspace_offset_m", &DeviceParams::workspace_offset_m,
                      "tool position = device position + this [m]")
-      .def_readwrite("max_stiffness_N_per_m", &DeviceParams::max_stiffness_N_per_m,
-                     "largest stiffness the device displays [N/m]; 0: unknown")
-      .def_readwrite("max_damping_Ns_per_m", &DeviceParams::max_damping_Ns_per_m,
-                     "largest damping the device displays [N s/m]; 0: unknown")
+      .def_property(
+          "max_stiffness_N_per_m",
+          [](const DeviceParams& d) { return d.limits.max_stiffness_N_per_m; },
+          [](DeviceParams& d, double v) { d.limits.max_stiffness_N_per_m = v; },
+          "largest stiffness the device displays [N/m]; 0: unknown")
+      .def_property(
+          "max_damping_Ns_per_m",
+          [](const DeviceParams& d) { return d.limits.max_damping_Ns_per_m; },
+          [](DeviceParams& d, double v) { d.limits.max_damping_Ns_per_m = v; },
+          "largest damping the device displays [N s/m]; 0: unknown")
       .def_readwrite("plausible_radius_m", &DeviceParams::plausible_radius_m,
                      "device states farther from the origin are implausible [m]")
       .def_readwrite("plausible_speed_mps", &DeviceParams::plausible_speed_mps,

@@ -225,7 +225,7 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   const device::DeviceSpec spec = device::ParseDeviceSpec(config.device_preset);
   setup.device = spec.limits;
   if (config.max_force_N) setup.device.max_force_N = *config.max_force_N;
-  const device::DeviceLimits& limits = setup.device;
+  const DeviceLimits& limits = setup.device;
   const double h = 1.0 / config.rate_hz;
 
   LoadOptions load = config.load;
@@ -238,7 +238,7 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
       device::DefaultWall(limits, h, load.contact.stiffness_N_per_m).stiffness_N_per_m);
   load.contact.damping_Ns_per_m = config.damping_Ns_per_m.value_or(
       device::DefaultDamping(limits, h, load.contact.stiffness_N_per_m));
-  load.device.max_force_N = limits.max_force_N;
+  load.device.limits.max_force_N = limits.max_force_N;
   load.device.position_resolution_m = config.device_model.value_or(spec.model).encoder_resolution_m;
   if (load.device.coupling == Coupling::kNone) load.device.coupling = Coupling::kDirect;
   if (load.device.coupling == Coupling::kVirtual) {
@@ -283,6 +283,9 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   return setup;
 }
 
+// ticks between two looks at the progress (a clock read costs about as much as a tick)
+constexpr std::int64_t kProgressTicks = 256;
+
 TapRun RunTapExperiment(const TapExperimentConfig& config) {
   TapSetup setup = PrepareTap(config);
   TapRun run;
@@ -294,6 +297,15 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   run.trace.reserve(static_cast<std::size_t>(max_ticks));
   TickInput input;
   for (std::int64_t tick = 0; tick < max_ticks && !dev.finished(); ++tick) {
+    if (config.progress != nullptr && tick % kProgressTicks == 0) {
+      config.progress->ThrowIfStopped(config.progress_where, config.progress_kept);
+      if (config.progress->Due()) {
+        const double done = static_cast<double>(tick) / static_cast<double>(max_ticks);
+        config.progress->Report(
+            config.progress_from + (config.progress_to - config.progress_from) * done,
+            config.progress_where);
+      }
+    }
     input.device = dev.Read();
     const DeviceCommand command = Tick(model, data, input);
     dev.Write(command);

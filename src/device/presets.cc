@@ -54,11 +54,11 @@ const DeviceLimits& FindPreset(std::string_view name) {
 }
 
 void TightenDeviceParams(DeviceParams& params, const DeviceLimits& limits) {
-  params.max_force_N = limits::StricterLimit(params.max_force_N, limits.max_force_N);
-  params.max_stiffness_N_per_m =
-      limits::StricterLimit(params.max_stiffness_N_per_m, limits.max_stiffness_N_per_m);
-  params.max_damping_Ns_per_m =
-      limits::StricterLimit(params.max_damping_Ns_per_m, limits.max_damping_Ns_per_m);
+  params.limits.max_force_N = limits::StricterLimit(params.limits.max_force_N, limits.max_force_N);
+  params.limits.max_stiffness_N_per_m =
+      limits::StricterLimit(params.limits.max_stiffness_N_per_m, limits.max_stiffness_N_per_m);
+  params.limits.max_damping_Ns_per_m =
+      limits::StricterLimit(params.limits.max_damping_Ns_per_m, limits.max_damping_Ns_per_m);
 }
 
 Wall DefaultWall(const DeviceLimits& limits, double h, double law_stiffness) {

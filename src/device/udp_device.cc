@@ -100,7 +100,7 @@ void UdpDevice::HandleReply(const PacketHeader& header, std::span<const std::uin
     ++counters_.no_session;  // an answer to another (older) hello
     return;
   }
-  AnnouncedLimits announced;
+  DeviceLimits announced;
   const DecodeResult result = DecodeHelloReplyPayload(datagram, &announced);
   if (result != DecodeResult::kOk) {
     ++counters_.malformed[static_cast<std::size_t>(result)];

@@ -54,7 +54,7 @@ class UdpDevice final : public Device {
   /// ended it since).
   bool has_session() const { return session_; }
   /// The limits the server announced in the newest session; zero before the first.
-  const AnnouncedLimits& announced_limits() const { return announced_; }
+  const DeviceLimits& announced_limits() const { return announced_; }
 
   /// Counters since construction.
   const UdpCounters& counters() const { return counters_; }
@@ -74,7 +74,7 @@ class UdpDevice final : public Device {
 
   DeviceLimits own_limits_;
   DeviceLimits limits_;
-  AnnouncedLimits announced_;
+  DeviceLimits announced_;
   UdpEndpoint server_;
   std::int64_t watchdog_ns_ = 0;
   std::int64_t hello_interval_ns_ = 0;

@@ -170,10 +170,8 @@ void UdpDeviceServer::Impl::SendState() {
 }
 
 void UdpDeviceServer::Impl::SendReply() {
-  const DeviceLimits& limits = device.limits();
-  const AnnouncedLimits announced{limits.max_force_N, limits.max_stiffness_N_per_m,
-                                  limits.max_damping_Ns_per_m};
-  const HelloReplyPacket packet = EncodeHelloReply(announced, client_nonce, server_nonce, key);
+  const HelloReplyPacket packet =
+      EncodeHelloReply(device.limits(), client_nonce, server_nonce, key);
   SendCounted(socket, loss, counters, packet, peer);
 }
 

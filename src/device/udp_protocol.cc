@@ -270,7 +270,7 @@ HelloPacket EncodeHello(std::uint64_t client_nonce, const DeviceKey& key) {
   return packet;
 }
 
-HelloReplyPacket EncodeHelloReply(const AnnouncedLimits& limits, std::uint64_t client_nonce,
+HelloReplyPacket EncodeHelloReply(const DeviceLimits& limits, std::uint64_t client_nonce,
                                   std::uint64_t server_nonce, const DeviceKey& key) {
   HelloReplyPacket packet{};
   std::uint8_t* out = packet.data();
@@ -309,13 +309,14 @@ DecodeResult DecodeCommandPayload(std::span<const std::uint8_t> datagram, Device
   return DecodeResult::kOk;
 }
 
-DecodeResult DecodeHelloReplyPayload(std::span<const std::uint8_t> datagram,
-                                     AnnouncedLimits* limits) {
+DecodeResult DecodeHelloReplyPayload(std::span<const std::uint8_t> datagram, DeviceLimits* limits) {
   if (datagram.size() != kHelloReplyPacketBytes) return DecodeResult::kTooShort;
   const std::uint8_t* in = datagram.data();
   if (!AllFiniteDoubles(in + kReplyMaxForce, 3)) return DecodeResult::kNonFinite;
-  const AnnouncedLimits decoded{GetF64(in + kReplyMaxForce), GetF64(in + kReplyMaxStiffness),
-                                GetF64(in + kReplyMaxDamping)};
+  DeviceLimits decoded;
+  decoded.max_force_N = GetF64(in + kReplyMaxForce);
+  decoded.max_stiffness_N_per_m = GetF64(in + kReplyMaxStiffness);
+  decoded.max_damping_Ns_per_m = GetF64(in + kReplyMaxDamping);
   if (decoded.max_force_N < 0.0 || decoded.max_stiffness_N_per_m < 0.0 ||
       decoded.max_damping_Ns_per_m < 0.0) {
     return DecodeResult::kBadLimits;

@@ -76,13 +76,6 @@ struct PacketHeader {
   std::uint64_t counter = 0;
 };
 
-/// The limits a hello-reply announces (DeviceLimits without its name, which is not sent).
-struct AnnouncedLimits {
-  double max_force_N = 0.0;            // 0: unlimited
-  double max_stiffness_N_per_m = 0.0;  // 0: unknown
-  double max_damping_Ns_per_m = 0.0;   // 0: unknown
-};
-
 /// A state datagram ready to send.
 using StatePacket = std::array<std::uint8_t, kStatePacketBytes>;
 /// A command datagram ready to send.
@@ -104,8 +97,9 @@ CommandPacket EncodeCommand(const DeviceCommand& command, const PacketHeader& he
 /// Encodes a hello with the client's nonce.
 HelloPacket EncodeHello(std::uint64_t client_nonce, const DeviceKey& key);
 
-/// Encodes a hello-reply granting the session (client_nonce, server_nonce).
-HelloReplyPacket EncodeHelloReply(const AnnouncedLimits& limits, std::uint64_t client_nonce,
+/// Encodes a hello-reply granting the session (client_nonce, server_nonce) and announcing the
+/// device's force, stiffness and damping limits (its name and torque limit are not sent).
+HelloReplyPacket EncodeHelloReply(const DeviceLimits& limits, std::uint64_t client_nonce,
                                   std::uint64_t server_nonce, const DeviceKey& key);
 
 /// Framing checks 1 to 6 of docs/device-protocol.md ("Receiving") for a receiver that expects
@@ -126,9 +120,9 @@ DecodeResult DecodeStatePayload(std::span<const std::uint8_t> datagram, DeviceSt
 /// and impulsive parts zero); otherwise leaves it untouched.
 DecodeResult DecodeCommandPayload(std::span<const std::uint8_t> datagram, DeviceCommand* command);
 
-/// Decodes the payload of a framed, authenticated hello-reply: finite limits >= 0.
-DecodeResult DecodeHelloReplyPayload(std::span<const std::uint8_t> datagram,
-                                     AnnouncedLimits* limits);
+/// Decodes the payload of a framed, authenticated hello-reply: finite limits >= 0 (name empty,
+/// torque limit 0).
+DecodeResult DecodeHelloReplyPayload(std::span<const std::uint8_t> datagram, DeviceLimits* limits);
 
 /// Initialises libsodium (idempotent, thread-safe). Throws Error if it cannot start.
 void InitSodium();

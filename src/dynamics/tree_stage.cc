@@ -110,11 +110,9 @@ bool PrepareTreeStep(const Model& model, int t, Data& data, Eigen::Ref<Eigen::Ve
 
 void TreeFreeMotion(const Model& model, int t, Data& data,
                     const Eigen::Ref<const Eigen::VectorXd>& force) {
-  TreeData& d = *data.trees[t];
-  // (M + h D) dv = h (tau - bias + passive): backward Euler on the damper, explicit on the rest
-  d.scratch_w = model.timestep_s * (force - d.bias + d.passive);
-  TreeSolve(d, d.scratch_w);
-  d.qvel += d.scratch_w;
+  // TreeStep's velocity update: the free velocity with the damper implicit, then the joints' dry
+  // friction (frictionloss), before the contact and limit rows of the tree's group
+  TreeFreeVelocity(*model.trees[t].dynamics, *data.trees[t], model.timestep_s, force);
 }
 
 void ResetTree(const Model& model, int t, Data& data) {

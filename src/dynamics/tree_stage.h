@@ -40,7 +40,8 @@ void ActuatorForces(const Model& model, int t, const Data& data, Eigen::Ref<Eige
 /// the factor of M + h D) and the actuators' forces into `force`. False when the factor fails.
 bool PrepareTreeStep(const Model& model, int t, Data& data, Eigen::Ref<Eigen::VectorXd> force);
 
-/// Stage 4, tree t after PrepareTreeStep: qvel += h (M + h D)^-1 (force - bias + passive).
+/// Stage 4, tree t after PrepareTreeStep: qvel += h (M + h D)^-1 (force - bias + passive), then
+/// the dry friction impulse of its joints' frictionloss (dynamics::TreeFreeVelocity).
 void TreeFreeMotion(const Model& model, int t, Data& data,
                     const Eigen::Ref<const Eigen::VectorXd>& force);
 

@@ -329,16 +329,16 @@ void RequireDevice(const Model& model) {
   const ContactParams& c = model.contact;
   const RenderParams& r = model.render;
   const DeviceParams& d = model.device;
-  RequireFinite("max_force_N", d.max_force_N, 0.0, kInfinity, ">= 0 N (0: unlimited)");
+  RequireFinite("max_force_N", d.limits.max_force_N, 0.0, kInfinity, ">= 0 N (0: unlimited)");
   RequireFinite("coupling_stiffness_N_per_m", d.coupling_stiffness_N_per_m, 0.0, kInfinity,
                 ">= 0 N/m");
   RequireFinite("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m, 0.0, kInfinity,
                 ">= 0 N s/m");
   RequireInRange(d.workspace_offset_m.allFinite(), "workspace_offset_m",
                  d.workspace_offset_m.norm(), "finite");
-  RequireFinite("max_stiffness_N_per_m", d.max_stiffness_N_per_m, 0.0, kInfinity,
+  RequireFinite("max_stiffness_N_per_m", d.limits.max_stiffness_N_per_m, 0.0, kInfinity,
                 ">= 0 N/m (0: unknown)");
-  RequireFinite("max_damping_Ns_per_m", d.max_damping_Ns_per_m, 0.0, kInfinity,
+  RequireFinite("max_damping_Ns_per_m", d.limits.max_damping_Ns_per_m, 0.0, kInfinity,
                 ">= 0 N s/m (0: unknown)");
   RequireInRange(std::isfinite(d.plausible_radius_m) && d.plausible_radius_m > 0.0,
                  "plausible_radius_m", d.plausible_radius_m, "> 0 m, finite");
@@ -355,15 +355,15 @@ void RequireDevice(const Model& model) {
   if (d.coupling == Coupling::kDirect) {
     const std::string why = "direct coupling: the device renders the tool's contact law";
     RequireDisplayable("stiffness_N_per_m", c.stiffness_N_per_m, "max_stiffness_N_per_m",
-                       d.max_stiffness_N_per_m, "N/m", why);
+                       d.limits.max_stiffness_N_per_m, "N/m", why);
     RequireDisplayable("damping_Ns_per_m", c.damping_Ns_per_m, "max_damping_Ns_per_m",
-                       d.max_damping_Ns_per_m, "N s/m", why);
+                       d.limits.max_damping_Ns_per_m, "N s/m", why);
   } else if (d.coupling == Coupling::kVirtual) {
     const std::string why = "virtual coupling: the device renders the coupling";
     RequireDisplayable("coupling_stiffness_N_per_m", d.coupling_stiffness_N_per_m,
-                       "max_stiffness_N_per_m", d.max_stiffness_N_per_m, "N/m", why);
+                       "max_stiffness_N_per_m", d.limits.max_stiffness_N_per_m, "N/m", why);
     RequireDisplayable("coupling_damping_Ns_per_m", d.coupling_damping_Ns_per_m,
-                       "max_damping_Ns_per_m", d.max_damping_Ns_per_m, "N s/m", why);
+                       "max_damping_Ns_per_m", d.limits.max_damping_Ns_per_m, "N s/m", why);
   }
 }
 

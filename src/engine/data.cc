@@ -49,9 +49,7 @@ Data MakeData(const Model& model) {
   data.bodies.resize(nbody);
   data.R_WB.resize(nbody);
   data.contacts.resize(ncap);
-  data.previous.resize(ncap);
   data.runs.resize(ncap);
-  data.previous_runs.resize(ncap);
   data.body_group.assign(nbody, -1);
   data.window.resize(nbody);
   data.impulses.resize(nbody + model.trees.size());
@@ -84,7 +82,7 @@ bool DataFitsModel(const Model& model, const Data& data) {
   const std::size_t nbody = model.bodies.size();
   const auto ncap = static_cast<std::size_t>(model.max_contacts);
   return same_scene && data.bodies.size() == nbody && data.window.size() == nbody &&
-         data.contacts.size() == ncap && data.previous.size() == ncap &&
+         data.contacts.size() == ncap && data.runs.size() == ncap &&
          data.workspace->collision.poses.size() == model.geoms.size() &&
          model.initial.size() == nbody && data.trees.size() == model.trees.size();
 }
@@ -94,9 +92,6 @@ void ResetState(const Model& model, Data& data) {
   dynamics::ComputeKinematics(data);
   data.ncontact = 0;
   data.nruns = 0;
-  data.nprevious = 0;
-  data.nprevious_runs = 0;
-  data.next_contact_id = 0;
   data.ngroup = 0;
   std::fill(data.body_group.begin(), data.body_group.end(), -1);
   std::fill(data.window.begin(), data.window.end(), WindowState{});

@@ -13,139 +13,6 @@
 namespace rigidtouch::geometry {
 namespace {
 
-// last tick's contacts become `previous` (the buffers trade places, no copy), and the runs of
-// their geom pairs are indexed for MatchPair: data.previous_runs sorted by pair, the runs whose
-// first geom is g at previous_runs[run_start[g] .. run_start[g + 1]). A counting sort on the first
-// geom replaces a comparison sort; DetectContacts writes each geom pair in one run at most, so
-// the order is the one a sort by pair gives. The runs are last tick's data.runs when they index
-// its list (RunsIndexList), else found in the list.
-void RememberPrevious(Data& data, CollisionScratch& s) {
-  const bool indexed = RunsIndexList(data);
-  const int nlast = data.nruns;
-  std::swap(data.contacts, data.previous);
-  data.nprevious = data.ncontact;
-  data.ncontact = 0;
-  data.nruns = 0;
-  const Contact* prev = data.previous.data();
-  const int nprev = data.nprevious;
-  const PairRun* last = data.runs.data();  // written again only after the index is made
-  // calls f(run) for each run of one geom pair, in list order
-  auto for_each_run = [indexed, last, nlast, prev, nprev](auto&& f) {
-    if (indexed) {
-      for (int r = 0; r < nlast; ++r) f(last[r]);
-      return;
-    }
-    for (int begin = 0; begin < nprev;) {
-      const Contact& c = prev[begin];
-      int end = begin + 1;
-      while (end < nprev && prev[end].geom_a == c.geom_a && prev[end].geom_b == c.geom_b) ++end;
-      f(PairRun{c.geom_a, c.geom_b, c.body_a, c.body_b, begin, end - begin});
-      begin = end;
-    }
-  };
-  std::vector<int>& start = s.run_start;
-  std::vector<int>& fill = s.run_fill;
-  std::fill(start.begin(), start.end(), 0);
-  int nruns = 0;
-  for_each_run([&start, &nruns](const PairRun& run) {
-    ++start[run.geom_a + 1];
-    ++nruns;
-  });
-  const int ngeom = static_cast<int>(fill.size());
-  for (int g = 0; g < ngeom; ++g) {
-    start[g + 1] += start[g];
-    fill[g] = start[g];
-  }
-  PairRun* runs = data.previous_runs.data();
-  for_each_run([&start, &fill, runs](const PairRun& run) {
-    // insertion into its first geom's bucket, sorted by the second geom
-    const int ga = run.geom_a;
-    int j = fill[ga]++;
-    for (; j > start[ga] && runs[j - 1].geom_b > run.geom_b; --j) runs[j] = runs[j - 1];
-    runs[j] = run;
-  });
-  data.nprevious_runs = nruns;
-}
-
-// matches the contacts of one geom pair [begin, end) in data.contacts against last tick's. A new
-// point gets no id here (-1): AssignNewIds gives the ids, in contact order, so that the two
-// threads, which match pairs in any order, number new contacts as one thread would. Returns
-// whether the pair has a new point. Reads only last tick's contacts and the pair's own.
-bool MatchPair(Data& data, const CollisionScratch& s, int begin, int end) {
-  const Contact& key = data.contacts[begin];
-  // last tick's run of this pair, if any
-  const PairRun* run = nullptr;
-  for (int r = s.run_start[key.geom_a]; r < s.run_start[key.geom_a + 1]; ++r) {
-    if (data.previous_runs[r].geom_b == key.geom_b) {
-      run = &data.previous_runs[r];
-      break;
-    }
-  }
-  const Contact* lo = data.previous.data() + (run != nullptr ? run->begin : 0);
-  const int nprev = run != nullptr ? run->count : 0;
-  const int ncur = end - begin;
-  // a pair with one point before and now is the same contact wherever it slid
-  const bool single = nprev == 1 && ncur == 1;
-  // greedy nearest matching; a manifold has at most a few points. The candidates are last tick's
-  // first 32 points not matched yet, one bit each: visiting the set bits from the lowest keeps the
-  // index order, so ties still go to the lowest index, without a test per matched point.
-  unsigned unused = nprev >= 32 ? ~0u : (1u << nprev) - 1u;
-  bool any_new = false;
-  for (int c = begin; c < end; ++c) {
-    Contact& con = data.contacts[c];
-    int best = single ? 0 : -1;
-    if (!single) {
-      double best_d2 = kMatchDistance_m * kMatchDistance_m;
-      for (unsigned left = unused; left != 0; left &= left - 1) {
-        const int k = std::countr_zero(left);
-        const double d2 = (lo[k].p_A - con.p_A).squaredNorm();
-        if (d2 < best_d2) {
-          best = k;
-          best_d2 = d2;
-        }
-      }
-    }
-    con.pair_points = ncur;
-    if (best >= 0) {
-      unused &= ~(1u << best);
-      const Contact& prev = lo[best];
-      con.id = prev.id;
-      con.is_new = false;
-      con.sticking = prev.sticking;
-      con.anchor_A = prev.anchor_A;
-      con.anchor_B = prev.anchor_B;
-      con.phase = prev.phase;
-    } else {
-      con.id = -1;
-      con.is_new = true;
-      con.sticking = false;
-      con.anchor_A = con.p_A;
-      con.anchor_B = con.p_B;
-      con.phase = ContactPhase::kResting;
-      any_new = true;
-    }
-  }
-  return any_new;
-}
-
-// the ids of the new points of the pair [begin, end) that MatchPair left without one
-void AssignNewIds(Data& data, int begin, int end) {
-  for (int c = begin; c < end; ++c) {
-    if (data.contacts[c].id < 0) data.contacts[c].id = data.next_contact_id++;
-  }
-}
-
-// MatchPair and AssignNewIds on one thread, and the pair's run appended to data.runs (a buffer
-// smaller than the contact list's, in a Data not made by MakeData, leaves the index short:
-// RunsIndexList then says so, and the list is read instead)
-void MatchAndNumber(Data& data, const CollisionScratch& s, int begin, int end) {
-  if (MatchPair(data, s, begin, end)) AssignNewIds(data, begin, end);
-  if (data.nruns >= static_cast<int>(data.runs.size())) return;
-  const Contact& first = data.contacts[begin];
-  data.runs[data.nruns++] =
-      PairRun{first.geom_a, first.geom_b, first.body_a, first.body_b, begin, end - begin};
-}
-
 // what the narrow phase makes of a geom of this kind at this pose
 GeomCheck CheckPose(GeomCheck kind, const GeomPose& pose) {
   return kind == GeomCheck::kAccepted && !PoseFinite(pose) ? GeomCheck::kRejected : kind;
@@ -202,13 +69,13 @@ void CollisionScratch::Reserve(const Model& model) {
                                 !centre_only && at_origin && identity});
   }
   SetStaticPoses(model, *this);
-  run_start.assign(model.geoms.size() + 1, 0);
-  run_fill.assign(model.geoms.size(), 0);
+  matching.Reserve(model.max_contacts, static_cast<int>(model.geoms.size()));
   mj = mj_makeData(model.collision.get());
   if (mj == nullptr) throw Error("could not allocate the collision backend's data");
 }
 
 void CollisionScratch::Reset(const Model& model) {
+  matching.Reset();
   broadphase.Reserve(model, static_cast<int>(broadphase.pairs.size()));
   SetStaticPoses(model, *this);
 }
@@ -453,7 +320,7 @@ void AwaitProgress(const CollisionScratch& s, std::uint32_t before, std::uint32_
 void RunRememberAndNarrowJob(void* context) {
   const auto* job = static_cast<const CollisionScratch::NarrowJob*>(context);
   CollisionScratch& s = *job->scratch;
-  RememberPrevious(*job->data, s);
+  RememberPrevious(*job->data, s.matching);
   AwaitProgress(s, job->progress_before, 1);
   SweepBack(*job->model, s.poses, s.broadphase);
   AwaitProgress(s, job->progress_before, 2);
@@ -473,7 +340,7 @@ void WriteRange(const Model& model, Data& data, CollisionScratch& s, int begin, 
     for (int i = 0; i < found.count; ++i) {
       WriteContact(data.contacts[first + i], w, p[i].p_W, p[i].n_W, p[i].depth_m);
     }
-    s.pair_new[k] = MatchPair(data, s, first, first + found.count) ? 1 : 0;
+    s.pair_new[k] = MatchPair(data, s.matching, first, first + found.count) ? 1 : 0;
     data.runs[s.pair_run[k]] = PairRun{w.ga, w.gb, w.body_a, w.body_b, first, found.count};
   }
 }
@@ -556,7 +423,7 @@ void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s,
     worker.Finish();
     for (int k = 0; k < npair; ++k) {
       if (s.pair_new[k]) {
-        AssignNewIds(data, s.pair_first[k], s.pair_first[k] + s.pair_points[k].count);
+        AssignNewIds(data, s.matching, s.pair_first[k], s.pair_first[k] + s.pair_points[k].count);
       }
     }
     data.ncontact = total;
@@ -576,22 +443,11 @@ void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s,
       const int fit = Room(data, found.count);
       for (int i = 0; i < fit; ++i) AddContact(data, w, p[i].p_W, p[i].n_W, p[i].depth_m);
     }
-    if (data.ncontact > begin) MatchAndNumber(data, s, begin, data.ncontact);
+    if (data.ncontact > begin) MatchAndNumber(data, s.matching, begin, data.ncontact);
   }
 }
 
 }  // namespace
-
-bool RunsIndexList(const Data& data) {
-  if (data.nruns > static_cast<int>(data.runs.size())) return false;
-  int next = 0;
-  for (int r = 0; r < data.nruns; ++r) {
-    const PairRun& run = data.runs[r];
-    if (run.begin != next || run.count < 1) return false;
-    next += run.count;
-  }
-  return next == data.ncontact;
-}
 
 void DetectContacts(const Model& model, Data& data, CollisionScratch& s, parallel::Worker* worker) {
   if (worker != nullptr) {
@@ -605,13 +461,13 @@ void DetectContacts(const Model& model, Data& data, CollisionScratch& s, paralle
     UpdatePoses(model, data, s);
     FindPairs(model, s.poses, s.broadphase);
     if (s.broadphase.dropped > 0) data.Warn(Warning::kContactFull);
-    RememberPrevious(data, s);
+    RememberPrevious(data, s.matching);
   }
   for (int k = 0; k < s.broadphase.npair; ++k) {
     const auto [g1, g2] = s.broadphase.pairs[k];
     const int begin = data.ncontact;
     CollidePair(model, data, s, g1, g2);
-    if (data.ncontact > begin) MatchAndNumber(data, s, begin, data.ncontact);
+    if (data.ncontact > begin) MatchAndNumber(data, s.matching, begin, data.ncontact);
   }
 }
 

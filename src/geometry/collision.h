@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "geometry/broadphase.h"
+#include "geometry/contact_matching.h"
 #include "geometry/narrow_phase.h"
 #include "parallel/worker.h"
 #include "rigidtouch/data.h"
@@ -52,9 +53,8 @@ struct CollisionScratch {
   std::array<ContactPoint, kMaxPairContacts> points{};  // one pair's narrow-phase output
   std::vector<mjContact> mj_contacts;                   // one pair's MuJoCo output (mjMAXCONPAIR)
   mjData* mj = nullptr;                                 // MuJoCo data for the fallback functions
-  // last tick's pair runs of first geom g: data.previous_runs[run_start[g] .. run_start[g + 1])
-  std::vector<int> run_start;  // (ngeom + 1)
-  std::vector<int> run_fill;   // (ngeom) counting-sort scratch
+  // last tick's contacts and the next contact id, for the contacts' identity across ticks
+  ContactMatching matching;
 
   // Model::threads 2: the tick's thread takes blocks of the pair list from the front and the
   // worker thread (owned by the Workspace) from the back, each colliding into its own point
@@ -103,23 +103,15 @@ struct CollisionScratch {
   ~CollisionScratch();
 };
 
-/// Whether data.runs indexes data.contacts: consecutive runs of at least one point each that
-/// cover contacts[0 .. ncontact) exactly, as DetectContacts writes them (a list written by hand
-/// has none). Only the runs are read.
-bool RunsIndexList(const Data& data);
-
 /// Detects contacts at the poses in `data.bodies` into data.contacts (first data.ncontact valid,
 /// the points of one geom pair contiguous, and indexed by data.runs), matching each to the contacts
-/// data.contacts held before the call (they become data.previous) to keep ids and friction anchors
+/// data.contacts held before the call (they become scratch.matching.previous) to keep ids and
+/// friction anchors
 /// and to mark new contacts. Reads the bodies' rotations from data.R_WB (the kinematics stage).
 /// Never allocates or throws; a full contact list counts Warning::kContactFull. With a worker
 /// (Model::threads 2, buffers sized by ReserveTwoThreads) the two threads share the narrow phase;
 /// the contacts are the same, bit for bit.
 void DetectContacts(const Model& model, Data& data, CollisionScratch& scratch,
                     parallel::Worker* worker = nullptr);
-
-/// Distance within which a contact point (in the first body's frame) is the same contact as one
-/// of last tick on the same geom pair.
-inline constexpr double kMatchDistance_m = 0.005;
 
 }  // namespace rigidtouch::geometry

@@ -99,7 +99,7 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
 
   DeviceParams& d = options.device;
   ReadSection(top, "device",
-              {{"max_force_N", &d.max_force_N},
+              {{"max_force_N", &d.limits.max_force_N},
                {"coupling_stiffness_N_per_m", &d.coupling_stiffness_N_per_m},
                {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m}},
               given, {"coupling"}, [&d](const StrictObject& in) {

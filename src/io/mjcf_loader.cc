@@ -449,9 +449,7 @@ void CheckInitialOverlap(const Model& model, const std::string& path) {
   data.R_WB.resize(model.bodies.size());
   dynamics::ComputeKinematics(data);
   data.contacts.resize(model.max_contacts);
-  data.previous.resize(model.max_contacts);
   data.runs.resize(model.max_contacts);
-  data.previous_runs.resize(model.max_contacts);
   geometry::CollisionScratch scratch;
   scratch.Reserve(model);
   geometry::DetectContacts(model, data, scratch);
@@ -580,7 +578,7 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   model.tool = FindTool(model, path, options.tool_name);
   InitialState(m, path, model);
   model.contact = options.contact;
-  model.render = options.render;
+  model.render = SceneRender(options.render, model.timestep_s, path, model.load_warnings);
   model.device = options.device;
   model.max_contacts = geometry::MaxContactsFor(model, options.max_contacts);
   model.max_group_bodies = options.max_group_bodies > 0

@@ -53,7 +53,7 @@ class HapticStep {
       ++r_.non_finite_commands;
     }
     const double limit_N =
-        limits::StricterLimit(model_.device.max_force_N, device_.limits().max_force_N);
+        limits::StricterLimit(model_.device.limits.max_force_N, device_.limits().max_force_N);
     r_.force_limit_N = limit_N;
     // the torque within the device's own torque limit (none for a 3-DoF force device)
     const bool torque_clipped =

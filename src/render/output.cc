@@ -116,7 +116,7 @@ DeviceCommand DeviceWrench(const Model& model, Data& data, const contact::Contac
   out.impulsive_force_N = data.tool_impulse_Ns_W / model.timestep_s +
                           EventTransient(model, data, contact.normal_velocity);
   out.force_N = out.penalty_force_N + out.impulsive_force_N;
-  const double max_force_N = model.device.max_force_N;
+  const double max_force_N = model.device.limits.max_force_N;
   if (out.force_N.allFinite()) {
     out.clipped = LimitForce(max_force_N, out.force_N, out.torque_Nm);
   } else if (max_force_N > 0.0 && out.penalty_force_N.allFinite() &&

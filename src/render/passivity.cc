@@ -9,7 +9,7 @@ namespace rigidtouch::render {
 
 double MaxControlDamping(const Model& model) {
   const double by_mass = model.bodies[model.tool].mass_kg / model.timestep_s;
-  const double device = model.device.max_damping_Ns_per_m;
+  const double device = model.device.limits.max_damping_Ns_per_m;
   return device > 0.0 ? std::min(device, by_mass) : by_mass;
 }
 
@@ -53,7 +53,7 @@ void PassivityControl(const Model& model, Data& data, const DeviceState& device,
     p.damping_Ns_per_m = std::min(-predicted_J / (h * v2), MaxControlDamping(model));
     const Vec3 before = out.force_N;
     out.force_N -= p.damping_Ns_per_m * v;
-    if (LimitForce(model.device.max_force_N, out.force_N, out.torque_Nm)) {
+    if (LimitForce(model.device.limits.max_force_N, out.force_N, out.torque_Nm)) {
       out.clipped = true;
       data.Warn(Warning::kForceClipped);
     }

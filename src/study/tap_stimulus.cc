@@ -154,7 +154,7 @@ class DeviceWallPresenter final : public WallPresenter {
     // the preset's limits on every path, as serve applies them: the wall defaults to what the
     // device can display (its stiffness, damping k h capped at its damping), the force to its
     // limit, and the device's own announced limits tighten them further
-    const device::DeviceLimits preset = device::ParseDeviceSpec(options_.preset).limits;
+    const DeviceLimits preset = device::ParseDeviceSpec(options_.preset).limits;
     const double h = 0.001;
     LoadOptions load;
     load.render = ToRenderParams(condition);

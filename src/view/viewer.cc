@@ -322,8 +322,8 @@ void PanelWarnings(const ViewSnapshot& snap) {
 // the warnings
 void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& snap,
                const Scope& scope, bool can_switch, bool has_mouse, FrameState& st) {
-  const float force_scale =
-      static_cast<float>(model.device.max_force_N > 0.0 ? model.device.max_force_N : 5.0);
+  const float force_scale = static_cast<float>(
+      model.device.limits.max_force_N > 0.0 ? model.device.limits.max_force_N : 5.0);
   ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(static_cast<float>(kPanelRightPx) - 20.0f, 0), ImGuiCond_Always);
   ImGui::Begin("rigidtouch", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
@@ -332,10 +332,10 @@ void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& s
               text::RendererName(model.render.renderer), model.render.restitution,
               1e3 * model.render.t_collision_s, model.render.frequency_hz);
   if (can_switch) PanelSwitch(model, snap, st);
-  if (model.device.max_force_N > 0.0) {
+  if (model.device.limits.max_force_N > 0.0) {
     ImGui::Text("wall k %.0f N/m  b %.2f N s/m  force limit %.2f N",
                 model.contact.stiffness_N_per_m, model.contact.damping_Ns_per_m,
-                model.device.max_force_N);
+                model.device.limits.max_force_N);
   } else {
     ImGui::Text("wall k %.0f N/m  b %.2f N s/m  no force limit", model.contact.stiffness_N_per_m,
                 model.contact.damping_Ns_per_m);

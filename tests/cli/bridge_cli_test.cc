@@ -300,7 +300,7 @@ class StiffHandle final : public device::Device {
     return s;
   }
   void Write(const DeviceCommand&) override {}
-  const device::DeviceLimits& limits() const override { return limits_; }
+  const DeviceLimits& limits() const override { return limits_; }
 
   void Approach() { approaching_ = true; }
   double z() const { return kStart_m - kSpeed_mps * moving_reads_ / kRateHz; }
@@ -309,7 +309,7 @@ class StiffHandle final : public device::Device {
   std::uint64_t sequence_ = 0;
   long moving_reads_ = 0;
   bool approaching_ = false;
-  device::DeviceLimits limits_;  // no limit of its own: serve's preset decides
+  DeviceLimits limits_;  // no limit of its own: serve's preset decides
 };
 
 // Forks a device process: a UdpDeviceServer at 1 kHz over StiffHandle. Once serve holds a

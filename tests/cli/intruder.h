@@ -106,7 +106,7 @@ class Intruder {
     Send(EncodeCommand(command, header, key_), to);
     Send(EncodeState(state, header, key_), to);
     Send(EncodeHello(round, key_), to);
-    Send(EncodeHelloReply(AnnouncedLimits{1000.0, 0.0, 0.0}, client_nonce, round, key_), to);
+    Send(EncodeHelloReply(DeviceLimits{"", 1000.0, 0.0, 0.0}, client_nonce, round, key_), to);
     Send(Version1(2, 60, 1000.0), to);
     Send(Version1(1, 124, 1e300), to);
   }

@@ -122,7 +122,7 @@ struct Client {
   std::uint64_t client_nonce = 0;
   std::uint64_t server_nonce = 0;
   std::uint64_t sent_counter = 0;
-  AnnouncedLimits announced;
+  DeviceLimits announced;
 };
 
 // steps the server until it has taken `received` datagrams off its socket

@@ -71,7 +71,7 @@ struct Fixture {
 
   // answers the client's hello (the newest one, or the nonce already taken from it) and reads
   // until the session stands
-  void Handshake(const AnnouncedLimits& limits = AnnouncedLimits{2.0, 1000.0, 0.0},
+  void Handshake(const DeviceLimits& limits = DeviceLimits{"", 2.0, 1000.0, 0.0},
                  std::uint64_t server_nonce = kServerNonce, bool receive_hello = true) {
     if (receive_hello) client_nonce = ReceiveHello();
     this->server_nonce = server_nonce;
@@ -143,7 +143,7 @@ TEST(UdpDevice, ResendsItsHelloWithTheSameNonceUntilAnswered) {
 TEST(UdpDevice, HandshakeCombinesAnnouncedLimitsWithItsOwn) {
   Fixture f;
   EXPECT_EQ(f.device->limits().max_force_N, 3.3);
-  f.Handshake(AnnouncedLimits{2.0, 1000.0, 0.0});
+  f.Handshake(DeviceLimits{"", 2.0, 1000.0, 0.0});
   EXPECT_TRUE(f.device->has_session());
   EXPECT_EQ(f.device->counters().handshakes, 1u);
   EXPECT_EQ(f.device->limits().name, "udp-test");
@@ -155,7 +155,7 @@ TEST(UdpDevice, HandshakeCombinesAnnouncedLimitsWithItsOwn) {
 
 TEST(UdpDevice, OwnLimitStaysWhenTheDeviceAnnouncesALooserOne) {
   Fixture f;
-  f.Handshake(AnnouncedLimits{40.0, 0.0, 0.0});
+  f.Handshake(DeviceLimits{"", 40.0, 0.0, 0.0});
   EXPECT_EQ(f.device->limits().max_force_N, 3.3);
 }
 
@@ -240,12 +240,12 @@ TEST(UdpDevice, StatesOutsideTheSessionAreDropped) {
   f.ReadUntilReceived(1);
   EXPECT_EQ(f.device->counters().no_session, 1u);
   // a reply to a hello the client never sent (or an old one): no session either
-  f.SendRaw(EncodeHelloReply(AnnouncedLimits{}, f.client_nonce ^ 1, kServerNonce, f.key));
+  f.SendRaw(EncodeHelloReply(DeviceLimits{}, f.client_nonce ^ 1, kServerNonce, f.key));
   f.ReadUntilReceived(2);
   EXPECT_EQ(f.device->counters().no_session, 2u);
   EXPECT_FALSE(f.device->has_session());
 
-  f.Handshake(AnnouncedLimits{}, kServerNonce, /*receive_hello=*/false);
+  f.Handshake(DeviceLimits{}, kServerNonce, /*receive_hello=*/false);
   // another server nonce (a recorded session), another client nonce
   const std::uint64_t nonce = f.client_nonce;
   f.server_nonce = kServerNonce + 1;
@@ -254,7 +254,7 @@ TEST(UdpDevice, StatesOutsideTheSessionAreDropped) {
   f.client_nonce = nonce + 1;
   f.SendRaw(f.StateBytes(3, 3));
   // a second reply in the session, with another server nonce, does not replace it
-  f.SendRaw(EncodeHelloReply(AnnouncedLimits{}, nonce, kServerNonce + 2, f.key));
+  f.SendRaw(EncodeHelloReply(DeviceLimits{}, nonce, kServerNonce + 2, f.key));
   const DeviceState state = f.ReadUntilReceived(6);
   EXPECT_EQ(f.device->counters().no_session, 5u);
   EXPECT_FALSE(state.valid);
@@ -269,7 +269,7 @@ TEST(UdpDevice, UnauthenticatedStatesAreDroppedAndCounted) {
   const DeviceKey right = f.key;
   f.key = KeyOf(8);
   f.SendRaw(f.StateBytes(1, 1));
-  f.SendRaw(EncodeHelloReply(AnnouncedLimits{}, f.client_nonce, kServerNonce, f.key));
+  f.SendRaw(EncodeHelloReply(DeviceLimits{}, f.client_nonce, kServerNonce, f.key));
   f.key = right;
   std::vector<std::uint8_t> flipped = f.StateBytes(2, 2);
   flipped[60] ^= 0x04;
@@ -382,7 +382,7 @@ TEST(UdpDevice, WatchdogTripsStartsANewHandshakeAndRecovers) {
   EXPECT_EQ(f.device->counters().no_session, 1u);
 
   // a new session (a restarted server numbers from 1 again) recovers
-  f.Handshake(AnnouncedLimits{}, kServerNonce + 1);
+  f.Handshake(DeviceLimits{}, kServerNonce + 1);
   EXPECT_NE(f.client_nonce, first_nonce) << "each handshake has a fresh nonce";
   f.SendState(1);
   state = f.ReadUntilReceived(5);

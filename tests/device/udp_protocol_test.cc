@@ -138,7 +138,7 @@ TEST(UdpProtocol, EncodingsMatchGoldenBytes) {
   EXPECT_EQ(CommandBytes().size(), kCommandPacketBytes);
   const HelloPacket hello = EncodeHello(kClientNonce, TestKey());
   EXPECT_EQ(std::vector<std::uint8_t>(hello.begin(), hello.end()), FromHex(kGoldenHelloHex));
-  const HelloReplyPacket reply = EncodeHelloReply(AnnouncedLimits{3.3, 1000.0, 2.5}, kClientNonce,
+  const HelloReplyPacket reply = EncodeHelloReply(DeviceLimits{"", 3.3, 1000.0, 2.5}, kClientNonce,
                                                   kProtocolServerNonce, TestKey());
   EXPECT_EQ(std::vector<std::uint8_t>(reply.begin(), reply.end()), FromHex(kGoldenHelloReplyHex));
 }
@@ -196,7 +196,7 @@ TEST(UdpProtocol, HeaderFieldsAreRead) {
   EXPECT_EQ(header.client_nonce, kClientNonce);
   EXPECT_EQ(header.server_nonce, kProtocolServerNonce);
   EXPECT_EQ(header.counter, 9u);
-  AnnouncedLimits limits;
+  DeviceLimits limits;
   const std::vector<std::uint8_t> reply = FromHex(kGoldenHelloReplyHex);
   ASSERT_EQ(Framing(reply), DecodeResult::kOk);
   ASSERT_TRUE(VerifyMac(reply, TestKey()));
@@ -403,7 +403,7 @@ TEST(UdpProtocol, AnnouncedLimitsMustBeFiniteAndNonNegative) {
   for (std::size_t field = 0; field < 3; ++field) {
     std::vector<std::uint8_t> bytes = FromHex(kGoldenHelloReplyHex);
     PutF64(bytes, 40 + 8 * field, -1.0);
-    AnnouncedLimits limits;
+    DeviceLimits limits;
     EXPECT_EQ(DecodeHelloReplyPayload(bytes, &limits), DecodeResult::kBadLimits);
     PutF64(bytes, 40 + 8 * field, std::numeric_limits<double>::infinity());
     EXPECT_EQ(DecodeHelloReplyPayload(bytes, &limits), DecodeResult::kNonFinite);

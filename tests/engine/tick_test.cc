@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "engine/workspace.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
@@ -195,7 +196,8 @@ TEST(TickTest, NonFiniteStateResetsTheWholeStateToInitial) {
   EXPECT_EQ(d.warnings[static_cast<int>(Warning::kNonFiniteState)].count, 1);
   EXPECT_EQ(d.step, step + 1);  // the time goes on
   EXPECT_EQ(d.ncontact, 0);
-  EXPECT_EQ(d.nprevious, 0);
+  EXPECT_EQ(d.workspace->collision.matching.nprevious, 0);
+  EXPECT_EQ(d.workspace->collision.matching.next_contact_id, 0);
   for (std::size_t i = 0; i < d.bodies.size(); ++i) {
     EXPECT_EQ(d.bodies[i].x_W, m.initial[i].x_W);
     EXPECT_EQ(d.bodies[i].v_W, m.initial[i].v_W);

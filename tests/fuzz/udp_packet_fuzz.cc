@@ -43,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       CheckAgain(again, d::PacketType::kState);
       if (d::DecodeStatePayload(again, &state) != d::DecodeResult::kOk) __builtin_trap();
     }
-    d::AnnouncedLimits limits;
+    d::DeviceLimits limits;
     if (header.type == d::PacketType::kHelloReply &&
         d::DecodeHelloReplyPayload(datagram, &limits) == d::DecodeResult::kOk) {
       const d::HelloReplyPacket again =

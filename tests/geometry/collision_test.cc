@@ -176,7 +176,7 @@ struct Expected {
   int id = -1;  // -1: new
   Vec3 anchor_A, anchor_B;
 };
-std::vector<Expected> ReferenceMatch(const Data& d) {
+std::vector<Expected> ReferenceMatch(const Data& d, const geometry::ContactMatching& m) {
   std::vector<Expected> out(d.ncontact);
   for (int begin = 0; begin < d.ncontact;) {
     const Contact& key = d.contacts[begin];
@@ -186,8 +186,8 @@ std::vector<Expected> ReferenceMatch(const Data& d) {
       ++end;
     }
     std::vector<int> prev;
-    for (int k = 0; k < d.nprevious; ++k) {
-      if (d.previous[k].geom_a == key.geom_a && d.previous[k].geom_b == key.geom_b) {
+    for (int k = 0; k < m.nprevious; ++k) {
+      if (m.previous[k].geom_a == key.geom_a && m.previous[k].geom_b == key.geom_b) {
         prev.push_back(k);
       }
     }
@@ -198,7 +198,7 @@ std::vector<Expected> ReferenceMatch(const Data& d) {
       double best_d2 = geometry::kMatchDistance_m * geometry::kMatchDistance_m;
       for (std::size_t k = 0; k < prev.size(); ++k) {
         if (used[k]) continue;
-        const double d2 = (d.previous[prev[k]].p_A - d.contacts[c].p_A).squaredNorm();
+        const double d2 = (m.previous[prev[k]].p_A - d.contacts[c].p_A).squaredNorm();
         if (single || d2 < best_d2) {
           best = static_cast<int>(k);
           best_d2 = d2;
@@ -206,7 +206,7 @@ std::vector<Expected> ReferenceMatch(const Data& d) {
       }
       if (best >= 0) {
         used[best] = true;
-        const Contact& p = d.previous[prev[best]];
+        const Contact& p = m.previous[prev[best]];
         out[c] = Expected{p.id, p.anchor_A, p.anchor_B};
       } else {
         out[c] = Expected{-1, d.contacts[c].p_A, d.contacts[c].p_B};
@@ -242,7 +242,7 @@ void ExpectMatchingAsTheReference(bool without_runs) {
       const Vec3 turn = 0.2 * step * test::Draw2(u, rng, 0.0);
       x.q_WB = (rest[b].q_WB * Quat(1.0, turn.x(), turn.y(), 0.0)).normalized();
     }
-    const int next_id = d.next_contact_id;
+    const int next_id = s.matching.next_contact_id;
     dynamics::ComputeKinematics(d);
     geometry::DetectContacts(m, d, s);
     if (without_runs) {
@@ -250,7 +250,7 @@ void ExpectMatchingAsTheReference(bool without_runs) {
     } else {
       ASSERT_TRUE(geometry::RunsIndexList(d)) << "trial " << trial;
     }
-    const std::vector<Expected> expected = ReferenceMatch(d);
+    const std::vector<Expected> expected = ReferenceMatch(d, s.matching);
     int new_id = next_id;
     for (int c = 0; c < d.ncontact; ++c) {
       const Contact& con = d.contacts[c];

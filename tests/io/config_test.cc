@@ -67,7 +67,7 @@ TEST(ConfigTest, EverySectionsFieldsAreRead) {
   EXPECT_EQ(o.render.frequency_hz, 500.0);
   EXPECT_TRUE(o.render.reference_solver);
   EXPECT_EQ(o.device.coupling, Coupling::kVirtual);
-  EXPECT_EQ(o.device.max_force_N, 7.5);
+  EXPECT_EQ(o.device.limits.max_force_N, 7.5);
   EXPECT_EQ(o.device.coupling_stiffness_N_per_m, 800.0);
   EXPECT_EQ(o.device.coupling_damping_Ns_per_m, 4.0);
 }

@@ -106,7 +106,7 @@ TEST(MjcfLoaderTest, OutOfRangeParametersNameParameterAndRange) {
       {"t_collision_s", [](LoadOptions& o) { o.render.t_collision_s = 0.2; }, "0.1 s"},
       {"timestep_s", [](LoadOptions& o) { o.timestep_s = INFINITY; }, "h <= 0.1 s"},
       {"frequency_hz", [](LoadOptions& o) { o.render.frequency_hz = 5.0; }, "[1/t_c, 1/h]"},
-      {"max_force_N", [](LoadOptions& o) { o.device.max_force_N = -3; }, ">= 0 N"},
+      {"max_force_N", [](LoadOptions& o) { o.device.limits.max_force_N = -3; }, ">= 0 N"},
       {"friction_static",
        [](LoadOptions& o) {
          o.contact.friction_static = 0.2;

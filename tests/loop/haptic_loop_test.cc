@@ -94,7 +94,7 @@ class RecordingDevice final : public device::Device {
     return s;
   }
   void Write(const DeviceCommand&) override { calls += 'W'; }
-  const device::DeviceLimits& limits() const override { return limits_; }
+  const DeviceLimits& limits() const override { return limits_; }
   void EndPeriod(double period_s) override {
     calls += 'E';
     last_period_s = period_s;
@@ -105,7 +105,7 @@ class RecordingDevice final : public device::Device {
   double last_period_s = 0.0;
 
  private:
-  device::DeviceLimits limits_;
+  DeviceLimits limits_;
 };
 
 TEST(HapticLoop, CallsReadWriteEndPeriodOncePerTickInOrder) {
@@ -152,7 +152,7 @@ class FreezingDevice final : public device::Device {
   void Write(const DeviceCommand& command) override {
     if (commands.size() < commands.capacity()) commands.push_back(command);
   }
-  const device::DeviceLimits& limits() const override { return limits_; }
+  const DeviceLimits& limits() const override { return limits_; }
 
   static constexpr double kStart_m = 0.0058;  // the tool centre touches the wall at 0.005
   static constexpr double kSpeed_mps = 0.2;
@@ -162,14 +162,14 @@ class FreezingDevice final : public device::Device {
   int fresh_reads_, stale_reads_;
   bool keep_moving_;
   int reads_ = 0;
-  device::DeviceLimits limits_;
+  DeviceLimits limits_;
 };
 
 Model DirectWall(double max_force_N) {
   LoadOptions o;
   o.render.renderer = RendererKind::kTrain;  // 250 Hz: an impulse every 4 ticks
   o.device.coupling = Coupling::kDirect;
-  o.device.max_force_N = max_force_N;
+  o.device.limits.max_force_N = max_force_N;
   o.timestep_s = 1.0 / kRateHz;
   return LoadModel(std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/wall.xml", o);
 }
@@ -188,14 +188,14 @@ class PressingDevice final : public device::Device {
   void Write(const DeviceCommand& command) override {
     if (commands.size() < commands.capacity()) commands.push_back(command);
   }
-  const device::DeviceLimits& limits() const override { return limits_; }
+  const DeviceLimits& limits() const override { return limits_; }
   std::uint64_t sequence() const { return sequence_; }
 
   std::vector<DeviceCommand> commands;
 
  private:
   std::uint64_t sequence_ = 0;
-  device::DeviceLimits limits_;
+  DeviceLimits limits_;
 };
 
 // a device holds its last command: when the loop stops, paced or not, the hand pressing into the
@@ -323,12 +323,12 @@ class LeverDevice final : public device::Device {
   void Write(const DeviceCommand& command) override {
     if (commands.size() < commands.capacity()) commands.push_back(command);
   }
-  const device::DeviceLimits& limits() const override { return limits_; }
+  const DeviceLimits& limits() const override { return limits_; }
   std::vector<DeviceCommand> commands;
 
  private:
   std::uint64_t sequence_ = 0;
-  device::DeviceLimits limits_;
+  DeviceLimits limits_;
 };
 
 TEST(HapticLoop, TheTorqueIsWithinTheDevicesTorqueLimitOrZero) {

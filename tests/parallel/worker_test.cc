@@ -258,7 +258,9 @@ TEST(WorkerTest, TwoThreadsGiveTheContactsOfOne) {
       ASSERT_EQ(a.group, d1.body_group[a.body_a >= 0 ? a.body_a : a.body_b])
           << "step " << s << " contact " << k;
     }
-    ASSERT_EQ(d1.next_contact_id, d2.next_contact_id) << "step " << s;
+    ASSERT_EQ(d1.workspace->collision.matching.next_contact_id,
+              d2.workspace->collision.matching.next_contact_id)
+        << "step " << s;
     // the list's index of runs, which the groups are built from, on either path
     ExpectRunsIndexTheList(d1, s);
     ExpectRunsIndexTheList(d2, s);

@@ -31,7 +31,7 @@ Model DirectModel(RendererKind kind, double k_N_per_m, double max_force_N = 0.0)
   o.contact.friction_kinetic = 0.0;
   o.render.renderer = kind;
   o.device.coupling = Coupling::kDirect;
-  o.device.max_force_N = max_force_N;
+  o.device.limits.max_force_N = max_force_N;
   Model m = LoadModel(TestScene("sphere_plane.xml"), o);
   m.gravity_W.setZero();
   return m;
@@ -141,8 +141,8 @@ TEST(DeviceLimitsTest, OverflowingForceIsClippedNotLost) {
 // limit; under virtual coupling the device renders the coupling, so that is what is checked
 TEST(DeviceLimitsTest, ConfigureRefusesWhatTheDeviceCannotDisplay) {
   Model m = DirectModel(RendererKind::kTrain, 400.0);
-  m.device.max_stiffness_N_per_m = 400.0;
-  m.device.max_damping_Ns_per_m = 4.0;
+  m.device.limits.max_stiffness_N_per_m = 400.0;
+  m.device.limits.max_damping_Ns_per_m = 4.0;
   m.contact.damping_Ns_per_m = 4.0;
   EXPECT_NO_THROW(Configure(m));  // at the limits
   const auto message = [](Model model) -> std::string {
@@ -176,7 +176,7 @@ TEST(DeviceLimitsTest, ConfigureRefusesWhatTheDeviceCannotDisplay) {
   EXPECT_NE(message(coupled).find("coupling_stiffness_N_per_m = 500"), std::string::npos);
 
   Model unknown = m;  // 0: the device's limits are unknown, nothing to check against
-  unknown.device.max_stiffness_N_per_m = 0.0;
+  unknown.device.limits.max_stiffness_N_per_m = 0.0;
   unknown.contact.stiffness_N_per_m = 1e6;
   EXPECT_NO_THROW(Configure(unknown));
 }

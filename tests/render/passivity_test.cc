@@ -17,8 +17,8 @@ Model PortModel(double max_damping = 0.0, double max_force = 0.0) {
   m.tool = 0;
   m.render.passivity_control = true;
   m.device.coupling = Coupling::kDirect;
-  m.device.max_damping_Ns_per_m = max_damping;
-  m.device.max_force_N = max_force;
+  m.device.limits.max_damping_Ns_per_m = max_damping;
+  m.device.limits.max_force_N = max_force;
   return m;
 }
 
