@@ -88,26 +88,34 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
               given);
 
   RenderParams& r = options.render;
-  ReadSection(top, "render",
-              {{"restitution", &r.restitution},
-               {"t_collision_s", &r.t_collision_s},
-               {"frequency_hz", &r.frequency_hz}},
-              given, {"renderer", "reference_solver", "passivity_control", "material"},
-              [&r, &path](const StrictObject& in) {
-                if (auto name = in.OneOf("renderer", text::RendererNames(), "renderer")) {
-                  r.renderer = ParseRenderer(*name);
-                }
-                in.Read("reference_solver", r.reference_solver);
-                in.Read("passivity_control", r.passivity_control);
-                // a preset's name, or a material file relative to the config file's folder
-                if (auto material = in.String("material")) {
-                  try {
-                    r.material = ParseMaterial(MaterialPath(*material, path));
-                  } catch (const Error& e) {
-                    throw Error(path + ": render.material: " + e.what());
-                  }
-                }
-              });
+  ReadSection(
+      top, "render",
+      {{"restitution", &r.restitution},
+       {"t_collision_s", &r.t_collision_s},
+       {"frequency_hz", &r.frequency_hz}},
+      given,
+      {"renderer", "reference_solver", "passivity_control", "material", "joint_limit_renderer"},
+      [&r, &path](const StrictObject& in) {
+        if (auto name = in.OneOf("renderer", text::RendererNames(), "renderer")) {
+          r.renderer = ParseRenderer(*name);
+        }
+        // a joint limit renders like a wall: penalty, impulse or train (Configure refuses
+        // event with the field named)
+        if (auto name =
+                in.OneOf("joint_limit_renderer", text::RendererNames(), "joint_limit_renderer")) {
+          r.joint_limit_renderer = ParseRenderer(*name);
+        }
+        in.Read("reference_solver", r.reference_solver);
+        in.Read("passivity_control", r.passivity_control);
+        // a preset's name, or a material file relative to the config file's folder
+        if (auto material = in.String("material")) {
+          try {
+            r.material = ParseMaterial(MaterialPath(*material, path));
+          } catch (const Error& e) {
+            throw Error(path + ": render.material: " + e.what());
+          }
+        }
+      });
 
   DeviceParams& d = options.device;
   ReadSection(top, "device",

@@ -386,16 +386,17 @@ std::vector<LinkOf> CopyTrees(const mjModel* m, const std::string& path, Model& 
   }
   for (int u = 0; u < m->nu; ++u) CopyActuator(L, u, link_of, tree_joint);
   WarnLimitSoftness(L);
-  // until the contact stages take joint limits as unilateral contacts, a range is only reported
+  // hinge and slide ranges are unilateral rows of the contact stages; a ball's is only reported
   int limited = 0, first = -1;
   for (int j = 0; j < m->njnt; ++j) {
     if (link_of[m->jnt_bodyid[j]].tree < 0 || !m->jnt_limited[j]) continue;
+    if (m->jnt_type[j] != mjJNT_BALL) continue;
     if (limited++ == 0) first = j;
   }
   if (limited > 0) {
     L.Warn(L.Joint(first) + (limited > 1 ? " and " + std::to_string(limited - 1) + " more" : "") +
-           ": joint ranges are reported (at_limit) but not enforced yet; the joint can pass its "
-           "limit");
+           ": a ball joint's range is reported (at_limit) but not enforced; the joint can pass "
+           "its limit");
   }
   return link_of;
 }
