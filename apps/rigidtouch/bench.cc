@@ -21,6 +21,7 @@ struct BenchFlags {
   bool tool_force_given = false;  // --tool-force on the command line (its default is not)
   bool json = false;
   bool reference = false;
+  bool quiet = false;
 };
 
 // --reference: the last warm-up steps whose median sizes the fixed job, and the job's first guess
@@ -29,6 +30,7 @@ constexpr long kReferenceWarmup = 200;
 constexpr long kReferenceFirstUnits = 1000;
 constexpr long kReferenceMaxUnits = 10'000'000;
 constexpr int kCalibrationRuns = 21;
+constexpr long kProgressSteps = 1024;  // steps between two looks at the progress
 
 double Percentile(const std::vector<double>& sorted, double q) {
   // nearest rank
@@ -62,6 +64,16 @@ nlohmann::json ReferenceJson(long units, const std::vector<double>& job_sorted,
   return r;
 }
 
+// between steps, outside the timed part: every kProgressSteps steps a look at the clock and at
+// the stop request
+void LookAtProgress(Progress& progress, long done, long total, const char* phase) {
+  if (done % kProgressSteps != 0) return;
+  const std::string where =
+      std::string(phase) + " step " + std::to_string(done) + " of " + std::to_string(total);
+  progress.ThrowIfStopped(where, "nothing was measured");
+  if (progress.Due()) progress.Report(static_cast<double>(done) / total, where);
+}
+
 void RunBench(const BenchFlags& f) {
   if (f.steps < 1) throw Error("--steps must be >= 1, got " + std::to_string(f.steps));
   if (f.warmup < 0) throw Error("--warmup must be >= 0, got " + std::to_string(f.warmup));
@@ -86,7 +98,14 @@ void RunBench(const BenchFlags& f) {
   input.tool_wrench.force_N = model.has_tool ? tool_force : Vec3::Zero();
   // the last warm-up steps are timed when the reference job is sized from them
   std::vector<double> warm_ns;
+  const std::unique_ptr<Progress> progress = StartProgress("bench", f.quiet);
+  const long total = f.warmup + f.steps;
+  auto look = [&progress, total](long done, const char* phase) {
+    LookAtProgress(*progress, done, total, phase);
+  };
+
   for (long s = 0; s < f.warmup; ++s) {
+    look(s, "warm-up");
     const auto t0 = std::chrono::steady_clock::now();
     Tick(model, data, input);
     if (f.reference && s >= f.warmup - kReferenceWarmup) {
@@ -108,6 +127,7 @@ void RunBench(const BenchFlags& f) {
   long impulses = 0;
   double deepest = 0.0;
   for (long s = 0; s < f.steps; ++s) {
+    look(f.warmup + s, "measured");
     const auto t0 = std::chrono::steady_clock::now();
     Tick(model, data, input);
     const auto t1 = std::chrono::steady_clock::now();
@@ -118,6 +138,7 @@ void RunBench(const BenchFlags& f) {
     impulses += data.nimpulse;
     for (int c = 0; c < data.ncontact; ++c) deepest = std::max(deepest, data.contacts[c].depth_m);
   }
+  progress->Finish();
   const dynamics::GroupSolveCounts solves = data.workspace->velocity.Counts() - before;
   bool finite = true;
   for (const BodyState& b : data.bodies) finite = finite && b.x_W.allFinite();
@@ -181,6 +202,7 @@ void RegisterBench(CLI::App& root) {
   app->add_option("--warmup", f->warmup, "warm-up steps")->capture_default_str();
   app->add_option("--tool-force", f->tool_force, "constant tool force FX FY FZ [N]")->expected(3);
   app->add_flag("--json", f->json, "print one JSON object");
+  AddQuietFlag(*app, f->quiet);
   app->add_flag("--reference", f->reference,
                 "after each step, time a fixed job sized to the median of the last 200 warm-up "
                 "steps: the tail the machine adds to work that never varies "

@@ -4,8 +4,12 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
+
+#include "base/progress.h"
 
 namespace rigidtouch::cli {
 
@@ -28,6 +32,15 @@ inline constexpr int kExitNoDevice = 5;
 
 /// `--connect replay:LOG`: a recorded session's handle motion as the device.
 inline constexpr std::string_view kReplayPrefix = "replay:";
+
+/// Progress of a long subcommand's work on stderr: a bar when stderr is a terminal, a line at most
+/// every 2 s otherwise, nothing in the first 2 s and nothing with `quiet` (--quiet). Installs the
+/// SIGINT and SIGTERM handlers whose request the work checks: it stops cleanly, keeping what it
+/// finished, and throws Interrupted, which the tool reports with exit status 128 + the signal.
+std::unique_ptr<Progress> StartProgress(std::string task, bool quiet);
+
+/// Adds `--quiet` (no progress on stderr) to a long subcommand.
+void AddQuietFlag(CLI::App& app, bool& quiet);
 
 /// Registers a subcommand at static-initialisation time.
 struct CommandRegistrar {

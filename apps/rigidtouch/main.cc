@@ -2,12 +2,14 @@
 // non-zero exit; with --json a subcommand prints exactly one JSON object on stdout. Exit codes
 // (README, "Exit codes"): 0 success, 2 bad input (a file, field, value or output path), 3 an
 // internal error, 4 an output file could not be written (disk full, file size limit), 5 serve's
-// device did not answer. A malformed command line is bad input too: status 2, the same prefix.
+// device did not answer, 128 + the signal's number when SIGINT (130) or SIGTERM (143) stopped
+// long work. A malformed command line is bad input too: status 2, the same prefix.
 #include <algorithm>
 #include <exception>
 #include <iostream>
 #include <string>
 
+#include "base/progress.h"
 #include "io/output_file.h"
 #include "rigidtouch/command.h"
 #include "rigidtouch/types.h"
@@ -78,6 +80,10 @@ int main(int argc, char** argv) {
   } catch (const rigidtouch::Error& e) {
     std::cerr << "rigidtouch: error: " << e.what() << "\n";
     return 2;
+  } catch (const rigidtouch::Interrupted& e) {
+    // SIGINT or SIGTERM during long work, which kept what it finished (the message says what)
+    std::cerr << "rigidtouch: interrupted: " << e.what() << "\n";
+    return 128 + e.signal();
   } catch (const std::exception& e) {
     std::cerr << "rigidtouch: internal error: " << e.what() << "\n";
     return 3;

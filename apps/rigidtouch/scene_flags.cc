@@ -178,13 +178,14 @@ Settings ResolveSettings(const SceneFlags& f) {
     o.render.material = io::ParseMaterial(*f.material);
     s.origin["render.material"] = "--material";
   }
-  if (f.material && o.render.renderer == RendererKind::kTrain) {
+  if ((f.material || s.Given("render.material")) && o.render.renderer == RendererKind::kTrain) {
     // a material train: f and the window come from the material, not from a flag as well
     for (const char* field : {"render.frequency_hz", "render.t_collision_s"}) {
       if (s.Given(field)) {
-        throw Error(std::string(field) + " (" + Where(s, field) +
-                    ") and --material both set the train; a material train takes f and t_c from "
-                    "the material (docs/renderers.md): give one");
+        throw Error(std::string(field) + " (" + Where(s, field) + ") and the material (" +
+                    Where(s, "render.material") +
+                    ") both set the train; a material train takes f and t_c from the material "
+                    "(docs/renderers.md): give one");
       }
     }
     io::ApplyMaterial(o.render, o.render.material);
@@ -197,6 +198,7 @@ Settings ResolveSettings(const SceneFlags& f) {
   // scene's otherwise)
   o.contact.scene_stiffness_given = s.Given("contact.scene_stiffness_N_per_m");
   o.contact.scene_damping_given = s.Given("contact.scene_damping_Ns_per_m");
+  o.render.frequency_given = s.Given("render.frequency_hz") || !o.render.material.name.empty();
   return s;
 }
 
@@ -287,7 +289,8 @@ void RefuseDeviceSettings(const Settings& s, const std::string& command) {
   if (s.load.device.coupling != Coupling::kNone) RefuseUnused(s, {"device.coupling"}, why);
   RefuseUnused(s,
                {"device.max_force_N", "device.coupling_stiffness_N_per_m",
-                "device.coupling_damping_Ns_per_m"},
+                "device.coupling_damping_Ns_per_m", "device.plausible_radius_m",
+                "device.plausible_speed_mps", "device.plausible_angular_speed_radps"},
                why);
 }
 

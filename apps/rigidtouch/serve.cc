@@ -44,8 +44,9 @@ struct ServeFlags {
   int taps = 3;
   double speed_mps = 0.2;
   double startup_timeout_s = 1.0;
-  double max_device_radius_m = DeviceParams{}.plausible_radius_m;
-  double max_device_speed_mps = DeviceParams{}.plausible_speed_mps;
+  // default: the config's device.plausible_radius_m / plausible_speed_mps, else DeviceParams'
+  std::optional<double> max_device_radius_m;
+  std::optional<double> max_device_speed_mps;
   std::string trace;
   std::string record;                // --record LOG: every tick's device state and command
   std::string replay_pace = "rate";  // replay: "rate" (the loop's deadlines) or "max"
@@ -94,8 +95,8 @@ nlohmann::json RenderJson(const Model& model, const Data& data) {
 }
 
 void SetPlausibility(const ServeFlags& f, DeviceParams& d) {
-  d.plausible_radius_m = f.max_device_radius_m;
-  d.plausible_speed_mps = f.max_device_speed_mps;
+  if (f.max_device_radius_m) d.plausible_radius_m = *f.max_device_radius_m;
+  if (f.max_device_speed_mps) d.plausible_speed_mps = *f.max_device_speed_mps;
 }
 
 // a replay runs at the recorded rate: the recorded states are one period apart
@@ -362,11 +363,11 @@ void RegisterServe(CLI::App& root) {
                   "udp: no first state from the device within this long [s]: exit with status 5")
       ->capture_default_str();
   app->add_option("--max-device-radius", f->max_device_radius_m,
-                  "a device state farther from the device's origin [m] is implausible: zero force")
-      ->capture_default_str();
+                  "a device state farther from the device's origin [m] is implausible: zero "
+                  "force (default: the config's device.plausible_radius_m, else 1)");
   app->add_option("--max-device-speed", f->max_device_speed_mps,
-                  "a device state faster than this [m/s] is implausible: zero force")
-      ->capture_default_str();
+                  "a device state faster than this [m/s] is implausible: zero force (default: "
+                  "the config's device.plausible_speed_mps, else 10)");
   app->add_option("--test-drop", f->test_drop, "udp, TEST ONLY: drop this fraction of packets");
   app->add_option("--key", f->key_file,
                   "udp: pre-shared key file (rigidtouch keygen); default: the per-user key, "

@@ -62,6 +62,7 @@ struct SimulateOptions {
   std::string scene;
   std::string device;
   bool json = false;
+  bool quiet = false;
 };
 
 struct AnalyzeOptions {
@@ -79,6 +80,7 @@ struct PredictOptions {
   std::string scene;
   std::string device;
   bool json = false;
+  bool quiet = false;
 };
 
 std::string StatusName(st::SessionStatus status) {
@@ -181,7 +183,22 @@ void Simulate(const SimulateOptions& o) {
     config.log_dir = o.log_dir;
   }
   const std::unique_ptr<st::StimulusSource> source = TapSource(o.scene, o.device);
+  const std::unique_ptr<Progress> progress = StartProgress("study simulate", o.quiet);
+  config.progress = progress.get();
   const std::vector<st::ParticipantRun> runs = st::SimulateCohort(protocol, *source, config);
+  progress->Finish();
+  const bool stopped = static_cast<int>(runs.size()) < o.participants ||
+                       (!runs.empty() && runs.back().outcome.status == st::SessionStatus::kStopped);
+  if (stopped) {
+    int complete = 0;
+    for (const auto& run : runs) complete += run.outcome.status != st::SessionStatus::kStopped;
+    progress->ThrowIfStopped(
+        "participant " + std::to_string(runs.size()) + " of " + std::to_string(o.participants),
+        config.log_dir.empty()
+            ? "the answers were kept in memory only (no --log-dir): nothing to resume"
+            : std::to_string(complete) + " participant(s) complete; every answer given is in " +
+                  config.log_dir + ": run again with --resume to continue");
+  }
   std::vector<st::LogInput> logs;
   for (const auto& run : runs) {
     logs.push_back({run.log_path.empty() ? run.id : run.log_path, run.records});
@@ -230,7 +247,10 @@ void Predict(const PredictOptions& o) {
   config.sample_taps = o.taps;
   config.participants = o.participants;
   config.cohorts = o.cohorts;
+  const std::unique_ptr<Progress> progress = StartProgress("study predict", o.quiet);
+  config.progress = progress.get();
   const auto predictions = st::PredictProtocol(protocol, *source, observer, config);
+  progress->Finish();
   if (o.json) {
     json tests = json::array();
     for (const auto& p : predictions) {
@@ -345,6 +365,7 @@ void AddStudyCommand(CLI::App& root) {
   simulate->add_option("--device", sim_options->device,
                        "Device for the tap experiment: " + device::DeviceSpecHelp());
   simulate->add_flag("--json", sim_options->json, "Print one JSON object");
+  AddQuietFlag(*simulate, sim_options->quiet);
   simulate->callback([sim_options] { Simulate(*sim_options); });
 
   auto analyze_options = std::make_shared<AnalyzeOptions>();
@@ -380,6 +401,7 @@ void AddStudyCommand(CLI::App& root) {
   predict->add_option("--device", predict_options->device,
                       "Device for the tap experiment: " + device::DeviceSpecHelp());
   predict->add_flag("--json", predict_options->json, "Print one JSON object");
+  AddQuietFlag(*predict, predict_options->quiet);
   predict->callback([predict_options] { Predict(*predict_options); });
 }
 

@@ -29,6 +29,7 @@ struct SweepFlags {
   std::optional<int> workers;
   std::optional<int> batch;
   bool json = false;
+  bool quiet = false;
 };
 
 // folders holding the package rigidtouch/: the build tree's python/ beside the executable, the
@@ -67,6 +68,7 @@ void RunSweep(const SweepFlags& f) {
   if (f.workers) args.insert(args.end(), {"--workers", std::to_string(*f.workers)});
   if (f.batch) args.insert(args.end(), {"--batch", std::to_string(*f.batch)});
   if (f.json) args.push_back("--json");
+  if (f.quiet) args.push_back("--quiet");
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -92,6 +94,7 @@ void RegisterSweep(CLI::App& root) {
   app->add_option("--batch", f->batch, "points per Dask task (default: about 8 tasks per worker)")
       ->check(CLI::Range(1, 100000));
   app->add_flag("--json", f->json, "print one JSON object");
+  AddQuietFlag(*app, f->quiet);
   app->callback([f] { RunSweep(*f); });
 }
 

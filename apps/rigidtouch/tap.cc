@@ -46,6 +46,7 @@ struct TapFlags {
   std::string compare;
   std::string out_dir = "out";
   bool json = false;
+  bool quiet = false;          // `tap` only: no progress on stderr
   bool out_dir_given = false;  // --out-dir was written (it has a default)
 };
 
@@ -168,8 +169,8 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
   const double k = direct ? m.contact.stiffness_N_per_m : m.device.coupling_stiffness_N_per_m;
   const double b = direct ? m.contact.damping_Ns_per_m : m.device.coupling_damping_Ns_per_m;
   const auto within = [](double value, double limit) { return !(limit > 0.0) || value <= limit; };
-  const bool displayable = within(k, run.device.max_stiffness_N_per_m) &&
-                           within(b, run.device.max_damping_Ns_per_m);
+  const bool displayable =
+      within(k, run.device.max_stiffness_N_per_m) && within(b, run.device.max_damping_Ns_per_m);
   return {
       {"renderer", text::RendererName(m.render.renderer)},
       {"restitution", m.render.restitution},
@@ -347,9 +348,20 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   double max_force_N = 0.0;
   NonFiniteReport non_finite;
   std::string non_finite_name;
+  const std::unique_ptr<Progress> progress = StartProgress("tap --" + set, f.quiet);
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const analysis::RendererSpec& spec = specs[i];
-    const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, std::nullopt, &spec));
+    analysis::TapExperimentConfig config = MakeConfig(f, std::nullopt, &spec);
+    const double n = static_cast<double>(specs.size());
+    config.progress = progress.get();
+    config.progress_from = static_cast<double>(i) / n;
+    config.progress_to = static_cast<double>(i + 1) / n;
+    config.progress_where = "renderer " + std::to_string(i + 1) + " of " +
+                            std::to_string(specs.size()) + ", " + spec.label;
+    config.progress_kept = i == 0 ? std::string("nothing was written")
+                                  : "the traces of the " + std::to_string(i) +
+                                        " renderer(s) before it are in " + f.out_dir;
+    const analysis::TapRun run = analysis::RunTapExperiment(config);
     if (i == 0) PrintLoadWarnings(run.model);  // the same scene for every renderer: once
     const std::string trace = OutPath(f, FileStem(spec) + ".csv");
     io::WriteTraceCsv(trace, run.trace);
@@ -367,6 +379,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
       non_finite_name = spec.label;
     }
   }
+  progress->Finish();
   const std::string table_path = OutPath(f, set + ".md");
   {
     std::ostringstream out;
@@ -453,7 +466,13 @@ void RunTap(const TapFlags& f) {
     io::CheckOutputPath(f.plot, "figure");
   }
   if (!trace.empty()) io::CheckOutputPath(trace, "trace file");
-  const analysis::TapRun run = analysis::RunTapExperiment(MakeConfig(f, f.wall));
+  const std::unique_ptr<Progress> progress = StartProgress("tap", f.quiet);
+  analysis::TapExperimentConfig config = MakeConfig(f, f.wall);
+  config.progress = progress.get();
+  config.progress_where = std::to_string(f.taps) + " taps";
+  config.progress_kept = "nothing was written";
+  const analysis::TapRun run = analysis::RunTapExperiment(config);
+  progress->Finish();
   PrintLoadWarnings(run.model);
   if (!trace.empty()) io::WriteTraceCsv(trace, run.trace);
   if (!f.plot.empty()) {
@@ -462,8 +481,8 @@ void RunTap(const TapFlags& f) {
     try {
       RunPlotScript(
           "python/plot_tap.py",
-          {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N),
-           "--title", std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
+          {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N), "--title",
+           std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
           f.json);
     } catch (...) {
       if (temporary) std::filesystem::remove(trace, ignored);
@@ -543,6 +562,7 @@ void RegisterTap(CLI::App& root) {
   CLI::App* app = root.add_subcommand(
       "tap", "tap a wall with the simulated hand and device; metrics, trace and figures");
   auto f = AddTapOptions(app);
+  AddQuietFlag(*app, f->quiet);
   // an error about a parameter the user wrote says where it was written
   app->callback([f, app] {
     f->out_dir_given = app->get_option("--out-dir")->count() > 0;

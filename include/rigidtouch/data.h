@@ -158,6 +158,8 @@ struct Data {
   std::vector<std::unique_ptr<dynamics::TreeData, TreeDataDeleter>> trees;  // (ntree)
   // per tree and joint, written by the trees stage: the joint is at or beyond a limit of its range
   std::vector<std::vector<unsigned char>> joint_at_limit;  // (ntree) x (njoint of the tree)
+  // per tree: the collision-rendering window of its group (as Data::window for bodies)
+  std::vector<WindowState> tree_window;  // (ntree)
 
   // POSITION dependent, written by the kinematics stage before collision detection and read by
   // every later stage until the positions are integrated
@@ -172,8 +174,10 @@ struct Data {
   // collision stage's own (src/geometry/contact_matching.h)
   std::vector<PairRun> runs;
   int nruns = 0;
-  std::vector<int> body_group;  // (nbody) group of each body, -1 if in no contact
-  int ngroup = 0;
+  // (nbody) group of each body, -1 if in no contact; a body in a group with a tree (a contact on
+  // a link) has a group from ngroup on (the groups with trees come after the others)
+  std::vector<int> body_group;
+  int ngroup = 0;                   // groups without a tree
   std::vector<WindowState> window;  // (nbody) collision-window state of each body's group
 
   // FORCE outputs of the last tick
@@ -183,7 +187,7 @@ struct Data {
   double tool_penetration_m = 0.0;
   Vec3 tool_normal_W = Vec3::UnitZ();
   int tool_contacts = 0;
-  std::vector<ImpulseEvent> impulses;  // (nbody) impulses applied this tick
+  std::vector<ImpulseEvent> impulses;  // (nbody + ntree) impulses applied this tick
   int nimpulse = 0;
 
   // PASSIVITY observer and controller state, kept across ticks

@@ -63,9 +63,10 @@ struct BodyModel {
 
 /// A collision geom. `body` is an index into Model::bodies, or -1 for static world geometry and for
 /// the geoms of a tree's links. A link geom has `tree` >= 0 (Model::trees) and `link` (the tree's
-/// body): the tick's trees stage moves its pose every step; until contacts on links land, the
-/// collision stages see it as static geometry at that pose (docs/decisions.md, "Articulated
-/// trees in the Model").
+/// body): the tick's trees stage moves its pose every step. Collision sees it as static geometry at
+/// that pose (so links collide with free bodies and the tool only); the contact stages make its
+/// contacts rows on the link of its tree's group (docs/decisions.md, "Contact groups over
+/// trees in the tick").
 struct GeomModel {
   std::string name;
   GeomType type = GeomType::kSphere;
@@ -101,7 +102,8 @@ struct JointModel {
   int dof_adr = -1;   // into the tree's qvel: 1, 3 or 6 numbers
   /// MJCF range with limited (or the compiler's autolimits): hinge [rad], slide [m]; a ball's
   /// limit is the rotation angle, range_hi_rad_or_m (range_lo is 0). Reported by the trees stage
-  /// (Data::joint_at_limit); to be enforced as unilateral contacts by the contact stages.
+  /// (Data::joint_at_limit); a hinge's or slide's limit is enforced as a unilateral row of its
+  /// tree's contact group (RenderParams::joint_limit_renderer); a ball's is only reported.
   bool limited = false;
   double range_lo_rad_or_m = 0.0;
   double range_hi_rad_or_m = 0.0;
@@ -174,11 +176,21 @@ struct RenderParams {
   double t_collision_s = 0.1;     // t_c, collision-rendering window, at most 0.1 s
   double frequency_hz = 250.0;    // f, impulse-train frequency, in [1/t_c, 1/h]
   bool reference_solver = false;  // use the exact Eq. 5/8 pseudo-inverse (may pull) instead
+  /// The user gave f (flag, config or material): kept as given. Unset and equal to the default
+  /// 250 Hz, LoadModel lowers it to 1/h (one impulse per step) for a scene whose time step is
+  /// longer than 4 ms, with a load warning (docs/config.md).
+  bool frequency_given = false;
   /// Time-domain passivity observer and controller at the device port (Hannaford and Ryu 2002,
   /// render::PassivityControl), over any renderer; needs a device (direct or virtual coupling).
   bool passivity_control = false;
   /// The event renderer's transient (required by it); other renderers refuse one.
   Material material;
+  /// How a hinge or slide joint's limit (its `range`) renders when the joint reaches it: always a
+  /// unilateral penalty row of its contact group (stiffness from the joint's inertia, docs/
+  /// decisions.md, "Joint limits as rows"), plus at onset a single impulse (kImpulse, Eq. 5 with
+  /// restitution e), a train (kTrain, Eq. 8, plastic, over t_c at f) or nothing (kPenalty), like
+  /// a wall. kEvent is refused.
+  RendererKind joint_limit_renderer = RendererKind::kTrain;
 };
 
 /// Impulse schedule derived from RenderParams and the time step (Eq. 6, Eq. 7).
@@ -235,6 +247,9 @@ struct Model {
   ContactParams contact;
   RenderParams render;
   Schedule schedule;  // derived by Configure from render and timestep_s
+  /// The joint limits' train schedule (render.joint_limit_renderer kTrain; Eq. 6-7 with the
+  /// render's t_c and f), derived by Configure
+  Schedule joint_limit_schedule;
   DeviceParams device;
   int max_contacts = 0;                 // capacity of the contact list; extra contacts are dropped
   int max_group_bodies = 0;             // capacity of one group (implicit penalty solve is dense)

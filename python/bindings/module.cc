@@ -245,6 +245,8 @@ void DefineParams(py::module_& m) {
       .def_readwrite("restitution", &RenderParams::restitution, "restitution e in [0, 1]")
       .def_readwrite("t_collision_s", &RenderParams::t_collision_s,
                      "collision window t_c [s], at most 0.1")
+      .def_readwrite("frequency_given", &RenderParams::frequency_given,
+                     "keep frequency_hz even when it is the default and above 1/h")
       .def_readwrite("frequency_hz", &RenderParams::frequency_hz,
                      "impulse-train frequency f [Hz], in [1/t_c, 1/h]")
       .def_readwrite("reference_solver", &RenderParams::reference_solver,

@@ -248,6 +248,82 @@ def read_results(out):
         return [json.loads(line) for line in f if line.endswith("\n")]
 
 
+def _duration(seconds):
+    """A duration for people, as the C++ tool writes it ("0.4 s", "12 s", "3 min 05 s")."""
+    seconds = max(0.0, seconds)
+    if seconds < 9.95:
+        return f"{seconds:.1f} s"
+    if seconds < 59.5:
+        return f"{seconds:.0f} s"
+    if seconds < 3599.5:
+        s = round(seconds)
+        return f"{s // 60} min {s % 60:02d} s"
+    m = round(seconds / 60)
+    return f"{m // 60} h {m % 60:02d} min"
+
+
+class Progress:
+    """Progress of a sweep on stderr, as the C++ subcommands report theirs: nothing in the first
+    2 s, then a bar redrawn in place on a terminal, else a line at most every 2 s. Call it with
+    (done, total) after each point (run_sweep's `progress`)."""
+
+    def __init__(self, stream=None, clock=time.monotonic, first_after_s=2.0, every_s=2.0):
+        self.stream = stream or sys.stderr
+        self.clock = clock
+        self.start = clock()
+        self.first_after_s = first_after_s
+        self.every_s = 0.1 if self._terminal() else every_s
+        self.origin = None  # (time, done) of the first report: the rate's origin
+        self.last = None
+        self.printed = 0
+        self.bar_open = False
+
+    def _terminal(self):
+        try:
+            return self.stream.isatty()
+        except (AttributeError, ValueError):
+            return False
+
+    def text(self, done, total, now):
+        fraction = done / total if total else 1.0
+        text = (f"{int(100 * fraction)}% ({done} of {total} points), "
+                f"{_duration(now - self.start)} elapsed")
+        t0, d0 = self.origin
+        if done > d0 and now > t0:
+            text += f", about {_duration((total - done) * (now - t0) / (done - d0))} left"
+        else:
+            text += ", estimating the time left"
+        return text
+
+    def __call__(self, done, total):
+        now = self.clock()
+        if self.origin is None:
+            # the rate counts from the start and the points before this run's first one (those
+            # already in the results file do not count as fast)
+            self.origin = (self.start, done - 1 if done > 0 else 0)
+        if now - self.start < self.first_after_s:
+            return
+        if self.last is not None and now - self.last < self.every_s:
+            return
+        self.last = now
+        self.printed += 1
+        if self._terminal():
+            width = 24
+            filled = int(width * done / total) if total else width
+            self.stream.write(f"\r\033[Ksweep [{'#' * filled}{'.' * (width - filled)}] "
+                              f"{self.text(done, total, now)}")
+            self.bar_open = True
+        else:
+            self.stream.write(f"rigidtouch: progress: sweep: {self.text(done, total, now)}\n")
+        self.stream.flush()
+
+    def finish(self):
+        if self.bar_open:
+            self.stream.write("\n")
+            self.stream.flush()
+            self.bar_open = False
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message):
         # the project's one voice for errors: prefix, status 2
@@ -267,12 +343,21 @@ def main(argv=None):
                        help="local worker processes (default: one per core)")
     parser.add_argument("--batch", type=int, help="points per Dask task")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--quiet", action="store_true", help="print no progress on stderr")
     args = parser.parse_args(argv)
     if args.workers is not None and args.workers < 1:
         parser.error(f"--workers {args.workers}: valid 1 or more")
+    progress = None if args.quiet else Progress()
     try:
         summary = run_sweep(args.spec, args.out, scheduler=args.scheduler,
-                            workers=args.workers, batch=args.batch)
+                            workers=args.workers, batch=args.batch, progress=progress)
+    except KeyboardInterrupt:
+        # Ctrl-C: every point finished so far is in the results file; a rerun resumes
+        if progress:
+            progress.finish()
+        print(f"rigidtouch: interrupted: sweep stopped; the points finished are in {args.out}: "
+              "run the same command again to continue", file=sys.stderr)
+        return 130
     except SpecError as e:
         print(f"rigidtouch: error: {e}", file=sys.stderr)
         return 2
@@ -282,6 +367,8 @@ def main(argv=None):
     except Exception as e:  # the README's status 3: an internal error (e.g. the cluster failed)
         print(f"rigidtouch: internal error: {type(e).__name__}: {e}", file=sys.stderr)
         return 3
+    if progress:
+        progress.finish()
     if args.json:
         print(json.dumps(summary))
     else:

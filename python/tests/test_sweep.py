@@ -103,3 +103,55 @@ def test_zwidth_figure_counts_the_passive_points(tmp_path):
     png = tmp_path / "z.png"
     assert zwidth_figure(made, str(png)) == {("penalty", "omega3"): (3, 6)}
     assert png.stat().st_size > 1000
+
+
+class _Clock:
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_progress_is_silent_at_first_then_a_line_every_two_seconds_with_the_time_left():
+    import io
+    clock = _Clock()
+    out = io.StringIO()  # not a terminal: lines, not a bar
+    progress = sw.Progress(stream=out, clock=clock)
+    progress(1, 10)  # 0 s: nothing printed in the first 2 s
+    clock.now += 1.5
+    progress(2, 10)
+    assert out.getvalue() == ""
+    clock.now += 1.0  # 2.5 s: due
+    progress(3, 10)
+    clock.now += 1.0  # 3.5 s: less than 2 s after the last line
+    progress(4, 10)
+    clock.now += 1.0  # 4.5 s
+    progress(5, 10)
+    lines = out.getvalue().splitlines()
+    assert len(lines) == 2, lines
+    assert all(line.startswith("rigidtouch: progress: sweep: ") for line in lines)
+    # 5 points in 4.5 s since the start, 5 left: about 4.5 s
+    assert lines[1] == ("rigidtouch: progress: sweep: 50% (5 of 10 points), 4.5 s elapsed, "
+                        "about 4.5 s left"), lines[1]
+    progress.finish()  # no bar was drawn: nothing to end
+    assert out.getvalue().count("\n") == 2
+
+
+def test_progress_formats_durations_like_the_cli():
+    assert sw._duration(0.44) == "0.4 s"
+    assert sw._duration(12.2) == "12 s"
+    assert sw._duration(185) == "3 min 05 s"
+    assert sw._duration(2 * 3600 + 7 * 60) == "2 h 07 min"
+
+
+def test_sweep_quiet_prints_no_progress(tmp_path):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"base": {"taps": 1, "speed": 0.2, "device": "touch"},
+                                "grid": {"renderer": ["penalty"]}}))
+    out = tmp_path / "out.jsonl"
+    r = subprocess.run([CLI, "sweep", "--spec", str(spec), "--out", str(out), "--workers", "1",
+                        "--quiet", "--json"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "progress" not in r.stderr
+    assert json.loads(r.stdout)["ran"] == 1

@@ -283,6 +283,9 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   return setup;
 }
 
+// ticks between two looks at the progress (a clock read costs about as much as a tick)
+constexpr std::int64_t kProgressTicks = 256;
+
 TapRun RunTapExperiment(const TapExperimentConfig& config) {
   TapSetup setup = PrepareTap(config);
   TapRun run;
@@ -294,6 +297,15 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   run.trace.reserve(static_cast<std::size_t>(max_ticks));
   TickInput input;
   for (std::int64_t tick = 0; tick < max_ticks && !dev.finished(); ++tick) {
+    if (config.progress != nullptr && tick % kProgressTicks == 0) {
+      config.progress->ThrowIfStopped(config.progress_where, config.progress_kept);
+      if (config.progress->Due()) {
+        const double done = static_cast<double>(tick) / static_cast<double>(max_ticks);
+        config.progress->Report(
+            config.progress_from + (config.progress_to - config.progress_from) * done,
+            config.progress_where);
+      }
+    }
     input.device = dev.Read();
     const DeviceCommand command = Tick(model, data, input);
     dev.Write(command);

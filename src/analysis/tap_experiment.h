@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "analysis/tap_metrics.h"
+#include "base/progress.h"
 #include "device/device_spec.h"
 #include "device/presets.h"
 #include "device/simulated_device.h"
@@ -52,6 +53,14 @@ struct TapExperimentConfig {
   // default: the device spec's inertia and sensing; tick_rate_hz is set from rate_hz
   std::optional<device::DeviceModelParams> device_model;
   device::TapScript script;  // surface point and normal are set from the wall
+  // the longer task this run is part of (may be null): the run reports the fractions
+  // progress_from to progress_to of it as its ticks pass, saying `progress_where`, and at a stop
+  // request throws Interrupted saying `progress_kept` (what the task has kept)
+  Progress* progress = nullptr;
+  double progress_from = 0.0;
+  double progress_to = 1.0;
+  std::string progress_where;
+  std::string progress_kept;
 };
 
 /// The result of a run.

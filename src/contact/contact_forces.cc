@@ -210,6 +210,8 @@ void GroupsAndVelocities(const Model& model, Data& data, ContactScratch& scratch
   dynamics::BeginVelocities(velocity);
   const bool shared =
       ClassifyAndForces(model, data, scratch, velocity, worker, free.AsTask(), solves.AsTask());
+  // the groups with trees, on this thread once the free-body groups are done (tree_groups.h)
+  if (!model.trees.empty()) SolveTreeGroups(model, data, scratch, velocity);
   dynamics::EndVelocities(model, data, velocity, shared);
 }
 

@@ -50,7 +50,9 @@ bool ClassifyAndForces(const Model& model, Data& data, ContactScratch& scratch,
 /// free-motion forces (dynamics::AddFreeMotionForces) alongside the building of the groups,
 /// ClassifyAndForces gives each group its laws, window, phase and forces and solves it right
 /// after on the same thread (dynamics::SolveGroup); the bodies in no group move freely
-/// (dynamics::EndVelocities). The threads' interleaving stays inside this call.
+/// (dynamics::EndVelocities). With trees, the groups that hold one are solved in joint space on
+/// the tick's thread after the others (SolveTreeGroups: each tree's step prepared, its free motion
+/// and its contact and limit forces). The threads' interleaving stays inside this call.
 void GroupsAndVelocities(const Model& model, Data& data, ContactScratch& scratch,
                          dynamics::VelocityScratch& velocity, const Wrench& user, bool onsets,
                          parallel::Worker* worker);

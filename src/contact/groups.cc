@@ -45,9 +45,138 @@ void ForEachRun(const Data& data, bool indexed, F&& f) {
   }
 }
 
+// calls f(node_a, node_b, begin, count) for each run of contacts, a side's node its body, the
+// tree of its link geom (nbody + tree) or -1 (static)
+template <typename F>
+void ForEachNodeRun(const Data& data, const Groups& g, bool indexed, F&& f) {
+  const int nbody = static_cast<int>(data.bodies.size());
+  const auto node = [&g, nbody](int body, int geom) {
+    if (body >= 0) return body;
+    const int t = geom >= 0 ? g.geom_tree[geom] : -1;
+    return t >= 0 ? nbody + t : -1;
+  };
+  if (indexed) {
+    for (int r = 0; r < data.nruns; ++r) {
+      const PairRun& run = data.runs[r];
+      f(node(run.body_a, run.geom_a), node(run.body_b, run.geom_b), run.begin, run.count);
+    }
+    return;
+  }
+  const Contact* contacts = data.contacts.data();
+  for (int begin = 0; begin < data.ncontact;) {
+    const Contact& c = contacts[begin];
+    int end = begin + 1;
+    while (end < data.ncontact && contacts[end].geom_a == c.geom_a &&
+           contacts[end].geom_b == c.geom_b) {
+      ++end;
+    }
+    f(node(c.body_a, c.geom_a), node(c.body_b, c.geom_b), begin, end - begin);
+    begin = end;
+  }
+}
+
+// BuildGroups for a model with trees: union-find over bodies and trees
+void BuildGroupsWithTrees(Data& data, Groups& g) {
+  const int nbody = static_cast<int>(data.bodies.size());
+  const int nnode = nbody + g.ntree;
+  const bool indexed = geometry::RunsIndexList(data);
+  int* parent = g.parent.data();
+  int* count = g.count.data();
+  int* group = g.node_group.data();
+  char* has_tree = g.node_has_tree.data();
+  for (int i = 0; i < nnode; ++i) {
+    parent[i] = i;
+    count[i] = i >= nbody ? 1 : 0;  // every tree is in a group
+    group[i] = -1;
+    has_tree[i] = 0;
+  }
+  ForEachNodeRun(data, g, indexed, [parent, count](int a, int b, int, int) {
+    if (a >= 0) count[a] = 1;
+    if (b >= 0) count[b] = 1;
+    if (a >= 0 && b >= 0) Unite(parent, a, b);
+  });
+  for (int t = 0; t < g.ntree; ++t) has_tree[FindRoot(parent, nbody + t)] = 1;
+  int ngroup = 0;
+  ForEachNodeRun(data, g, indexed, [&](int a, int b, int, int) {
+    if (a < 0 && b < 0) return;  // two static sides (a list written by hand): no group
+    const int root = FindRoot(parent, a >= 0 ? a : b);
+    if (!has_tree[root] && group[root] < 0) group[root] = ngroup++;
+  });
+  const int nplain = ngroup;
+  for (int t = 0; t < g.ntree; ++t) {
+    const int root = FindRoot(parent, nbody + t);
+    if (group[root] < 0) group[root] = ngroup++;
+  }
+  int* body_start = g.body_start.data();
+  int* contact_start = g.contact_start.data();
+  for (int k = 0; k <= ngroup; ++k) body_start[k] = contact_start[k] = 0;
+  for (int k = 0; k <= ngroup - nplain; ++k) g.tree_start[k] = 0;
+  for (int i = 0; i < nbody; ++i) {
+    data.body_group[i] = count[i] != 0 ? group[FindRoot(parent, i)] : -1;
+    g.slot[i] = count[i] != 0 ? body_start[data.body_group[i] + 1]++ : -1;
+  }
+  for (int t = 0; t < g.ntree; ++t) {
+    const int k = group[FindRoot(parent, nbody + t)];
+    g.tree_group[t] = k;
+    g.tree_slot[t] = g.tree_start[k - nplain + 1]++;
+  }
+  for (int k = 0; k < ngroup; ++k) body_start[k + 1] += body_start[k];
+  for (int k = 0; k < ngroup - nplain; ++k) g.tree_start[k + 1] += g.tree_start[k];
+  for (int i = 0; i < nbody; ++i) {
+    if (data.body_group[i] >= 0) g.bodies[body_start[data.body_group[i]] + g.slot[i]] = i;
+  }
+  for (int t = 0; t < g.ntree; ++t) {
+    g.trees[g.tree_start[g.tree_group[t] - nplain] + g.tree_slot[t]] = t;
+  }
+  // contacts per group in list order (counting sort)
+  const auto group_of = [&data, &g, nbody](int a, int b) {
+    const int n = a >= 0 ? a : b;
+    return n < 0 ? -1 : n < nbody ? data.body_group[n] : g.tree_group[n - nbody];
+  };
+  ForEachNodeRun(data, g, indexed, [contact_start, &group_of](int a, int b, int, int n) {
+    if (group_of(a, b) >= 0) contact_start[group_of(a, b) + 1] += n;
+  });
+  for (int k = 0; k < ngroup; ++k) {
+    contact_start[k + 1] += contact_start[k];
+    count[k] = contact_start[k];
+  }
+  int* out = g.contacts.data();
+  ForEachNodeRun(data, g, indexed, [out, count, &group_of](int a, int b, int begin, int n) {
+    if (group_of(a, b) < 0) return;
+    int& next = count[group_of(a, b)];
+    for (int i = 0; i < n; ++i) out[next + i] = begin + i;
+    next += n;
+  });
+  g.ngroup = nplain;
+  g.ntree_group = ngroup - nplain;
+  data.ngroup = nplain;
+}
+
 }  // namespace
 
+void Groups::ReserveTrees(const Model& model) {
+  ntree = static_cast<int>(model.trees.size());
+  ntree_group = 0;
+  geom_tree.assign(model.geoms.size(), -1);
+  for (std::size_t i = 0; i < model.geoms.size(); ++i) geom_tree[i] = model.geoms[i].tree;
+  if (ntree == 0) return;
+  const int nbody = static_cast<int>(model.bodies.size());
+  const int nnode = nbody + ntree;
+  parent.assign(nnode, 0);
+  count.assign(nnode, 0);
+  body_start.assign(nnode + 1, 0);
+  contact_start.assign(nnode + 1, 0);
+  tree_start.assign(ntree + 1, 0);
+  trees.assign(ntree, 0);
+  tree_group.assign(ntree, -1);
+  tree_slot.assign(ntree, 0);
+  node_group.assign(nnode, -1);
+  node_has_tree.assign(nnode, 0);
+}
+
 void Groups::Reserve(int nbody, int max_contacts) {
+  ntree = 0;
+  ntree_group = 0;
   parent.assign(nbody, 0);
   body_start.assign(nbody + 1, 0);
   bodies.assign(nbody, 0);
@@ -59,6 +188,10 @@ void Groups::Reserve(int nbody, int max_contacts) {
 }
 
 void BuildGroups(Data& data, Groups& g) {
+  if (g.ntree > 0) {
+    BuildGroupsWithTrees(data, g);
+    return;
+  }
   const int nbody = static_cast<int>(data.bodies.size());
   const int ncontact = data.ncontact;
   const bool indexed = geometry::RunsIndexList(data);

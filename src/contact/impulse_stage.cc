@@ -185,7 +185,8 @@ void ImpulseScratch::Reserve(const Model& model, int worker_rows) {
 }
 
 void CollisionImpulses(const Model& model, Data& data, const Groups& G, ImpulseScratch& scratch,
-                       parallel::Worker* worker) {
+                       parallel::Worker* worker, TreeGroupScratch* trees) {
+  if (trees != nullptr && G.ntree_group > 0) TreeGroupImpulses(model, data, G, *trees);
   // penalty and event-based transients apply no impulses (the event renderer's window only
   // marks the onset its transient starts from)
   if (model.render.renderer == RendererKind::kPenalty ||

@@ -13,6 +13,7 @@
 #include "contact/impulse.h"
 #include "contact/impulse_reference.h"
 #include "contact/impulse_solver.h"
+#include "contact/tree_groups.h"
 #include "parallel/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
@@ -73,7 +74,11 @@ struct ImpulseScratch {
 /// when a solver fails), recorded in data.impulses, the contacts' impulse_Ns and
 /// data.tool_impulse_Ns_W, and the group's window advanced. With a worker, the groups with an
 /// impulse due are shared with it when there are enough of them.
+/// The groups with trees (Groups::ntree_group) take their impulses from `trees`
+/// (TreeGroupImpulses, on the tick's thread), whatever the renderer: a joint limit's mode is its
+/// own (RenderParams::joint_limit_renderer).
 void CollisionImpulses(const Model& model, Data& data, const Groups& groups,
-                       ImpulseScratch& scratch, parallel::Worker* worker = nullptr);
+                       ImpulseScratch& scratch, parallel::Worker* worker = nullptr,
+                       TreeGroupScratch* trees = nullptr);
 
 }  // namespace rigidtouch::contact

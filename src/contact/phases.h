@@ -7,6 +7,7 @@
 
 #include "contact/groups.h"
 #include "contact/penalty.h"
+#include "contact/tree_groups.h"
 #include "parallel/worker.h"
 #include "rigidtouch/data.h"
 #include "rigidtouch/model.h"
@@ -22,6 +23,8 @@ struct ContactScratch {
   // (nbody) each group's phase this tick, which stage 4 gives the group's contacts as it writes
   // their forces (so that the windows of stage 3 write no contact)
   std::vector<ContactPhase> group_phase;
+  // the groups with trees (Groups::ntree_group): their rows, solver and the limits' state
+  TreeGroupScratch trees;
 
   /// Sizes every buffer; the only allocating call.
   void Reserve(int nbody, int max_contacts);

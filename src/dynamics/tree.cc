@@ -61,8 +61,15 @@ void CheckBody(const std::vector<TreeBody>& bodies, int i) {
         std::abs(j.axis.norm() - 1.0) > 1e-9) {
       throw Error(name + ": joint axis must be unit");
     }
-    if (j.damping < 0.0 || j.armature < 0.0 || j.stiffness < 0.0) {
-      throw Error(name + ": joint damping, armature and stiffness must be >= 0");
+    if (!(j.damping >= 0.0 && j.armature >= 0.0 && j.stiffness >= 0.0 && j.frictionloss >= 0.0 &&
+          std::isfinite(j.frictionloss))) {
+      throw Error(name + ": joint damping, armature, stiffness and frictionloss must be >= 0");
+    }
+    if (j.stiffness != 0.0 && j.type == JointType::kFree) {
+      throw Error(name + ": a free joint has no spring here (stiffness must be 0)");
+    }
+    if (j.type == JointType::kBall && std::abs(j.spring_quat.norm() - 1.0) > 1e-9) {
+      throw Error(name + ": a ball joint's spring quaternion must be unit");
     }
   }
 }
@@ -92,6 +99,20 @@ Quat NormalizedQuat(Eigen::VectorXd& qpos, int adr) {
   qpos[adr + 2] = q.y();
   qpos[adr + 3] = q.z();
   return q;
+}
+
+// The rotation vector (axis times angle, the angle wrapped into [-pi, pi]) of spring_quat^-1 q for
+// the ball joint's quaternion at qpos[adr], in the frame after the joint: what MuJoCo 2.2.2's
+// ball spring pulls back (mj_passive with mju_subQuat), written here from its definition.
+Vec3 BallSpringRotation(const TreeJoint& jt, const Eigen::VectorXd& qpos, int adr) {
+  const Quat q = Quat(qpos[adr], qpos[adr + 1], qpos[adr + 2], qpos[adr + 3]).normalized();
+  const Quat d = jt.spring_quat.conjugate() * q;
+  const Vec3 v = d.vec();
+  const double s = v.norm();
+  if (!(s > 0.0)) return Vec3::Zero();
+  double angle = 2.0 * std::atan2(s, d.w());  // in [0, 2 pi]
+  if (angle > M_PI) angle -= 2.0 * M_PI;      // the shorter way round
+  return v / s * angle;
 }
 
 // Spatial inertia about the world origin of a body with mass m, centre c and inertia Ic (world).
@@ -181,6 +202,7 @@ TreeModel MakeTree(std::vector<TreeBody> bodies, const Vec3& gravity_mps2) {
         m.dof_body.push_back(i);
         m.dof_joint.push_back(j);
         m.dof_parent.push_back(last);
+        if (jt.frictionloss > 0.0) m.friction_dofs.push_back(m.nv);
         last = m.nv++;
       }
     }
@@ -215,6 +237,10 @@ TreeData MakeTreeData(const TreeModel& model) {
   d.factor = Eigen::MatrixXd::Zero(nv, nv);
   d.scratch_v = Eigen::VectorXd::Zero(nv);
   d.scratch_w = Eigen::VectorXd::Zero(nv);
+  const int nf = static_cast<int>(model.friction_dofs.size());
+  d.friction_A = Eigen::MatrixXd::Zero(nf, nf);
+  d.friction_v = Eigen::VectorXd::Zero(nf);
+  d.friction_lambda = Eigen::VectorXd::Zero(nf);
   TreeKinematics(model, d);
   return d;
 }
@@ -307,8 +333,12 @@ void TreePassiveForces(const TreeModel& model, TreeData& data) {
     for (int k = 0; k < DofCount(jt.type); ++k) {
       data.passive[da + k] = -jt.damping * data.qvel[da + k];
     }
+    if (jt.stiffness == 0.0) continue;
     if (jt.type == JointType::kHinge || jt.type == JointType::kSlide) {
       data.passive[da] -= jt.stiffness * (data.qpos[model.joint_qadr[j]] - jt.spring_ref);
+    } else if (jt.type == JointType::kBall) {
+      data.passive.segment<3>(da) -=
+          jt.stiffness * BallSpringRotation(jt, data.qpos, model.joint_qadr[j]);
     }
   }
 }
@@ -400,10 +430,7 @@ bool TreeStep(const TreeModel& model, TreeData& data, double h_s,
   TreeBiasForces(model, data);
   TreePassiveForces(model, data);
   if (!TreeFactor(model, data, h_s)) return false;
-  // (M + h D) dv = h (tau - bias + passive): backward Euler on the damper, explicit on the rest
-  data.scratch_w = h_s * (tau - data.bias + data.passive);
-  TreeSolve(data, data.scratch_w);
-  data.qvel += data.scratch_w;
+  TreeFreeVelocity(model, data, h_s, tau);
   TreeIntegratePositions(model, data, h_s);
   return true;
 }
@@ -420,6 +447,10 @@ double TreePotentialEnergy(const TreeModel& model, const TreeData& data) {
   }
   for (int j = 0; j < static_cast<int>(model.joint_body.size()); ++j) {
     const TreeJoint& jt = model.joint(j);
+    if (jt.type == JointType::kBall) {
+      U_J +=
+          0.5 * jt.stiffness * BallSpringRotation(jt, data.qpos, model.joint_qadr[j]).squaredNorm();
+    }
     if (jt.type != JointType::kHinge && jt.type != JointType::kSlide) continue;
     const double dq = data.qpos[model.joint_qadr[j]] - jt.spring_ref;
     U_J += 0.5 * jt.stiffness * dq * dq;

@@ -29,9 +29,11 @@ struct TreeJoint {
   Vec3 pos_m = Vec3::Zero();  // anchor in the body frame (hinge and ball rotate about it)
   double ref = 0.0;           // hinge [rad] / slide [m] coordinate of the body's given offset
   double spring_ref = 0.0;    // coordinate at which the joint spring is relaxed
-  double stiffness = 0.0;     // N m/rad (hinge) or N/m (slide); ball and free have none here
+  Quat spring_quat = Quat::Identity();  // ball: the orientation at which its spring is relaxed
+  double stiffness = 0.0;     // N m/rad (hinge, ball) or N/m (slide); a free joint has none here
   double damping = 0.0;       // N m s/rad or N s/m, per degree of freedom
   double armature = 0.0;      // kg m^2 or kg, added to the mass matrix's diagonal
+  double frictionloss = 0.0;  // N m or N, dry friction bound per degree of freedom (>= 0)
 };
 
 struct TreeBody {
@@ -57,6 +59,7 @@ struct TreeModel {
   std::vector<int> dof_joint;
   std::vector<int> dof_parent;     // previous dof on the path to the root, -1 at the root
   std::vector<int> body_last_dof;  // last dof moving the body (own or an ancestor's), or -1
+  std::vector<int> friction_dofs;  // the dofs with frictionloss > 0, ascending
   Eigen::VectorXd qpos0;           // coordinates of the bodies' given offsets
   const TreeJoint& joint(int j) const { return bodies[joint_body[j]].joints[joint_index[j]]; }
 };
@@ -85,6 +88,11 @@ struct TreeData {
   Eigen::MatrixXd factor;       // LDL^T of M + h D: L below the diagonal, D on it
   Eigen::VectorXd scratch_v, scratch_w;
   bool factored = false;
+  // dry joint friction (TreeFrictionImpulse), sized for the model's friction dofs F
+  Eigen::MatrixXd friction_A;       // (M + h D)^-1 restricted to F x F
+  Eigen::VectorXd friction_v;       // velocities of F before the friction impulse
+  Eigen::VectorXd friction_lambda;  // friction impulses on F [N m s or N s]
+  int friction_sweeps = 0;          // Gauss-Seidel sweeps of the last solve
 };
 
 /// State at qpos0 with zero velocity, every array sized for the model.
@@ -102,7 +110,9 @@ void TreeMassMatrix(const TreeModel& model, TreeData& data);
 /// (recursive Newton-Euler with qacc = 0), MuJoCo's qfrc_bias. Needs TreeKinematics.
 void TreeBiasForces(const TreeModel& model, TreeData& data);
 
-/// Spring and damper forces -k (q - spring_ref) - d qdot into data.passive.
+/// Spring and damper forces into data.passive: -k (q - spring_ref) on hinges and slides, -k r on
+/// a ball's three dofs with r the rotation vector of spring_quat^-1 q (angle wrapped into
+/// [-pi, pi], in the frame after the joint: MuJoCo 2.2.2's ball spring), -d qdot on every dof.
 void TreePassiveForces(const TreeModel& model, TreeData& data);
 
 /// Jacobians of the world point p_W moving with `body`: jac_trans (3 x nv) maps qvel to the
@@ -122,10 +132,27 @@ void TreeSolve(const TreeData& data, Eigen::Ref<Eigen::VectorXd> x);
 void TreeEffectiveInverseMass(TreeData& data, const Eigen::Ref<const Eigen::MatrixXd>& J,
                               Eigen::Ref<Eigen::MatrixXd> out);
 
+/// Dry joint friction over a step of length h (docs/decisions.md, "Dry joint friction"): the
+/// generalized impulse lambda on the friction dofs F with |lambda_i| <= h frictionloss_i that
+/// minimizes 1/2 lambda^T A lambda + lambda^T v_F, A = (M + h D)^-1 on F x F (the kept factor),
+/// v_F the dofs' velocities before it; then qvel += (M + h D)^-1 lambda. At the minimum a dof
+/// whose impulse is inside its bound ends with zero velocity (it sticks) and one at its bound
+/// slides with the full friction opposing its velocity. Solved by projected Gauss-Seidel (at most
+/// kFrictionMaxSweeps sweeps, stopping when no impulse changes by more than 1e-12 of its bound);
+/// when it converged, the sticking dofs' velocities are set to exactly 0. Needs TreeFactor at
+/// this h. Never allocates or throws; does nothing without friction dofs. Returns the sweeps.
+int TreeFrictionImpulse(const TreeModel& model, TreeData& data, double h_s);
+inline constexpr int kFrictionMaxSweeps = 200;
+
+/// The velocity update of a step, after TreeFactor at h: qvel += h (M + h D)^-1 (tau - bias +
+/// passive) (damping implicit), then the dry friction impulse (TreeFrictionImpulse).
+void TreeFreeVelocity(const TreeModel& model, TreeData& data, double h_s,
+                      const Eigen::Ref<const Eigen::VectorXd>& tau);
+
 /// One semi-implicit step of length h with joint forces tau (nv): kinematics, mass matrix, bias,
-/// passive forces; v += h (M + h D)^-1 (tau - bias + passive) (damping implicit); then the
-/// positions move with the new velocities (quaternions by the exponential map, renormalised).
-/// Returns false (state unchanged) when the factorisation fails.
+/// passive forces, factor, TreeFreeVelocity; then the positions move with the new velocities
+/// (quaternions by the exponential map, renormalised). Returns false (state unchanged) when the
+/// factorisation fails.
 bool TreeStep(const TreeModel& model, TreeData& data, double h_s,
               const Eigen::Ref<const Eigen::VectorXd>& tau);
 
@@ -136,8 +163,8 @@ void TreeIntegratePositions(const TreeModel& model, TreeData& data, double h_s);
 /// 1/2 qvel^T M qvel (armature included) [J]. Needs TreeMassMatrix at the current state.
 double TreeKineticEnergy(TreeData& data);
 
-/// Gravity potential -sum m g.com plus joint springs 1/2 k (q - spring_ref)^2 [J]. Needs
-/// TreeKinematics.
+/// Gravity potential -sum m g.com plus joint springs 1/2 k (q - spring_ref)^2 (a ball's 1/2 k
+/// |r|^2, r as in TreePassiveForces) [J]. Needs TreeKinematics.
 double TreePotentialEnergy(const TreeModel& model, const TreeData& data);
 
 }  // namespace rigidtouch::dynamics

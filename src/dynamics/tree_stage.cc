@@ -63,12 +63,14 @@ void MakeTreesData(const Model& model, Data& data) {
     SetTreeInitialState(tree, *data.trees.back());
     data.joint_at_limit.emplace_back(tree.joints.size(), 0);
   }
+  data.tree_window.assign(model.trees.size(), WindowState{});
 }
 
 void ResetTrees(const Model& model, Data& data, geometry::CollisionScratch& collision) {
   const int ntree = static_cast<int>(model.trees.size());
   for (int t = 0; t < ntree && t < static_cast<int>(data.trees.size()); ++t) {
     SetTreeInitialState(model.trees[t], *data.trees[t]);
+    data.tree_window[t] = WindowState{};
     if (collision.poses.size() == model.geoms.size()) {
       PlaceLinkGeoms(model, t, *data.trees[t], collision);
     }
@@ -95,16 +97,45 @@ void ActuatorForces(const Model& model, int t, const Data& data,
   }
 }
 
+bool PrepareTreeStep(const Model& model, int t, Data& data, Eigen::Ref<Eigen::VectorXd> force) {
+  const TreeModel& tm = *model.trees[t].dynamics;
+  TreeData& d = *data.trees[t];
+  ActuatorForces(model, t, data, force);
+  TreeKinematics(tm, d);
+  TreeMassMatrix(tm, d);
+  TreeBiasForces(tm, d);
+  TreePassiveForces(tm, d);
+  return TreeFactor(tm, d, model.timestep_s);
+}
+
+void TreeFreeMotion(const Model& model, int t, Data& data,
+                    const Eigen::Ref<const Eigen::VectorXd>& force) {
+  // TreeStep's velocity update: the free velocity with the damper implicit, then the joints' dry
+  // friction (frictionloss), before the contact and limit rows of the tree's group
+  TreeFreeVelocity(*model.trees[t].dynamics, *data.trees[t], model.timestep_s, force);
+}
+
+void ResetTree(const Model& model, int t, Data& data) {
+  SetTreeInitialState(model.trees[t], *data.trees[t]);
+  data.trees[t]->factored = false;
+}
+
+Vec3 LinkPointVelocity(const TreeData& data, int link, const Vec3& p_W) {
+  const Vec6& V = data.V[link];
+  return V.tail<3>() + V.head<3>().cross(p_W);
+}
+
 void StepTrees(const Model& model, Data& data, TreeStageScratch& scratch,
                geometry::CollisionScratch& collision) {
+  (void)scratch;
   if (!model.has_tool) data.bodies[model.tool] = model.initial[model.tool];
   const int ntree = static_cast<int>(model.trees.size());
   for (int t = 0; t < ntree; ++t) {
     const ArticulatedTree& tree = model.trees[t];
     TreeData& d = *data.trees[t];
-    Eigen::VectorXd& force = scratch.joint_force[t];
-    ActuatorForces(model, t, data, force);
-    const bool stepped = TreeStep(*tree.dynamics, d, model.timestep_s, force);
+    // a tree whose factor failed in stage 4 was not moved there; its velocities stay unused
+    const bool stepped = d.factored;
+    if (stepped) TreeIntegratePositions(*tree.dynamics, d, model.timestep_s);
     if (!stepped || !d.qpos.allFinite() || !d.qvel.allFinite()) {
       data.Warn(Warning::kNonFiniteState);
       SetTreeInitialState(tree, d);

@@ -112,6 +112,10 @@ void EndVelocities(const Model& model, Data& data, VelocityScratch& scratch, boo
   for (int k = 0; k < failed; ++k) data.Warn(Warning::kSolverFailed);
 }
 
+void MoveFreely(const Model& model, Data& data, const VelocityScratch& scratch, int i) {
+  FreeMotion(model, data, scratch, i);
+}
+
 void IntegratePositions(const Model& model, Data& data) {
   for (BodyState& s : data.bodies) IntegratePosition(s, model.timestep_s);
 }

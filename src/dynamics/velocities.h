@@ -116,6 +116,11 @@ struct GroupSolves {
 /// (counted in shared_steps).
 void EndVelocities(const Model& model, Data& data, VelocityScratch& scratch, bool shared);
 
+/// Body i moves freely over the step under its explicit force sums (Eq. 1 without contact
+/// coupling): what EndVelocities does for a body in no group; the groups with a tree (contact::
+/// SolveTreeGroups) start their bodies' solve from it.
+void MoveFreely(const Model& model, Data& data, const VelocityScratch& scratch, int i);
+
 /// Stage 7: semi-implicit Euler position update of every body with its new velocity.
 void IntegratePositions(const Model& model, Data& data);
 

@@ -300,6 +300,30 @@ void RequireRender(const Model& model) {
   }
 }
 
+// a joint limit's onset rendering (RenderParams::joint_limit_renderer): penalty, impulse or a
+// plastic train over the render's t_c at f (Eq. 6-7, the same bounds as the wall's train)
+void RequireJointLimitRenderer(Model& model) {
+  const RenderParams& r = model.render;
+  const RendererKind k = r.joint_limit_renderer;
+  if (k != RendererKind::kPenalty && k != RendererKind::kImpulse && k != RendererKind::kTrain) {
+    throw Error(std::string("parameter joint_limit_renderer = ") + text::RendererName(k) +
+                " is not a joint-limit renderer; valid: penalty, impulse, train");
+  }
+  model.joint_limit_schedule = Schedule{};
+  if (k != RendererKind::kTrain) return;
+  const std::string window =
+      "0 < t_c <= " + text::FormatNumber(limits::kMaxCollisionWindow_s) + " s";
+  RequireFinite("t_collision_s", r.t_collision_s, 0.0, limits::kMaxCollisionWindow_s,
+                window + " (joint_limit_renderer train)");
+  RequireInRange(r.t_collision_s > 0.0, "t_collision_s", r.t_collision_s, window);
+  RequireInRange(std::isfinite(r.frequency_hz) && r.frequency_hz > 0.0, "frequency_hz",
+                 r.frequency_hz, "f > 0 Hz, within [1/t_c, 1/h] (Eq. 6-7)");
+  RenderParams train = r;
+  train.renderer = RendererKind::kTrain;
+  train.material = Material{};
+  model.joint_limit_schedule = contact::MakeSchedule(model.timestep_s, train);
+}
+
 // the device port, and the laws it renders against what the device can display
 void RequireDevice(const Model& model) {
   const ContactParams& c = model.contact;
@@ -354,6 +378,7 @@ void Configure(Model& model) {
   RequireContact(model.contact);
   RequireRender(model);
   model.schedule = contact::MakeSchedule(model.timestep_s, model.render);
+  RequireJointLimitRenderer(model);
 
   RequireDevice(model);
   RequireInRange(model.tool >= 0 && model.tool < static_cast<int>(model.bodies.size()), "tool",

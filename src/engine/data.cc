@@ -52,11 +52,13 @@ Data MakeData(const Model& model) {
   data.runs.resize(ncap);
   data.body_group.assign(nbody, -1);
   data.window.resize(nbody);
-  data.impulses.resize(nbody);
+  data.impulses.resize(nbody + model.trees.size());
   data.workspace.reset(new Workspace);
   Workspace& ws = *data.workspace;
   ws.collision.Reserve(model);
   ws.contact.Reserve(nbody, ncap);
+  ws.contact.groups.ReserveTrees(model);
+  ws.contact.trees.Reserve(model);
   ws.velocity.Reserve(nbody, ncap, model.max_group_bodies, model.threads);
   ws.impulse.Reserve(model);
   ws.trees.Reserve(model);
@@ -106,6 +108,7 @@ void ResetState(const Model& model, Data& data) {
     data.workspace->collision.Reset(model);
     data.workspace->velocity.ForgetFactors();
     dynamics::ResetTrees(model, data, data.workspace->collision);
+    data.workspace->contact.trees.Reset();
   }
 }
 

@@ -39,7 +39,8 @@ DeviceCommand Tick(const Model& model, Data& data, const TickInput& input) {
   // 5. impulses: Eq. 5 (single impulse) or Eq. 8 (train) where the window's schedule (Eq. 6-7)
   // says one is due, on the velocities after stage 4; none from a reading without new motion
   if (coupling.new_motion) {
-    contact::CollisionImpulses(model, data, ws.contact.groups, ws.impulse, ws.worker.get());
+    contact::CollisionImpulses(model, data, ws.contact.groups, ws.impulse, ws.worker.get(),
+                               &ws.contact.trees);
   }
 
   // 6. integrate positions with the new velocities

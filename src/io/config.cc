@@ -1,11 +1,13 @@
 #include "io/config.h"
 
+#include <filesystem>
 #include <functional>
 #include <utility>
 #include <vector>
 
 #include "base/names.h"
 #include "base/text.h"
+#include "io/materials.h"
 #include "io/strict_json.h"
 
 namespace rigidtouch::io {
@@ -28,6 +30,14 @@ void ReadSection(const StrictObject& top, const std::string& name, const NumberF
   for (const std::string& field : fields) {
     if (in.Has(field)) given.push_back(name + "." + field);
   }
+}
+
+// a material named in a config file: a ".json" path relative to the file's folder, else a
+// preset's name
+std::string MaterialPath(const std::string& text, const std::string& config_path) {
+  const std::filesystem::path p(text);
+  if (p.extension() != ".json" || p.is_absolute()) return text;
+  return (std::filesystem::path(config_path).parent_path() / p).string();
 }
 
 }  // namespace
@@ -78,24 +88,43 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
               given);
 
   RenderParams& r = options.render;
-  ReadSection(top, "render",
-              {{"restitution", &r.restitution},
-               {"t_collision_s", &r.t_collision_s},
-               {"frequency_hz", &r.frequency_hz}},
-              given, {"renderer", "reference_solver", "passivity_control"},
-              [&r](const StrictObject& in) {
-                if (auto name = in.OneOf("renderer", text::RendererNames(), "renderer")) {
-                  r.renderer = ParseRenderer(*name);
-                }
-                in.Read("reference_solver", r.reference_solver);
-                in.Read("passivity_control", r.passivity_control);
-              });
+  ReadSection(
+      top, "render",
+      {{"restitution", &r.restitution},
+       {"t_collision_s", &r.t_collision_s},
+       {"frequency_hz", &r.frequency_hz}},
+      given,
+      {"renderer", "reference_solver", "passivity_control", "material", "joint_limit_renderer"},
+      [&r, &path](const StrictObject& in) {
+        if (auto name = in.OneOf("renderer", text::RendererNames(), "renderer")) {
+          r.renderer = ParseRenderer(*name);
+        }
+        // a joint limit renders like a wall: penalty, impulse or train (Configure refuses
+        // event with the field named)
+        if (auto name =
+                in.OneOf("joint_limit_renderer", text::RendererNames(), "joint_limit_renderer")) {
+          r.joint_limit_renderer = ParseRenderer(*name);
+        }
+        in.Read("reference_solver", r.reference_solver);
+        in.Read("passivity_control", r.passivity_control);
+        // a preset's name, or a material file relative to the config file's folder
+        if (auto material = in.String("material")) {
+          try {
+            r.material = ParseMaterial(MaterialPath(*material, path));
+          } catch (const Error& e) {
+            throw Error(path + ": render.material: " + e.what());
+          }
+        }
+      });
 
   DeviceParams& d = options.device;
   ReadSection(top, "device",
               {{"max_force_N", &d.limits.max_force_N},
                {"coupling_stiffness_N_per_m", &d.coupling_stiffness_N_per_m},
-               {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m}},
+               {"coupling_damping_Ns_per_m", &d.coupling_damping_Ns_per_m},
+               {"plausible_radius_m", &d.plausible_radius_m},
+               {"plausible_speed_mps", &d.plausible_speed_mps},
+               {"plausible_angular_speed_radps", &d.plausible_angular_speed_radps}},
               given, {"coupling"}, [&d](const StrictObject& in) {
                 if (auto name = in.OneOf("coupling", text::CouplingNames(), "coupling")) {
                   d.coupling = ParseCoupling(*name);

@@ -115,16 +115,13 @@ dynamics::TreeJoint TreeJointOf(const Loader& L, int j, JointModel& out) {
   out.type = JointKindOf(m->jnt_type[j]);
   const bool scalar = out.type == JointKind::kHinge || out.type == JointKind::kSlide;
   const int ndof = out.type == JointKind::kFree ? 6 : out.type == JointKind::kBall ? 3 : 1;
-  for (int k = 0; k < ndof; ++k) {
-    if (m->dof_frictionloss[da + k] != 0.0) {
-      L.Refuse(L.Joint(j) + " has frictionloss=\"" + Number(m->dof_frictionloss[da + k]) +
-               "\": rigidtouch does not simulate dry joint friction (remove it or set it to 0)");
-    }
+  if (out.type == JointKind::kFree && m->jnt_stiffness[j] != 0.0) {
+    L.Refuse(L.Joint(j) + " is a free joint with stiffness=\"" + Number(m->jnt_stiffness[j]) +
+             "\": rigidtouch's joint springs act on hinge, slide and ball joints only");
   }
-  if (!scalar && m->jnt_stiffness[j] != 0.0) {
-    L.Refuse(L.Joint(j) + " is a " + (out.type == JointKind::kBall ? "ball" : "free") +
-             " joint with stiffness=\"" + Number(m->jnt_stiffness[j]) +
-             "\": rigidtouch's joint springs act on hinge and slide joints only");
+  if (!(m->dof_frictionloss[da] >= 0.0 && m->dof_frictionloss[da] <= 1e9)) {
+    L.Refuse(L.Joint(j) + " has frictionloss=\"" + Number(m->dof_frictionloss[da]) +
+             "\": it must be within [0, 1e9] N or N m");
   }
   const Vec3 axis = Vec3At(m->jnt_axis + 3 * j);
   if (scalar && !(std::abs(axis.norm() - 1.0) < 1e-6)) {
@@ -146,12 +143,17 @@ dynamics::TreeJoint TreeJointOf(const Loader& L, int j, JointModel& out) {
     jt.ref = m->qpos0[qa];
     jt.spring_ref = m->qpos_spring[qa];
     jt.stiffness = m->jnt_stiffness[j];
+  } else if (out.type == JointKind::kBall) {
+    jt.stiffness = m->jnt_stiffness[j];
+    jt.spring_quat = QuatAt(m->qpos_spring + qa);
   }
   jt.damping = m->dof_damping[da];
   jt.armature = m->dof_armature[da];
+  jt.frictionloss = m->dof_frictionloss[da];
   for (int k = 1; k < ndof; ++k) {
-    if (m->dof_damping[da + k] != jt.damping || m->dof_armature[da + k] != jt.armature) {
-      L.Refuse(L.Joint(j) + ": its degrees of freedom differ in damping or armature");
+    if (m->dof_damping[da + k] != jt.damping || m->dof_armature[da + k] != jt.armature ||
+        m->dof_frictionloss[da + k] != jt.frictionloss) {
+      L.Refuse(L.Joint(j) + ": its degrees of freedom differ in damping, armature or frictionloss");
     }
   }
   return jt;
@@ -216,12 +218,32 @@ void CopyActuator(const Loader& L, int u, const std::vector<LinkOf>& link_of,
     L.Refuse(who + " drives " + L.Joint(j) +
              ": rigidtouch's actuators act on hinge and slide joints of articulated bodies only");
   }
-  if (m->actuator_dyntype[u] != mjDYN_NONE) {
-    L.Refuse(who +
-             " has activation dynamics (dyntype integrator, filter, muscle or user): "
-             "rigidtouch applies actuators at a constant control without activation state");
-  }
   const int gt = m->actuator_gaintype[u], bt = m->actuator_biastype[u];
+  double ctrl = L.key >= 0 && m->nu > 0 ? m->key_ctrl[L.key * m->nu + u] : 0.0;
+  if (m->actuator_ctrllimited[u]) {
+    ctrl = std::clamp(ctrl, m->actuator_ctrlrange[2 * u], m->actuator_ctrlrange[2 * u + 1]);
+  }
+  const int dyn = m->actuator_dyntype[u];
+  if (dyn != mjDYN_NONE) {
+    // MuJoCo 2.2 keeps the activations of the last na actuators (the stateful ones come last)
+    const int act = u - (m->nu - m->na);
+    const double act0 =
+        L.key >= 0 && act >= 0 && act < m->na ? m->key_act[L.key * m->na + act] : 0.0;
+    // integrator (act' = ctrl) or filter (act' = (ctrl - act) / tau) from 0 at control 0 keeps
+    // act = 0, and a force gain(l, v) act without bias is then 0 for the whole run
+    const bool idle = (dyn == mjDYN_INTEGRATOR || dyn == mjDYN_FILTER) && ctrl == 0.0 &&
+                      act0 == 0.0 && (gt == mjGAIN_FIXED || gt == mjGAIN_AFFINE) &&
+                      bt == mjBIAS_NONE;
+    if (!idle) {
+      L.Refuse(who +
+               " has activation dynamics (dyntype integrator, filter, muscle or user): "
+               "rigidtouch applies actuators at a constant control without activation state");
+    }
+    L.Warn(who +
+           " has activation dynamics, which rigidtouch does not simulate; at its constant "
+           "control 0 from activation 0 with no bias it exerts no force, so it is left out");
+    return;
+  }
   if ((gt != mjGAIN_FIXED && gt != mjGAIN_AFFINE) || (bt != mjBIAS_NONE && bt != mjBIAS_AFFINE)) {
     L.Refuse(who +
              " has a muscle or user gain or bias: rigidtouch supports fixed and affine "
@@ -238,10 +260,6 @@ void CopyActuator(const Loader& L, int u, const std::vector<LinkOf>& link_of,
   a.gain[1] = gt == mjGAIN_AFFINE ? g[1] : 0.0;
   a.gain[2] = gt == mjGAIN_AFFINE ? g[2] : 0.0;
   for (int k = 0; k < 3; ++k) a.bias[k] = bt == mjBIAS_AFFINE ? bias[k] : 0.0;
-  double ctrl = L.key >= 0 && m->nu > 0 ? m->key_ctrl[L.key * m->nu + u] : 0.0;
-  if (m->actuator_ctrllimited[u]) {
-    ctrl = std::clamp(ctrl, m->actuator_ctrlrange[2 * u], m->actuator_ctrlrange[2 * u + 1]);
-  }
   a.ctrl = ctrl;
   a.force_limited = m->actuator_forcelimited[u] != 0;
   a.force_lo = m->actuator_forcerange[2 * u];
@@ -320,21 +338,25 @@ void BuildTree(const Loader& L, int root, std::vector<LinkOf>& link_of,
   }
 }
 
-// limits' softness and margins, which the contact stages replace with their own
+// limits' softness and margins, which the contact stages replace with their own: one warning
+// naming the first three joints and the count of the others (a file of 22 humanoids has 462)
 void WarnLimitSoftness(const Loader& L) {
   const mjModel* m = L.m;
   mjtNum solref[mjNREF], solimp[mjNIMP];
   mj_defaultSolRefImp(solref, solimp);
+  std::string named;
+  int tuned_joints = 0;
   for (int j = 0; j < m->njnt; ++j) {
     bool tuned = m->jnt_margin[j] != 0.0;
     for (int k = 0; k < mjNREF; ++k) tuned = tuned || m->jnt_solref[mjNREF * j + k] != solref[k];
     for (int k = 0; k < mjNIMP; ++k) tuned = tuned || m->jnt_solimp[mjNIMP * j + k] != solimp[k];
-    if (tuned && m->jnt_limited[j]) {
-      L.Warn(L.Joint(j) +
-             ": solreflimit, solimplimit and margin are ignored; rigidtouch's "
-             "contact stages make joint limits hard");
-    }
+    if (!tuned || !m->jnt_limited[j]) continue;
+    if (tuned_joints++ < 3) named += (named.empty() ? "" : ", ") + L.Joint(j);
   }
+  if (tuned_joints == 0) return;
+  L.Warn(named + (tuned_joints > 3 ? " and " + std::to_string(tuned_joints - 3) + " more" : "") +
+         ": solreflimit, solimplimit and margin are ignored; rigidtouch's contact stages make "
+         "joint limits hard");
 }
 
 }  // namespace
@@ -364,16 +386,17 @@ std::vector<LinkOf> CopyTrees(const mjModel* m, const std::string& path, Model& 
   }
   for (int u = 0; u < m->nu; ++u) CopyActuator(L, u, link_of, tree_joint);
   WarnLimitSoftness(L);
-  // until the contact stages take joint limits as unilateral contacts, a range is only reported
+  // hinge and slide ranges are unilateral rows of the contact stages; a ball's is only reported
   int limited = 0, first = -1;
   for (int j = 0; j < m->njnt; ++j) {
     if (link_of[m->jnt_bodyid[j]].tree < 0 || !m->jnt_limited[j]) continue;
+    if (m->jnt_type[j] != mjJNT_BALL) continue;
     if (limited++ == 0) first = j;
   }
   if (limited > 0) {
     L.Warn(L.Joint(first) + (limited > 1 ? " and " + std::to_string(limited - 1) + " more" : "") +
-           ": joint ranges are reported (at_limit) but not enforced yet; the joint can pass its "
-           "limit");
+           ": a ball joint's range is reported (at_limit) but not enforced; the joint can pass "
+           "its limit");
   }
   return link_of;
 }

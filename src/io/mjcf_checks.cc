@@ -1,5 +1,6 @@
 #include "io/mjcf_checks.h"
 
+#include <cmath>
 #include <sstream>
 
 #include "io/mjcf_articulation.h"
@@ -76,15 +77,30 @@ void CheckOptions(const mjModel* m, const Reporter& r) {
     r.Refuse("<option wind=\"" + Nums(o.wind, 3) +
              "\"> asks for fluid forces, which rigidtouch does not compute; remove it");
   }
-  if (o.disableflags & mjDSBL_CONTACT) {
+  // rigidtouch always computes contacts, limits and dry friction; the flags only change nothing
+  // when the scene has none of them: no free body (links collide with free bodies and the tool
+  // only), and for `constraint` no limited joint and no frictionloss either
+  bool free_body = false, limited = false, friction = false;
+  for (int b = 1; b < m->nbody; ++b) free_body = free_body || io::IsLoneFreeBody(m, b);
+  for (int j = 0; j < m->njnt; ++j) limited = limited || m->jnt_limited[j] != 0;
+  for (int d = 0; d < m->nv; ++d) friction = friction || m->dof_frictionloss[d] != 0.0;
+  if ((o.disableflags & mjDSBL_CONTACT) && free_body) {
     r.Refuse(
         "<flag contact=\"disable\"/>: rigidtouch always computes contacts (it is a contact "
-        "renderer); remove the flag");
+        "renderer) and this scene has free bodies; remove the flag");
   }
-  if (o.disableflags & mjDSBL_CONSTRAINT) {
+  if ((o.disableflags & mjDSBL_CONSTRAINT) && (free_body || limited || friction)) {
     r.Refuse(
-        "<flag constraint=\"disable\"/> turns contacts off, which rigidtouch always computes; "
-        "remove the flag");
+        "<flag constraint=\"disable\"/> turns contacts, joint limits and frictionloss off, "
+        "which rigidtouch always computes (this scene has free bodies, limited joints or "
+        "frictionloss); remove the flag");
+  }
+  const std::string unchanged =
+      "changes nothing here: the scene has no free body for its links to touch";
+  if (o.disableflags & mjDSBL_CONTACT) r.Warn("<flag contact=\"disable\"/> " + unchanged);
+  if (o.disableflags & mjDSBL_CONSTRAINT) {
+    r.Warn("<flag constraint=\"disable\"/> " + unchanged +
+           ", no limited joint and no frictionloss");
   }
   if (o.collision == mjCOL_PAIR) {
     r.Refuse(
@@ -212,10 +228,11 @@ void CheckElements(const mjModel* m, const std::string& path, std::vector<std::s
     const int j = m->dof_jntid[d];
     if (!io::IsLoneFreeBody(m, m->jnt_bodyid[j]))
       continue;  // a tree's joint: io::CopyTrees honours or refuses these
-    if (m->dof_damping[d] != 0.0 || m->dof_armature[d] != 0.0 || m->dof_frictionloss[d] != 0.0) {
+    if (m->dof_damping[d] != 0.0 || m->dof_armature[d] != 0.0 || m->dof_frictionloss[d] != 0.0 ||
+        m->jnt_stiffness[j] != 0.0) {
       r.Refuse("<joint> " + Name(m, mjOBJ_JOINT, m->dof_jntid[d]) +
-               " has damping, armature or frictionloss: rigidtouch's free bodies move without "
-               "joint forces");
+               " has damping, armature, frictionloss or stiffness: rigidtouch's free bodies move "
+               "without joint forces");
     }
   }
   if (m->nsensor > 0) {
@@ -224,6 +241,23 @@ void CheckElements(const mjModel* m, const std::string& path, std::vector<std::s
   }
   CheckOptions(m, r);
   CheckGeoms(m, r);
+}
+
+RenderParams SceneRender(const RenderParams& render, double h_s, const std::string& path,
+                         std::vector<std::string>& warnings) {
+  RenderParams r = render;
+  if (r.renderer == RendererKind::kTrain && !r.frequency_given &&
+      r.frequency_hz == RenderParams{}.frequency_hz && r.frequency_hz * h_s > 1.0 &&
+      std::isfinite(h_s)) {
+    r.frequency_hz = 1.0 / h_s;
+    std::ostringstream s;
+    s << "scene file '" << path << "': its time step h = " << h_s
+      << " s is longer than the default train's impulse interval (1 / 250 Hz): the train "
+         "frequency is 1/h = "
+      << r.frequency_hz << " Hz (one impulse per step); --frequency sets another";
+    warnings.push_back(s.str());
+  }
+  return r;
 }
 
 void CheckPairs(const mjModel* m, const std::string& path, std::vector<std::string>& warnings) {

@@ -9,17 +9,25 @@
 #include <string>
 #include <vector>
 
+#include "rigidtouch/model.h"
+
 namespace rigidtouch {
 
 /// Refuses (Error) the elements that change the motion rigidtouch computes: equality constraints,
 /// tendons with stiffness, damping or limits, fluid forces, contacts or constraints disabled,
-/// contact of predefined pairs only, damping, armature or friction loss on a free body's joint
-/// (the joints and actuators of articulated trees are io::CopyTrees's).
+/// contact of predefined pairs only, damping, armature, friction loss or stiffness on a free
+/// body's joint (the joints and actuators of articulated trees are io::CopyTrees's).
 /// Appends a warning for those that only tune MuJoCo's own solver and soft contact, which
 /// rigidtouch replaces with its own (solver options, integrator, solref, solimp, margin, gap,
 /// priority, solmix), for torsional and rolling friction (condim 4 and 6), and for sensors and
 /// passive tendons.
 void CheckElements(const mjModel* m, const std::string& path, std::vector<std::string>& warnings);
+
+/// `render` for a scene stepped at h: the default train frequency (250 Hz, not given by the user)
+/// lowered to 1/h with a warning when h is longer than 1/250 s (MuJoCo's humanoid: 5 ms), so
+/// that such a scene runs without a flag; everything else as it is (Configure checks it).
+RenderParams SceneRender(const RenderParams& render, double h_s, const std::string& path,
+                         std::vector<std::string>& warnings);
 
 /// <contact><pair>: refused when the pair would add a contact that the geoms' contype and
 /// conaffinity bits exclude (rigidtouch collides only what the filter lets through); otherwise

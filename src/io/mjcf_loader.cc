@@ -581,7 +581,7 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   model.tool = FindTool(model, path, options.tool_name);
   InitialState(m, path, model);
   model.contact = options.contact;
-  model.render = options.render;
+  model.render = SceneRender(options.render, model.timestep_s, path, model.load_warnings);
   model.device = options.device;
   model.max_contacts = geometry::MaxContactsFor(model, options.max_contacts);
   model.max_group_bodies = options.max_group_bodies > 0

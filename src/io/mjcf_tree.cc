@@ -41,18 +41,22 @@ dynamics::TreeJoint ToJoint(const mjModel* m, int j) {
   if (scalar) {
     jt.ref = m->qpos0[qa];
     jt.spring_ref = m->qpos_spring[qa];
+  } else if (jt.type == dynamics::JointType::kBall) {
+    jt.spring_quat = MjUnitQuat(m->qpos_spring + qa);
   } else if (m->jnt_stiffness[j] != 0.0) {
-    throw Error(name + ": stiffness on a ball or free joint is not modelled by the tree");
+    throw Error(name + ": stiffness on a free joint is not modelled by the tree");
   }
   jt.stiffness = m->jnt_stiffness[j];
   jt.damping = m->dof_damping[da];
   jt.armature = m->dof_armature[da];
+  jt.frictionloss = m->dof_frictionloss[da];
   const int ndof = jt.type == dynamics::JointType::kFree   ? 6
                    : jt.type == dynamics::JointType::kBall ? 3
                                                            : 1;
   for (int k = 1; k < ndof; ++k) {
-    if (m->dof_damping[da + k] != jt.damping || m->dof_armature[da + k] != jt.armature) {
-      throw Error(name + ": its dofs differ in damping or armature");
+    if (m->dof_damping[da + k] != jt.damping || m->dof_armature[da + k] != jt.armature ||
+        m->dof_frictionloss[da + k] != jt.frictionloss) {
+      throw Error(name + ": its dofs differ in damping, armature or frictionloss");
     }
   }
   return jt;

@@ -12,9 +12,12 @@ namespace {
 
 // a namespace-scope atomic: signal handlers may only touch lock-free atomics
 std::atomic<bool> stop_flag{false};
+std::atomic<int> stop_signal{0};
 static_assert(std::atomic<bool>::is_always_lock_free);
+static_assert(std::atomic<int>::is_always_lock_free);
 
-void OnStopSignal(int /*signal*/) {
+void OnStopSignal(int signal_number) {
+  stop_signal.store(signal_number, std::memory_order_relaxed);
   stop_flag.store(true, std::memory_order_release);
 }
 
@@ -35,7 +38,12 @@ const std::atomic<bool>& InstallStopSignalHandlers() {
   return stop_flag;
 }
 
+const std::atomic<int>& StopSignalNumber() {
+  return stop_signal;
+}
+
 void ResetStopSignalFlag() noexcept {
+  stop_signal.store(0, std::memory_order_relaxed);
   stop_flag.store(false, std::memory_order_release);
 }
 

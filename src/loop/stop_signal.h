@@ -11,6 +11,10 @@ namespace rigidtouch::loop {
 /// when sigaction fails.
 const std::atomic<bool>& InstallStopSignalHandlers();
 
+/// The number of the last stop signal received (SIGINT 2, SIGTERM 15); 0 before any. Set by the
+/// handlers InstallStopSignalHandlers installs, before the flag.
+const std::atomic<int>& StopSignalNumber();
+
 /// Clears the process-wide stop flag (e.g. between two runs).
 void ResetStopSignalFlag() noexcept;
 

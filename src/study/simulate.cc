@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
+#include <set>
+#include <string_view>
 
 #include "rigidtouch/types.h"
 #include "study/log.h"
@@ -49,6 +52,52 @@ SessionConfig SimulatedSessionConfig(const std::string& id, std::uint64_t seed,
   return config;
 }
 
+namespace {
+
+// a simulated participant seen by the cohort's progress: each answer reports how far the cohort
+// is, and a stop request ends the session before its next answer (the log stays resumable)
+class WatchedParticipant final : public WallPresenter, public Responder {
+ public:
+  WatchedParticipant(SimulatedParticipant& participant, Progress* progress, int index,
+                     int participants, int steps)
+      : participant_(participant),
+        progress_(progress),
+        index_(index),
+        participants_(participants),
+        steps_(steps) {}
+  void Present(const Condition& condition, int taps) override {
+    participant_.Present(condition, taps);
+  }
+  std::string Describe() const override { return participant_.Describe(); }
+  bool dry_run() const override { return participant_.dry_run(); }
+  void Show(std::string_view text) override { participant_.Show(text); }
+  std::optional<int> Ask(const Protocol& protocol, const Step& step) override {
+    if (progress_ == nullptr) return participant_.Ask(protocol, step);
+    if (progress_->StopRequested()) {
+      stopped_ = true;
+      return std::nullopt;
+    }
+    if (progress_->Due()) {
+      const double within = static_cast<double>(step.index + 1) / std::max(1, steps_);
+      progress_->Report(
+          (index_ + within) / participants_,
+          "participant " + std::to_string(index_ + 1) + " of " + std::to_string(participants_));
+    }
+    return participant_.Ask(protocol, step);
+  }
+  std::string StopReason() const override {
+    return stopped_ ? "interrupted by a signal" : participant_.StopReason();
+  }
+
+ private:
+  SimulatedParticipant& participant_;
+  Progress* progress_;
+  int index_, participants_, steps_;
+  bool stopped_ = false;
+};
+
+}  // namespace
+
 std::vector<ParticipantRun> SimulateCohort(const Protocol& protocol, StimulusSource& source,
                                            const CohortConfig& config) {
   if (config.participants < 1) {
@@ -56,7 +105,10 @@ std::vector<ParticipantRun> SimulateCohort(const Protocol& protocol, StimulusSou
   }
   std::vector<ParticipantRun> runs;
   runs.reserve(config.participants);
+  // every participant's plan has the same steps, in another order
+  const int steps = static_cast<int>(MakePlan(protocol, config.seed).size());
   for (int i = 0; i < config.participants; ++i) {
+    if (config.progress != nullptr && config.progress->StopRequested()) break;
     ParticipantRun run;
     run.id = SimulatedParticipantId(i, config.participants);
     run.seed = SimulatedParticipantSeed(config.seed, i);
@@ -64,16 +116,19 @@ std::vector<ParticipantRun> SimulateCohort(const Protocol& protocol, StimulusSou
         SimulatedSessionConfig(run.id, run.seed, config.seed, i, config.observer, source,
                                config.software_version, config.resume);
     SimulatedParticipant participant(protocol, config.observer, source, run.seed);
+    WatchedParticipant watched(participant, config.progress, i, config.participants, steps);
     if (config.log_dir.empty()) {
       MemorySink sink;
-      run.outcome = RunSession(protocol, session, {}, run.id, sink, participant, participant);
+      run.outcome = RunSession(protocol, session, {}, run.id, sink, watched, watched);
       run.records = std::move(sink.records);
     } else {
       run.log_path = config.log_dir + "/" + run.id + ".jsonl";
-      run.outcome = RunLoggedSession(protocol, session, run.log_path, participant, participant);
+      run.outcome = RunLoggedSession(protocol, session, run.log_path, watched, watched);
       run.records = ReadLog(run.log_path).records;
     }
+    const bool stopped = run.outcome.status == SessionStatus::kStopped;
     runs.push_back(std::move(run));
+    if (stopped) break;
   }
   return runs;
 }
@@ -85,8 +140,13 @@ namespace {
 // every tap again.
 class SampledTapSource final : public StimulusSource {
  public:
-  SampledTapSource(StimulusSource& inner, std::uint64_t seed, int taps)
-      : inner_(inner), seed_(seed), taps_(taps) {}
+  SampledTapSource(StimulusSource& inner, std::uint64_t seed, int taps, Progress* progress,
+                   int pools_expected)
+      : inner_(inner),
+        seed_(seed),
+        taps_(taps),
+        progress_(progress),
+        pools_expected_(std::max(1, pools_expected)) {}
 
   // the taps of `condition` (rendered on first use): seeds depend on its configuration only
   const std::vector<TapPercept>& TapsOf(const Condition& condition) {
@@ -96,6 +156,15 @@ class SampledTapSource final : public StimulusSource {
     const std::uint64_t stream = DeriveSeed(seed_, {kPredictionStream, config_hash});
     std::vector<TapPercept> taps;
     for (int j = 0; j < taps_; ++j) {
+      if (progress_ != nullptr) {
+        const std::string where =
+            "wall " + std::to_string(pools_.size() + 1) + " of " + std::to_string(pools_expected_);
+        progress_->ThrowIfStopped(where, "nothing was written");
+        if (progress_->Due()) {
+          progress_->Report((pools_.size() + static_cast<double>(j) / taps_) / pools_expected_,
+                            where);
+        }
+      }
       taps.push_back(
           inner_.RenderTap(condition, DeriveSeed(stream, {static_cast<std::uint64_t>(j)})));
     }
@@ -116,6 +185,8 @@ class SampledTapSource final : public StimulusSource {
   StimulusSource& inner_;
   std::uint64_t seed_;
   int taps_;
+  Progress* progress_;
+  int pools_expected_;
   std::map<std::uint64_t, std::vector<TapPercept>> pools_;
 };
 
@@ -195,6 +266,14 @@ void CohortPredictions(const Protocol& protocol, SampledTapSource& sampled,
   std::vector<std::vector<double>> pc(tests), at_90(tests), at_50(tests);
   std::vector<double> sum_pc(tests, 0.0), n_90(tests, 0.0), n_50(tests, 0.0);
   for (int k = 0; k < config.cohorts; ++k) {
+    if (config.progress != nullptr) {
+      const std::string where =
+          "cohort " + std::to_string(k + 1) + " of " + std::to_string(config.cohorts);
+      config.progress->ThrowIfStopped(where, "nothing was written");
+      if (config.progress->Due()) {
+        config.progress->Report(static_cast<double>(k) / config.cohorts, where);
+      }
+    }
     std::vector<double> cohort_pc(tests, 0.0), cohort_90(tests, 0.0), cohort_50(tests, 0.0);
     for (int i = 0; i < config.participants; ++i) {
       const std::uint64_t seed =
@@ -253,8 +332,17 @@ std::vector<TestPrediction> PredictProtocol(const Protocol& protocol, StimulusSo
   if (config.cohorts < 0) {
     throw Error("cohorts: " + std::to_string(config.cohorts) + "; valid: >= 0");
   }
-  SampledTapSource sampled(source, config.seed, config.sample_taps);
+  // the distinct walls whose taps are rendered (equal configurations share them)
+  std::set<std::uint64_t> walls;
+  for (const StudyTest& test : protocol.tests) {
+    for (const int c : test.conditions)
+      walls.insert(Fnv1a64(protocol.conditions[c].ToJson().dump()));
+  }
+  if (config.progress != nullptr) config.progress->Restart("study predict: rendering taps");
+  SampledTapSource sampled(source, config.seed, config.sample_taps, config.progress,
+                           static_cast<int>(walls.size()));
   std::vector<TestPrediction> predictions = NominalPredictions(protocol, sampled, observer);
+  if (config.progress != nullptr) config.progress->Restart("study predict: simulated cohorts");
   if (config.cohorts > 0) CohortPredictions(protocol, sampled, observer, config, predictions);
   return predictions;
 }

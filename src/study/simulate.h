@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/progress.h"
 #include "study/observer.h"
 #include "study/protocol.h"
 #include "study/session.h"
@@ -25,6 +26,9 @@ struct CohortConfig {
   bool resume = false;           ///< continue existing logs (complete ones are left as they are)
   ObserverParams observer;       ///< the observer model of every participant
   std::string software_version;  ///< recorded in the logs
+  /// Progress of the cohort (may be null); a stop request ends the current participant's session
+  /// before its next answer (its log stays resumable) and starts no further participant.
+  Progress* progress = nullptr;
 };
 
 /// One simulated participant's run.
@@ -51,7 +55,8 @@ SessionConfig SimulatedSessionConfig(const std::string& id, std::uint64_t seed,
                                      const std::string& software_version, bool resume);
 
 /// Runs the whole cohort, one participant after the other. Throws rigidtouch::Error on a refused
-/// log (another protocol, participant or observer; not a study log; exists without resume).
+/// log (another protocol, participant or observer; not a study log; exists without resume). After
+/// a stop request (CohortConfig::progress) it returns the runs so far, the last one stopped.
 std::vector<ParticipantRun> SimulateCohort(const Protocol& protocol, StimulusSource& source,
                                            const CohortConfig& config);
 
@@ -90,6 +95,9 @@ struct PredictionConfig {
   int sample_taps = 20;    ///< taps rendered per condition (>= 1)
   int participants = 9;    ///< cohort size the intervals refer to (>= 1)
   int cohorts = 1000;      ///< simulated cohorts (>= 1; 0 skips the cohort part)
+  /// Progress of the prediction (may be null); a stop request throws Interrupted between taps or
+  /// cohorts (a prediction writes nothing before it ends).
+  Progress* progress = nullptr;
 };
 
 /// Predicts every test of `protocol`. Each condition's taps are rendered once, `sample_taps` taps

@@ -10,8 +10,13 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "cli/cli_util.h"
 
@@ -117,6 +122,25 @@ TEST(ServeCliTest, UnwritableTracePathIsRefusedBeforeTheSession) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("/nonexistent-folder/t.csv"), std::string::npos) << r.err;
   EXPECT_LT(took_s, 5.0);  // the 30 s session never ran
+}
+
+// the plausibility limits a config file sets are used by serve, and its flags override them one
+// by one (the flags' defaults used to override the config silently)
+TEST(ServeCliTest, PlausibilityLimitsFromTheConfigAndTheFlags) {
+  const std::filesystem::path dir = TempDir("plausible");
+  const std::string config = (dir / "c.json").string();
+  std::ofstream(config) << R"({"device": {"plausible_radius_m": 0.4, "plausible_speed_mps": 3}})";
+  const std::string serve =
+      "serve --device sim --rate 1000 --duration 0.2 --taps 1 --json --config " + config;
+  for (const auto& [flags, radius] :
+       std::vector<std::pair<std::string, double>>{{"", 0.4}, {" --max-device-radius 0.6", 0.6}}) {
+    const CliResult r = RunCli(serve + flags);
+    ASSERT_EQ(r.exit_code, 0) << flags << "\n" << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["limits"]["plausible_radius_m"].get<double>(), radius) << flags;
+    EXPECT_EQ(j["limits"]["plausible_speed_mps"].get<double>(), 3.0) << flags;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

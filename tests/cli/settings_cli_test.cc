@@ -253,7 +253,9 @@ TEST_F(SettingsCliTest, SimulateAndBenchRefuseDeviceSettings) {
                                                            name + " has no device"});
     ExpectRefused(command + wall + " --config " + direct,
                   {"device.coupling (set in " + direct + " as device.coupling) has no effect"});
-    for (const char* field : {"coupling_stiffness_N_per_m", "coupling_damping_Ns_per_m"}) {
+    for (const char* field :
+         {"coupling_stiffness_N_per_m", "coupling_damping_Ns_per_m", "plausible_radius_m",
+          "plausible_speed_mps", "plausible_angular_speed_radps"}) {
       const std::string one =
           Config(std::string(field) + ".json", "{\"device\": {\"" + std::string(field) + "\": 1}}");
       ExpectRefused(command + wall + " --config " + one,

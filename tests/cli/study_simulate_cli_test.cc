@@ -10,7 +10,10 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "cli/cli_util.h"
 
@@ -150,6 +153,84 @@ TEST(StudySimulateCliTest, SlowKilledAndResumedEqualsAnUninterruptedRun) {
 // kills)
 TEST(StudySimulateCliTest, KilledAndResumedEqualsAnUninterruptedRun) {
   EXPECT_GE(KillAndResumeUntilDone(1, "simkill1"), 2);
+}
+
+// a study simulate that runs for several seconds: progress lines on stderr (none on stdout) while
+// it works; SIGINT stops it with status 130 and resumable logs; --resume --quiet finishes it with
+// no progress printed and every answer given once
+TEST(StudySimulateCliTest, ProgressOnStderrAndCtrlCKeepsResumableLogs) {
+  const fs::path dir = TempDir("simprogress");
+  const std::string protocol = std::string(RIGIDTOUCH_SOURCE_DIR) + "/studies/walls.json";
+  const int participants = 24;  // about 0.35 s each in the release build
+  const std::string common = "study simulate --protocol " + protocol + " --participants " +
+                             std::to_string(participants) + " --seed 77 --log-dir " +
+                             (dir / "logs").string();
+  const fs::path err = dir / "err.txt", out = dir / "out.txt";
+  const pid_t pid =
+      SpawnCommand(std::string(RIGIDTOUCH_CLI) + " " + common + " 2>" + err.string(), out.string());
+  // the arrival times of the progress lines
+  std::vector<double> arrivals;
+  const auto start = std::chrono::steady_clock::now();
+  auto seconds = [&start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  std::size_t seen = 0;
+  int early_status = 0;
+  bool ended = false;
+  while (arrivals.size() < 3 && seconds() < 120.0) {
+    if (::waitpid(pid, &early_status, WNOHANG) == pid) {
+      ended = true;  // finished before three progress lines: the run is too short for the test
+      break;
+    }
+    const std::string text = ReadAll(err);
+    std::size_t lines = 0;
+    for (std::size_t at = text.find("rigidtouch: progress: study simulate: ");
+         at != std::string::npos;
+         at = text.find("rigidtouch: progress: study simulate: ", at + 1)) {
+      ++lines;
+    }
+    for (; seen < lines; ++seen) arrivals.push_back(seconds());
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_FALSE(ended) << ReadAll(err);
+  ::kill(pid, SIGINT);
+  const int status = Wait(pid);
+  const std::string stderr_text = ReadAll(err);
+  ASSERT_GE(arrivals.size(), 3u) << stderr_text;
+  // nothing before 2 s; then one every 2 s, give or take one simulated series on a loaded machine
+  // (tolerance 1.5 s)
+  EXPECT_GE(arrivals[0], 2.0);
+  for (std::size_t k = 1; k < arrivals.size(); ++k) {
+    EXPECT_LE(arrivals[k] - arrivals[k - 1], 3.5) << "line " << k;
+  }
+  EXPECT_EQ(status, 130) << stderr_text;
+  EXPECT_EQ(ReadAll(out), "") << "progress and the stop message go to stderr only";
+  EXPECT_NE(stderr_text.find("rigidtouch: interrupted: study simulate stopped at participant "),
+            std::string::npos)
+      << stderr_text;
+  EXPECT_NE(stderr_text.find("run again with --resume to continue"), std::string::npos)
+      << stderr_text;
+  const std::size_t before = AnswerCount(Answers(dir / "logs"));
+  EXPECT_GT(before, 0u);
+  EXPECT_LT(before, participants * 40u);
+  bool reason = false;
+  for (const auto& entry : fs::directory_iterator(dir / "logs")) {
+    reason = reason || ReadAll(entry.path()).find("interrupted by a signal") != std::string::npos;
+  }
+  EXPECT_TRUE(reason) << "the stopped session's log says why it stopped";
+
+  const CliResult resumed = RunCli(common + " --resume --quiet");
+  EXPECT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_EQ(resumed.err.find("progress"), std::string::npos) << resumed.err;
+  const auto answers = Answers(dir / "logs");
+  EXPECT_EQ(answers.size(), static_cast<std::size_t>(participants));
+  for (const auto& [log, list] : answers) {
+    EXPECT_EQ(list.size(), 40u) << log;  // 2 tests x 20 series, none lost or given twice
+    std::set<std::pair<int, int>> series;
+    for (const auto& a : list) series.insert({a[0], a[1]});
+    EXPECT_EQ(series.size(), list.size()) << log;
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
+#include "io/materials.h"
 #include "rigidtouch/rigidtouch.h"
 #include "test_util.h"
 
@@ -45,7 +47,9 @@ TEST(ConfigTest, EverySectionsFieldsAreRead) {
     },
     "device": {
       "coupling": "virtual", "max_force_N": 7.5,
-      "coupling_stiffness_N_per_m": 800, "coupling_damping_Ns_per_m": 4
+      "coupling_stiffness_N_per_m": 800, "coupling_damping_Ns_per_m": 4,
+      "plausible_radius_m": 0.3, "plausible_speed_mps": 2.5,
+      "plausible_angular_speed_radps": 40
     }
   })");
   LoadOptions o;
@@ -70,6 +74,38 @@ TEST(ConfigTest, EverySectionsFieldsAreRead) {
   EXPECT_EQ(o.device.limits.max_force_N, 7.5);
   EXPECT_EQ(o.device.coupling_stiffness_N_per_m, 800.0);
   EXPECT_EQ(o.device.coupling_damping_Ns_per_m, 4.0);
+  EXPECT_EQ(o.device.plausible_radius_m, 0.3);
+  EXPECT_EQ(o.device.plausible_speed_mps, 2.5);
+  EXPECT_EQ(o.device.plausible_angular_speed_radps, 40.0);
+}
+
+// render.material: a preset's name, or a material file relative to the config file's folder,
+// read as --material reads it; a bad one names the config file and the field
+TEST(ConfigTest, TheMaterialIsAPresetOrAFileBesideTheConfig) {
+  LoadOptions preset;
+  ApplyConfigFile(WriteTempFile("m1.json", R"({"render": {"material": "wood"}})"), preset);
+  EXPECT_EQ(preset.render.material.name, ParseMaterial("wood").name);
+  EXPECT_EQ(preset.render.material.frequency_hz, ParseMaterial("wood").frequency_hz);
+  EXPECT_GT(preset.render.material.frequency_hz, 0.0);
+
+  const std::filesystem::path dir =
+      std::filesystem::path(WriteTempFile("m2.json", "{}")).parent_path() / "cfgmat";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream(dir / "soft.json")
+        << R"({"name": "soft", "amplitude_Ns_per_m": 2.5, "decay_per_s": 60, "frequency_hz": 150})";
+    std::ofstream(dir / "config.json") << R"({"render": {"material": "soft.json"}})";
+  }
+  LoadOptions file;
+  ApplyConfigFile((dir / "config.json").string(), file);
+  EXPECT_EQ(file.render.material.amplitude_Ns_per_m, 2.5);
+  EXPECT_EQ(file.render.material.decay_per_s, 60.0);
+  EXPECT_EQ(file.render.material.frequency_hz, 150.0);
+
+  const std::string bad = ConfigErrorOf(R"({"render": {"material": "marshmallow"}})", "m3.json");
+  EXPECT_TRUE(Has(bad, "m3.json: render.material: ")) << bad;
+  EXPECT_TRUE(Has(bad, "marshmallow")) << bad;
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ConfigTest, AbsentFieldsKeepTheirValues) {

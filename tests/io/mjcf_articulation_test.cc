@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "dynamics/tree.h"
 #include "rigidtouch/rigidtouch.h"
@@ -110,14 +111,24 @@ struct Refused {
 std::vector<Refused> RefusedInputs() {
   const std::string body = "<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>";
   return {
-      {"frictionloss",
-       World("<body name=\"b\"><joint name=\"j\" frictionloss=\"1\"/>" + std::string(kLink) +
-             "</body>"),
-       "<joint> 'j' of body 'b' has frictionloss=\"1\""},
-      {"ball_stiffness",
-       World("<body name=\"b\"><joint name=\"j\" type=\"ball\" stiffness=\"3\"/>" +
-             std::string(kLink) + "</body>"),
-       "<joint> 'j' of body 'b' is a ball joint with stiffness=\"3\""},
+      {"free_root_stiffness",
+       World("<body name=\"b\"><joint name=\"j\" type=\"free\" stiffness=\"3\"/>" +
+             std::string(kLink) + "<body name=\"c\" pos=\"0.2 0 0\"><joint name=\"k\"/>" +
+             std::string(kLink) + "</body></body>"),
+       "<joint> 'j' of body 'b' is a free joint with stiffness=\"3\""},
+      {"ball_keyframe_beyond_range",
+       World("<body name=\"b\"><joint name=\"j\" type=\"ball\" limited=\"true\" "
+             "range=\"0 0.5\"/>" +
+                 std::string(kLink) + "</body>",
+             "<keyframe><key name=\"initial\" qpos=\"0.8775825619 0.4794255386 0 0\"/>"
+             "</keyframe>"),
+       "<joint> 'j' of body 'b': its rotation of 1 rad in keyframe 'initial' is beyond its "
+       "range 0.5 rad"},
+      {"constraint_disabled_with_a_limit",
+       World("<body name=\"b\"><joint name=\"j\" limited=\"true\" range=\"-1 1\"/>" +
+                 std::string(kLink) + "</body>",
+             "<option><flag constraint=\"disable\"/></option>"),
+       "<flag constraint=\"disable\"/> turns contacts, joint limits and frictionloss off"},
       {"range_min_above_max",
        World("<body name=\"b\"><joint name=\"j\" limited=\"true\" range=\"1 -1\"/>" +
              std::string(kLink) + "</body>"),
@@ -130,8 +141,13 @@ std::vector<Refused> RefusedInputs() {
       {"activation_state",
        World(body,
              "<actuator><general name=\"act\" joint=\"j\" dyntype=\"integrator\"/>"
-             "</actuator>"),
+             "</actuator><keyframe><key name=\"initial\" ctrl=\"1\"/></keyframe>"),
        "<actuator> 'act' has activation dynamics"},
+      {"activation_state_with_a_bias",
+       World(body,
+             "<actuator><general name=\"held\" joint=\"j\" dyntype=\"filter\" "
+             "biastype=\"affine\" biasprm=\"0 -1 0\"/></actuator>"),
+       "<actuator> 'held' has activation dynamics"},
       {"muscle",
        World(body, "<actuator><muscle name=\"mus\" joint=\"j\" lengthrange=\"-1 1\"/></actuator>"),
        "<actuator> 'mus' has activation dynamics"},
@@ -178,12 +194,93 @@ INSTANTIATE_TEST_SUITE_P(MjcfArticulation, RefusedArticulationTest,
                            return std::string(info.param.name);
                          });
 
+bool HasWarning(const Model& m, const std::string& text) {
+  for (const std::string& w : m.load_warnings) {
+    if (w.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// frictionloss on every joint type of a tree and a ball joint's stiffness are honoured
+TEST(MjcfArticulationTest, FrictionlossAndBallStiffnessReachTheTree) {
+  const Model m = LoadTreeXml(
+      World("<body name=\"b\"><joint name=\"j\" frictionloss=\"1.5\"/>" + std::string(kLink) +
+            "<body name=\"c\" pos=\"0.2 0 0\"><joint name=\"k\" type=\"ball\" "
+            "stiffness=\"3\" frictionloss=\"0.25\"/>" +
+            std::string(kLink) + "</body></body>"));
+  ASSERT_EQ(m.trees.size(), 1u);
+  const dynamics::TreeModel& tree = *m.trees[0].dynamics;
+  EXPECT_DOUBLE_EQ(tree.joint(0).frictionloss, 1.5);
+  EXPECT_DOUBLE_EQ(tree.joint(1).frictionloss, 0.25);
+  EXPECT_DOUBLE_EQ(tree.joint(1).stiffness, 3.0);
+  EXPECT_EQ(tree.friction_dofs, (std::vector<int>{0, 1, 2, 3}));  // the hinge, the ball's three
+  EXPECT_TRUE(tree.joint(1).spring_quat.isApprox(Quat::Identity()));
+}
+
+// an actuator with activation dynamics that can only ever exert 0 (integrator or filter from
+// activation 0 at control 0, no bias) is left out with a warning instead of refused
+TEST(MjcfArticulationTest, IdleActuatorWithActivationIsLeftOutWithAWarning) {
+  const Model m = LoadTreeXml(
+      World("<body name=\"b\"><joint name=\"j\" type=\"slide\"/>" + std::string(kLink) + "</body>",
+            "<actuator><motor name=\"push\" joint=\"j\"/><general name=\"state\" joint=\"j\" "
+            "dyntype=\"integrator\"/></actuator>"));
+  ASSERT_EQ(m.trees[0].actuators.size(), 1u);
+  EXPECT_EQ(m.trees[0].actuators[0].name, "push");
+  EXPECT_TRUE(HasWarning(m, "<actuator> 'state' has activation dynamics")) << m.load_warnings[0];
+}
+
+// <flag constraint="disable"/> with nothing it could turn off here: warned, not refused
+TEST(MjcfArticulationTest, ConstraintFlagIsWarnedWhenTheSceneHasNoConstraintToTurnOff) {
+  const Model m =
+      LoadTreeXml(World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>",
+                        "<option><flag constraint=\"disable\"/></option>"));
+  EXPECT_TRUE(HasWarning(m, "<flag constraint=\"disable\"/> changes nothing here"));
+}
+
+// limit softness on many joints: one warning naming three of them and the count of the rest
+TEST(MjcfArticulationTest, LimitSoftnessIsOneWarningForManyJoints) {
+  std::string chain;
+  for (int i = 0; i < 5; ++i) {
+    chain += "<body name=\"l" + std::to_string(i) + "\" pos=\"0.2 0 0\"><joint name=\"j" +
+             std::to_string(i) + "\" limited=\"true\" range=\"-1 1\" solreflimit=\"0.05 1\"/>" +
+             kLink;
+  }
+  for (int i = 0; i < 5; ++i) chain += "</body>";
+  const Model m = LoadTreeXml(World(chain));
+  int count = 0;
+  for (const std::string& w : m.load_warnings) {
+    count += w.find("solreflimit, solimplimit and margin are ignored") != std::string::npos;
+  }
+  EXPECT_EQ(count, 1);
+  EXPECT_TRUE(HasWarning(m, "<joint> 'j2' of body 'l2' and 2 more: solreflimit"));
+}
+
+// MuJoCo's humanoid steps at 5 ms, longer than the default train's 4 ms impulse interval: the
+// default frequency becomes 1/h with a warning; a frequency the user gave is kept (and refused)
+TEST(MjcfArticulationTest, LongSceneTimestepLowersTheDefaultTrainFrequency) {
+  const std::string xml =
+      World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>",
+            "<option timestep=\"0.005\"/>");
+  const Model m = LoadTreeXml(xml);
+  EXPECT_DOUBLE_EQ(m.render.frequency_hz, 200.0);
+  EXPECT_TRUE(HasWarning(m, "the train frequency is 1/h = 200 Hz"));
+  LoadOptions o;
+  o.tool_name = "none";
+  o.render.frequency_given = true;
+  try {
+    LoadModel(test::WriteTempFile("articulated.xml", xml), o);
+    ADD_FAILURE() << "a given 250 Hz at h = 5 ms must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("frequency_hz = 250"), std::string::npos) << e.what();
+  }
+}
+
 // a zero joint axis: MuJoCo's compiler refuses it first; the error names the scene either way
 TEST(MjcfArticulationTest, ZeroAxisIsRefused) {
   const std::string e = TreeXmlError(World("<body name=\"b\"><joint name=\"j\" axis=\"0 0 0\"/>" +
                                            std::string(kLink) + "</body>"));
   EXPECT_NE(e.find("scene file '"), std::string::npos) << e;
-  EXPECT_NE(e.find("axis"), std::string::npos) << e;
+  EXPECT_NE(e.find("axis too small in joint 'j'"), std::string::npos) << e;  // MuJoCo's words
 }
 
 // a keyframe within 1e-6 of a limit is accepted (MuJoCo prints keyframes to a few digits)

@@ -350,12 +350,11 @@ std::vector<ElementCase> RefusedCases() {
              "<site site=\"b\"/></spatial></tendon>",
              "<site name=\"a\" pos=\"0 0 0.5\"/>", "<site name=\"b\"/>"),
        "<tendon> 'rope' has a limit"},
-      {"frictionloss",
-       Scene("",
-             "<body name=\"door\" pos=\"0.3 0 0.1\"><joint name=\"hinge\" type=\"hinge\" "
-             "frictionloss=\"0.1\"/><geom type=\"box\" size=\"0.01 0.01 0.01\" mass=\"0.1\"/>"
-             "</body>"),
-       "<joint> 'hinge' of body 'door' has frictionloss"},
+      {"free_joint_stiffness",
+       "<mujoco><worldbody><body name=\"tool\" pos=\"0 0 0.1\">"
+       "<joint name=\"springy\" type=\"free\" stiffness=\"1\"/>"
+       "<geom type=\"sphere\" size=\"0.01\" mass=\"0.1\"/></body></worldbody></mujoco>",
+       "<joint> 'springy' has damping, armature, frictionloss or stiffness"},
       {"tool_with_a_joint_below",
        Scene("", "",
              "<body name=\"arm\" pos=\"0.05 0 0\"><joint name=\"elbow\"/>"

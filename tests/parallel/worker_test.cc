@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "draw.h"
+#include "dynamics/tree.h"
 #include "engine/workspace.h"
 #include "limit_malloc.h"
 #include "rigidtouch/rigidtouch.h"
@@ -520,6 +521,41 @@ TEST(WorkerTest, NeitherThreadAllocatesInTheTick) {
   EXPECT_GT(d.workspace->velocity.shared_steps, shared_before);  // and its groups were split
   // as were its impulses while it landed
   EXPECT_GT(d.workspace->impulse.shared_steps, impulses_shared_before);
+}
+
+// ThreadSanitizer's case for trees (scripts/test.sh runs this file under it): a 4 x 4 x 3 pile
+// beside a hinged lid with a stop that the tool and two boxes fall onto. The free-body groups are
+// shared between the threads while the lid's group is solved on the tick's thread after them;
+// every tick's bodies and tree state with two threads are the one-thread state, bit for bit
+TEST(WorkerTest, TwoThreadsWithATreeGiveTheStateOfOne) {
+  std::string xml = test::PileXml(4, 4, 3, 0.051, 0.5);
+  const std::string lid =
+      "<body name=\"lid\" pos=\"0.4 0 0.2\"><joint name=\"hinge\" type=\"hinge\" axis=\"1 0 0\""
+      " limited=\"true\" range=\"-20 20\"/>"
+      "<geom type=\"box\" size=\"0.1 0.1 0.01\" pos=\"0 0.05 0\" mass=\"1\"/></body>"
+      "<body name=\"drop_0\" pos=\"0.38 0.05 0.3\"><freejoint/>"
+      "<geom type=\"box\" size=\"0.02 0.02 0.02\" mass=\"0.1\"/></body>"
+      "<body name=\"drop_1\" pos=\"0.43 0.1 0.35\"><freejoint/>"
+      "<geom type=\"box\" size=\"0.02 0.02 0.02\" mass=\"0.1\"/></body>";
+  xml.insert(xml.find("</worldbody>"), lid);
+  OneAndTwoThreads t(test::WriteTempFile("pile_lid_threads.xml", xml));
+  ASSERT_EQ(t.m1.trees.size(), 1u);
+  const TickInput in;
+  int lid_groups = 0;
+  for (int step = 0; step < 600; ++step) {
+    Tick(t.m1, t.d1, in);
+    Tick(t.m2, t.d2, in);
+    const contact::Groups& g = t.d2.workspace->contact.groups;
+    lid_groups += g.body_start[t.d2.ngroup + 1] > g.body_start[t.d2.ngroup];
+    for (std::size_t i = 0; i < t.d1.bodies.size(); ++i) {
+      ASSERT_EQ(std::memcmp(&t.d1.bodies[i], &t.d2.bodies[i], sizeof(BodyState)), 0)
+          << "step " << step << " body " << i;
+    }
+    ASSERT_EQ(t.d1.trees[0]->qpos, t.d2.trees[0]->qpos) << "step " << step;
+    ASSERT_EQ(t.d1.trees[0]->qvel, t.d2.trees[0]->qvel) << "step " << step;
+  }
+  EXPECT_GT(lid_groups, 100);  // the lid shared a group with falling bodies
+  EXPECT_GT(t.d2.workspace->velocity.shared_steps, 0);  // the worker took free-body groups
 }
 
 }  // namespace
