@@ -7,22 +7,22 @@ namespace rigidtouch::contact {
 namespace {
 
 // one side of a row: the body it acts on, the sign of its Jacobian block and the lever r x n
-struct RowSide {
+struct ImpulseRowSide {
   int body = -1;
   double sign = 0.0;
   Vec3 lever_W = Vec3::Zero();  // r x n  [m]
 };
 
-RowSide SideA(const SolverRow& row) {
+ImpulseRowSide SideA(const SolverRow& row) {
   return {row.body_a, 1.0, RowJacobian(row.n_W, row.r_a_W).tail<3>()};
 }
-RowSide SideB(const SolverRow& row) {
+ImpulseRowSide SideB(const SolverRow& row) {
   return {row.body_b, -1.0, RowJacobian(row.n_W, row.r_b_W).tail<3>()};
 }
 
 // contribution of one shared body to A_ij = J_i M^-1 J_j^T
-double Coupling(const SolverBody& body, const SolverRow& row_i, const RowSide& side_i,
-                const SolverRow& row_j, const RowSide& side_j) {
+double Coupling(const SolverBody& body, const SolverRow& row_i, const ImpulseRowSide& side_i,
+                const SolverRow& row_j, const ImpulseRowSide& side_j) {
   return side_i.sign * side_j.sign *
          (body.inv_mass * row_i.n_W.dot(row_j.n_W) +
           side_i.lever_W.dot(body.inv_inertia_W * side_j.lever_W));
@@ -86,14 +86,14 @@ void DelassusDense(const ImpulseProblem& problem, Eigen::Ref<Eigen::MatrixXd> A)
   assert(A.rows() == c && A.cols() == c);
   for (Eigen::Index i = 0; i < c; ++i) {
     const SolverRow& row_i = problem.rows[i];
-    const RowSide sides_i[2] = {SideA(row_i), SideB(row_i)};
+    const ImpulseRowSide sides_i[2] = {SideA(row_i), SideB(row_i)};
     for (Eigen::Index j = 0; j <= i; ++j) {
       const SolverRow& row_j = problem.rows[j];
-      const RowSide sides_j[2] = {SideA(row_j), SideB(row_j)};
+      const ImpulseRowSide sides_j[2] = {SideA(row_j), SideB(row_j)};
       double a_ij = 0.0;
-      for (const RowSide& si : sides_i) {
+      for (const ImpulseRowSide& si : sides_i) {
         if (si.body < 0) continue;
-        for (const RowSide& sj : sides_j) {
+        for (const ImpulseRowSide& sj : sides_j) {
           if (sj.body != si.body) continue;
           a_ij += Coupling(problem.bodies[si.body], row_i, si, row_j, sj);
         }
