@@ -65,10 +65,10 @@ class HdDevice final : public rigidtouch::device::Device {
     const Eigen::Vector3d force_N = command.force_N * scale;
     hdSetDoublev(HD_CURRENT_FORCE, force_N.data());
   }
-  const rigidtouch::device::DeviceLimits& limits() const override { return limits_; }
+  const rigidtouch::DeviceLimits& limits() const override { return limits_; }
 
  private:
-  rigidtouch::device::DeviceLimits limits_;
+  rigidtouch::DeviceLimits limits_;
 };
 
 HDCallbackCode HDCALLBACK ServoTick(void* server) {

@@ -12,6 +12,11 @@
 
 namespace rigidtouch::device {
 
+/// The device's limits: rigidtouch::DeviceLimits (rigidtouch/types.h), the one limits type of
+/// presets, devices, the bridge and the model, also named here for code written against this
+/// header before it moved.
+using DeviceLimits = rigidtouch::DeviceLimits;
+
 /// A haptic device. Implementations never throw from Read, Write or EndPeriod: errors are
 /// reported through DeviceState::valid and counters of the implementation. The driver calls
 /// them from one thread, once each per period, in the order Read, Write, EndPeriod; when it stops
