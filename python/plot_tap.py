@@ -33,6 +33,13 @@ def main():
     parser.add_argument("--title", default=None,
                         help="figure title (default: the trace's file name and the tap)")
     parser.add_argument("--dump", default=None, help="also write what is plotted as JSON")
+    parser.add_argument("--parts-label", default="impulses (Eq. 9 force)",
+                        help="what the renderer adds to the penalty force, for the legend")
+    parser.add_argument("--window-ms", default=None,
+                        help="the tap metrics' spectral window (rigidtouch tap passes it)")
+    parser.add_argument("--resolution-hz", default=None, help="its resolution")
+    parser.add_argument("--repetition", default=None,
+                        help="the tap metrics' repetition rate of the transient, as stated")
     args = parser.parse_args()
 
     plt = trace_io.import_pyplot()
@@ -48,18 +55,18 @@ def main():
 
     plt.rcParams.update({"font.size": 8, "axes.titlesize": 9})
     fig, axes = plt.subplots(2, 2, figsize=(10, 7))
-    tap_panels.draw_force(axes[0][0], s, args.limit, parts=True)
+    tap_panels.draw_force(axes[0][0], s, args.limit, parts=True, parts_label=args.parts_label)
     axes[0][0].set_title(f"displayed peak {s['displayed_peak_N']:.2f} N, requested peak "
                          f"{s['requested_peak_N']:.2f} N")
     tap_panels.draw_force(axes[0][1], s, args.limit, parts=True, zoom_ms=args.zoom_ms,
-                          legend=False)
+                          legend=False, parts_label=args.parts_label)
     axes[0][1].set_title(f"first {args.zoom_ms:g} ms ({len(s['impulse_ms'])} impulse instants "
                          "in the tap shown)")
     for ax in (axes[0][0], axes[0][1], axes[1][0]):
         ax.set_xlabel("time from contact onset [ms]")
     tap_panels.draw_motion(axes[1][0], s)
-    tap_panels.draw_spectrum(axes[1][1], s)
-    axes[1][1].set_title("spectrum, 100 ms from onset (10 Hz resolution)")
+    tap_panels.draw_spectrum(axes[1][1], s, repetition=args.repetition)
+    axes[1][1].set_title(tap_panels.spectrum_title(args.window_ms, args.resolution_hz))
     name = os.path.splitext(os.path.basename(args.trace))[0]
     fig.suptitle(args.title or f"{name}, tap {args.tap}", fontsize=10)
     fig.tight_layout()

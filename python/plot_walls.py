@@ -33,6 +33,12 @@ def main():
     parser.add_argument("--zoom-ms", type=float, default=40.0)
     parser.add_argument("--dpi", type=float, default=150.0)
     parser.add_argument("--dump", default=None, help="also write what is plotted as JSON")
+    parser.add_argument("--repetitions", nargs="+", default=None,
+                        help="the tap metrics' repetition rate of each trace's transient in "
+                             "tap 0, as stated (rigidtouch tap passes them)")
+    parser.add_argument("--window-ms", default=None,
+                        help="the tap metrics' spectral window (rigidtouch tap passes it)")
+    parser.add_argument("--resolution-hz", default=None, help="its resolution")
     args = parser.parse_args()
     labels = args.labels
     if labels is None:
@@ -40,6 +46,11 @@ def main():
                   else [os.path.splitext(os.path.basename(p))[0] for p in args.traces])
     if len(labels) != len(args.traces):
         print(f"error: {len(args.traces)} traces but {len(labels)} labels", file=sys.stderr)
+        return 2
+    repetitions = args.repetitions or [None] * len(args.traces)
+    if len(repetitions) != len(args.traces):
+        print(f"error: {len(args.traces)} traces but {len(repetitions)} repetitions",
+              file=sys.stderr)
         return 2
 
     plt = trace_io.import_pyplot()
@@ -74,8 +85,8 @@ def main():
         for a in (axes[0][c], axes[1][c], axes[2][c], right):
             for handle, text in zip(*a.get_legend_handles_labels()):
                 legend.setdefault(text, handle)
-        tap_panels.draw_spectrum(axes[3][c], s, legend=True)
-        axes[3][c].set_title("spectrum, 100 ms from onset (10 Hz resolution)")
+        tap_panels.draw_spectrum(axes[3][c], s, legend=True, repetition=repetitions[c])
+        axes[3][c].set_title(tap_panels.spectrum_title(args.window_ms, args.resolution_hz))
     fig.suptitle(f"tap {args.tap}: the force the device displays against its limit, per renderer",
                  fontsize=10)
     fig.legend(list(legend.values()), list(legend.keys()), loc="upper center",

@@ -70,14 +70,6 @@ def power_spectrum(signal, sample_rate_hz):
     return list(np.arange(len(power)) * sample_rate_hz / length), list(power)
 
 
-def dominant_hz(freqs, power, min_hz=0.0):
-    best = None
-    for f, p in zip(freqs[1:], power[1:]):
-        if f >= min_hz and p > 0 and (best is None or p > best[1]):
-            best = (f, p)
-    return best[0] if best else float("nan")
-
-
 def _limit_line(ax, s, limit_n):
     if limit_n > 0:
         line = ax.axhline(limit_n, color="tab:red", linestyle=":", linewidth=1.2,
@@ -85,9 +77,11 @@ def _limit_line(ax, s, limit_n):
         s["limit_line_N"] = line.get_ydata()[0]  # what was drawn, for the dump
 
 
-def _force_ylim(ax, s, limit_n):
+def _force_ylim(ax, s, limit_n, parts=False):
     top = max(max(s["displayed_N"], default=0.0), limit_n) * 1.15 or 1.0
-    bottom = min(0.0, min(s["displayed_N"], default=0.0)) * 1.15 - 0.03 * top
+    # every drawn curve's negative lobe is inside (an event transient swings below zero)
+    drawn = s["displayed_N"] + (s["impulsive_N"] + s["requested_N"] if parts else [])
+    bottom = min(0.0, min(drawn, default=0.0)) * 1.15 - 0.03 * top
     ax.set_ylim(bottom, top)
     if s["requested_peak_N"] > top:
         ax.annotate(f"requested peak {s['requested_peak_N']:.1f} N (off scale)",
@@ -95,8 +89,10 @@ def _force_ylim(ax, s, limit_n):
                     fontsize=7, color="tab:orange")
 
 
-def draw_force(ax, s, limit_n, parts=False, zoom_ms=None, legend=True):
-    """Displayed force (always), requested force, optionally its parts, the device limit."""
+def draw_force(ax, s, limit_n, parts=False, zoom_ms=None, legend=True,
+               parts_label="impulses (Eq. 9 force)"):
+    """Displayed force (always), requested force, optionally its parts (the penalty part and
+    `parts_label`, what the renderer adds: impulses, or an event transient), the device limit."""
     t, d = s["t_ms"], s["displayed_N"]
     if zoom_ms is not None:
         keep = [k for k, x in enumerate(t) if x <= zoom_ms]
@@ -113,7 +109,7 @@ def draw_force(ax, s, limit_n, parts=False, zoom_ms=None, legend=True):
         ax.step(t, sub["penalty_N"], where="post", color="tab:blue", linewidth=0.9,
                 label="penalty part")
         ax.step(t, sub["impulsive_N"], where="post", color="tab:green", linewidth=0.9,
-                label="impulsive part (Eq. 9)")
+                label=parts_label)
     ax.step(t, d, where="post", color="black", linewidth=1.3, label="displayed")
     _limit_line(ax, s, limit_n)
     if zoom_ms is not None:
@@ -121,7 +117,7 @@ def draw_force(ax, s, limit_n, parts=False, zoom_ms=None, legend=True):
             ax.axvline(x, color="0.6", linestyle=":", linewidth=0.7,
                        label="impulse instant" if k == 0 else None)
         ax.set_xlim(min(t, default=-5.0), zoom_ms)
-    _force_ylim(ax, s, limit_n)
+    _force_ylim(ax, s, limit_n, parts)
     ax.set_ylabel("force along normal [N]")
     ax.grid(True, alpha=0.3)
     if legend:
@@ -142,13 +138,16 @@ def draw_motion(ax, s, legend=True):
     right.set_ylabel("velocity along normal [mm/s]", color="tab:cyan")
     if legend:
         lines = ax.get_lines()[:1] + right.get_lines()[:1]
-        ax.legend(lines, [line.get_label() for line in lines], loc="upper right", fontsize=7)
+        # where the curves leave room: before onset the penetration is 0, the velocity at its lowest
+        ax.legend(lines, [line.get_label() for line in lines], loc="upper left", fontsize=7)
     return right
 
 
-def draw_spectrum(ax, s, legend=True):
+def draw_spectrum(ax, s, legend=True, repetition=None):
     """Power of the displayed force and of its transient part (displayed minus penalty) over
-    the collision window, in dB relative to the displayed force's largest bin."""
+    the collision window, in dB relative to the displayed force's largest bin. `repetition` is
+    the transient's repetition rate as rigidtouch's tap metrics give it ("250 Hz", "none" or
+    "-"): the figure states it, it does not estimate its own."""
     f_d, p_d = power_spectrum(s["window_displayed_N"], s["sample_rate_hz"])
     f_t, p_t = power_spectrum(s["window_transient_N"], s["sample_rate_hz"])
     ref = max(p_d[1:], default=0.0) or 1.0
@@ -157,19 +156,14 @@ def draw_spectrum(ax, s, legend=True):
     def db(p):
         return [max(floor, 10.0 * math.log10(x / ref)) if x > 0 else floor for x in p]
 
-    dom_d = dominant_hz(f_d, p_d)
-    dom_t = dominant_hz(f_t, p_t, BAND_EDGES_HZ[0])
     s["spectrum"] = {"freq_hz": f_d, "displayed_power": p_d, "transient_power": p_t,
-                     "displayed_dominant_hz": dom_d, "transient_dominant_hz": dom_t}
-    ax.plot(f_d[1:], db(p_d[1:]), color="black", linewidth=1.2,
-            label=f"displayed (peak {dom_d:.0f} Hz)")
+                     "transient_repetition": repetition}
+    ax.plot(f_d[1:], db(p_d[1:]), color="black", linewidth=1.2, label="displayed")
     if any(x > 0 for x in p_t[1:]):
-        above = [p for f, p in zip(f_t[1:], p_t[1:]) if f >= BAND_EDGES_HZ[0]]
-        peak_to_mean = max(above) / (sum(above) / len(above))
-        # as the table: a peak less than twice the mean power is no dominant frequency
-        peak = f"{dom_t:.0f} Hz" if peak_to_mean >= 2.0 else "none, flat"
-        ax.plot(f_t[1:], db(p_t[1:]), color="tab:orange", linewidth=1.0,
-                label=f"transient part (peak >= 40 Hz: {peak})")
+        label = "transient part"
+        if repetition is not None:
+            label += f" (repetition: {repetition})"
+        ax.plot(f_t[1:], db(p_t[1:]), color="tab:orange", linewidth=1.0, label=label)
     else:
         ax.text(0.97, 0.95, "no transient part (no impulses)", transform=ax.transAxes,
                 ha="right", va="top", fontsize=7)
@@ -182,6 +176,13 @@ def draw_spectrum(ax, s, legend=True):
     ax.grid(True, alpha=0.3)
     if legend:
         ax.legend(loc="lower left", fontsize=7)
+
+
+def spectrum_title(window_ms, resolution_hz):
+    """The spectrum panel's title: the window and resolution the tap metrics used."""
+    if window_ms is None:
+        return "spectrum from contact onset"
+    return f"spectrum, {window_ms} ms from onset ({resolution_hz} Hz resolution)"
 
 
 def dump(path, panels, limit_n):

@@ -5,8 +5,9 @@ Usage: make_pile.py NX NY NZ NAME NCONMAX NJMAX NSTACK > scenes/NAME.xml
 
 Every box is a free cube of half-size 25 mm and 0.1 kg; centres are 51 mm apart (1 mm gaps),
 the grid is centred on the origin in x and y, the lowest layer rests on the floor, and the tool
-(a 5 mm sphere of 0.1 kg) sits 2 mm above the top box of a centre column. The sizes and
-jacobian="sparse" only affect MuJoCo (rigidtouch sizes its buffers from the scene itself):
+(a 5 mm sphere of 0.1 kg) sits 2 mm above the top box of a centre column. The sizes only
+affect MuJoCo (rigidtouch sizes its buffers from the scene itself; MuJoCo's default jacobian,
+auto, is already sparse at these sizes, nv >= 60, so the file does not set it):
 MuJoCo 2.2's mjData holds njmax x njmax and njmax x nv arrays in one buffer whose size is an
 int (at most 2 GB), and its Newton solver takes 3 nv^2 numbers of the stack. pile400 gets the
 rows its settled pile needs (about 2000 contacts of 4 pyramidal rows); pile1000 would need about
@@ -30,8 +31,8 @@ def main():
         '     Written by scenes/make_pile.py; same box, mass and spacing as pile.xml.',
         '     The tool is pushed down by a constant 2 N that is not part of this file. -->',
         f'<mujoco model="{name}">',
-        '  <option timestep="0.001" gravity="0 0 -9.81" jacobian="sparse"/>',
-        '  <!-- sizes and the sparse jacobian for MuJoCo only; rigidtouch ignores them -->',
+        '  <option timestep="0.001" gravity="0 0 -9.81"/>',
+        '  <!-- sizes for MuJoCo only; rigidtouch ignores them -->',
         f'  <size nconmax="{nconmax}" njmax="{njmax}" nstack="{nstack}"/>',
         '  <worldbody>',
         '    <geom name="floor" type="plane" size="0 0 1"/>',

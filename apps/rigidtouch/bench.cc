@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <iostream>
 
+#include "base/text.h"
 #include "command.h"
 #include "engine/workspace.h"
 #include "loop/reference_job.h"
@@ -72,6 +73,30 @@ void LookAtProgress(Progress& progress, long done, long total, const char* phase
       std::string(phase) + " step " + std::to_string(done) + " of " + std::to_string(total);
   progress.ThrowIfStopped(where, "nothing was measured");
   if (progress.Due()) progress.Report(static_cast<double>(done) / total, where);
+}
+
+// bench's lines for people: microseconds to 3-4 digits (the JSON keeps the nanoseconds)
+void PrintBench(const nlohmann::json& result, const std::string& source, long units,
+                bool reference) {
+  const auto us = [](const nlohmann::json& ns) {
+    return text::Significant(1e-3 * ns.get<double>());
+  };
+  std::cout << source << ": median " << us(result["median_ns"]) << " us, p99 "
+            << us(result["p99_ns"]) << ", p99.9 " << us(result["p999_ns"]) << ", max "
+            << us(result["max_ns"]) << " us per step; " << result["contacts"] << " contacts\n";
+  if (reference) {
+    const nlohmann::json& r = result["reference"];
+    const nlohmann::json& q = r["step_over_job"];
+    std::cout << "fixed job of " << units << " units after each step: median " << us(r["median_ns"])
+              << " us, p99 " << us(r["p99_ns"]) << ", p99.9 " << us(r["p999_ns"]) << ", max "
+              << us(r["max_ns"]) << " us\n"
+              << std::fixed << std::setprecision(2) << "step over job: median "
+              << q["median_ns"].get<double>() << ", p99 " << q["p99_ns"].get<double>() << ", p99.9 "
+              << q["p999_ns"].get<double>() << ", max " << q["max_ns"].get<double>()
+              << "; p99.9 over median: steps "
+              << r["tail_over_median"]["steps"]["p999"].get<double>() << ", job "
+              << r["tail_over_median"]["job"]["p999"].get<double>() << "\n";
+  }
 }
 
 void RunBench(const BenchFlags& f) {
@@ -175,22 +200,7 @@ void RunBench(const BenchFlags& f) {
     std::cout << result.dump() << "\n";
     return;
   }
-  std::cout << model.source << ": median " << result["median_ns"] << " ns, p99 " << result["p99_ns"]
-            << ", p99.9 " << result["p999_ns"] << ", max " << result["max_ns"] << " ns per step; "
-            << data.ncontact << " contacts\n";
-  if (f.reference) {
-    const nlohmann::json& r = result["reference"];
-    const nlohmann::json& q = r["step_over_job"];
-    std::cout << "fixed job of " << units << " units after each step: median " << r["median_ns"]
-              << " ns, p99 " << r["p99_ns"] << ", p99.9 " << r["p999_ns"] << ", max " << r["max_ns"]
-              << " ns\n"
-              << std::fixed << std::setprecision(2) << "step over job: median "
-              << q["median_ns"].get<double>() << ", p99 " << q["p99_ns"].get<double>() << ", p99.9 "
-              << q["p999_ns"].get<double>() << ", max " << q["max_ns"].get<double>()
-              << "; p99.9 over median: steps "
-              << r["tail_over_median"]["steps"]["p999"].get<double>() << ", job "
-              << r["tail_over_median"]["job"]["p999"].get<double>() << "\n";
-  }
+  PrintBench(result, model.source, units, f.reference);
 }
 
 void RegisterBench(CLI::App& root) {

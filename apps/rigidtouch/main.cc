@@ -10,6 +10,7 @@
 #include <string>
 
 #include "base/progress.h"
+#include "cli_errors.h"
 #include "io/output_file.h"
 #include "rigidtouch/command.h"
 #include "rigidtouch/types.h"
@@ -20,23 +21,6 @@ std::vector<Command>& Commands() {
   static std::vector<Command> commands;
   return commands;
 }
-
-namespace {
-
-// when the first word names no subcommand: that word and the valid ones (CLI11 says only that a
-// subcommand is required); empty otherwise
-std::string UnknownSubcommand(const CLI::App& app, int argc, char** argv) {
-  if (argc < 2 || argv[1][0] == '-') return "";
-  const std::string word = argv[1];
-  std::string valid;
-  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
-    if (sub->get_name() == word) return "";
-    valid += (valid.empty() ? "" : ", ") + sub->get_name();
-  }
-  return "unknown subcommand '" + word + "'; valid: " + valid;
-}
-
-}  // namespace
 
 }  // namespace rigidtouch::cli
 
@@ -64,15 +48,11 @@ int main(int argc, char** argv) {
     return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
     // CLI11 would exit with its own code (above 100) and no prefix: one voice for every error
-    const std::string unknown = rigidtouch::cli::UnknownSubcommand(app, argc, argv);
-    if (!unknown.empty()) {
-      std::cerr << "rigidtouch: error: " << unknown << "\n"
-                << "Run `" << argv[0] << " --help` for the subcommands.\n";
-      return 2;
-    }
-    std::cerr << "rigidtouch: error: " << e.what() << "\n"
-              << "Run `" << argv[0] << (argc > 1 ? std::string(" ") + argv[1] : std::string())
-              << " --help` for the options.\n";
+    const std::string message = rigidtouch::cli::ExplainParseError(app, e, argc, argv);
+    const std::string path = rigidtouch::cli::SubcommandPath(app, argc, argv);
+    std::cerr << "rigidtouch: error: " << message << "\n"
+              << "Run `" << argv[0] << (path.empty() ? std::string() : " " + path)
+              << " --help` for the " << (path.empty() ? "subcommands" : "options") << ".\n";
     return 2;
   } catch (const rigidtouch::io::OutputError& e) {
     std::cerr << "rigidtouch: error: " << e.what() << "\n";

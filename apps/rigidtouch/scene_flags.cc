@@ -117,11 +117,25 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
       "name of the free body that is the tool, or none for a scene without a tool (default: the "
       "config's, else tool)");
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");
-  app->add_option("--renderer", f.renderer, "penalty | impulse | train | event")
-      ->check(CLI::IsMember(text::RendererNames()));
+  app->add_option("--renderer", f.renderer,
+                  "penalty | impulse | train | event, or event:MATERIAL and train:MATERIAL (a "
+                  "material train) as --compare takes them")
+      ->check(CLI::Validator(
+          [](const std::string& value) {
+            const std::string name = value.substr(0, value.find(':'));
+            const std::vector<std::string> names = text::RendererNames();
+            if (std::find(names.begin(), names.end(), name) == names.end()) {
+              return "'" + name + "' is no renderer; valid: penalty, impulse, train, event";
+            }
+            if (value.find(':') != std::string::npos && name != "event" && name != "train") {
+              return "a material goes with event or train, not with '" + name + "'";
+            }
+            return std::string();
+          },
+          "RENDERER[:MATERIAL]"));
   app->add_option("--material", f.material,
-                  "the event renderer's material: rubber | wood | aluminium | FILE.json "
-                  "(docs/renderers.md)");
+                  "the event renderer's or the material train's material: rubber | wood | "
+                  "aluminium | FILE.json (docs/renderers.md)");
   app->add_option("--restitution", f.restitution,
                   "restitution e in [0, 1] (impulse renderer; the train's is 0)");
   app->add_option("--t-collision", f.t_collision_s,
@@ -161,9 +175,21 @@ Settings ResolveSettings(const SceneFlags& f) {
   flag("tool", o.tool_name, f.tool);
   flag("timestep_s", o.timestep_s, f.timestep_s);
   flag("threads", o.threads, f.threads);
+  // --renderer NAME:MATERIAL names the material too (as --compare's entries do)
+  std::optional<std::string> material = f.material;
+  std::string material_flag = "--material";
   if (f.renderer) {
-    o.render.renderer = io::ParseRenderer(*f.renderer);
+    const std::size_t colon = f.renderer->find(':');
+    o.render.renderer = io::ParseRenderer(f.renderer->substr(0, colon));
     s.origin["render.renderer"] = "--renderer";
+    if (colon != std::string::npos) {
+      if (f.material) {
+        throw Error("--renderer " + *f.renderer + " and --material " + *f.material +
+                    " both name the material: give it once");
+      }
+      material = f.renderer->substr(colon + 1);
+      material_flag = "--renderer";
+    }
   }
   flag("render.restitution", o.render.restitution, f.restitution);
   flag("render.t_collision_s", o.render.t_collision_s, f.t_collision_s);
@@ -174,11 +200,11 @@ Settings ResolveSettings(const SceneFlags& f) {
     o.render.reference_solver = true;
     s.origin["render.reference_solver"] = "--reference-solver";
   }
-  if (f.material) {
-    o.render.material = io::ParseMaterial(*f.material);
-    s.origin["render.material"] = "--material";
+  if (material) {
+    o.render.material = io::ParseMaterial(*material);
+    s.origin["render.material"] = material_flag;
   }
-  if ((f.material || s.Given("render.material")) && o.render.renderer == RendererKind::kTrain) {
+  if ((material || s.Given("render.material")) && o.render.renderer == RendererKind::kTrain) {
     // a material train: f and the window come from the material, not from a flag as well
     for (const char* field : {"render.frequency_hz", "render.t_collision_s"}) {
       if (s.Given(field)) {
@@ -318,9 +344,36 @@ nlohmann::json WarningsJson(const std::array<WarningStat, static_cast<int>(Warni
   return j;
 }
 
+namespace {
+
+// what a counted warning (Data's Warning, by its report name) means, for a sentence that ends
+// "in N ticks"
+std::string WarningMeaning(const std::string& name) {
+  static const std::pair<const char*, const char*> kMeanings[] = {
+      {"contact_full", "more contacts than the model's max_contacts (the extra ones dropped)"},
+      {"group_too_large", "a contact group larger than max_group_bodies (its bodies moved freely)"},
+      {"solver_failed", "the impulse solver failed (the impulse skipped)"},
+      {"bad_device_state", "an invalid device state (zero force sent)"},
+      {"non_finite_state", "a non-finite simulation state (the state reset)"},
+      {"force_clipped", "the device's force limit clipped the force"},
+      {"impulse_clipped", "the clipped force held an impulse"},
+      {"implausible_device_state",
+       "a device state beyond the plausible reach or speed (zero force sent)"},
+  };
+  for (const auto& [key, meaning] : kMeanings) {
+    if (name == key) return meaning;
+  }
+  return name;
+}
+
+}  // namespace
+
 void PrintWarnings(const nlohmann::json& warnings, std::ostream& out) {
+  // out is the terminal's stderr in use; a stream is taken so tests can read it
   for (const auto& [name, count] : warnings.items()) {
-    out << "warning: " << name << " x" << count << "\n";
+    const int ticks = count.get<int>();
+    out << "rigidtouch: warning: " << WarningMeaning(name) << " in " << ticks
+        << (ticks == 1 ? " tick" : " ticks") << " (" << name << ")\n";
   }
 }
 

@@ -76,7 +76,9 @@ void PrintResult(const nlohmann::json& result, bool json) {
             << result["stale_device_ticks"] << "\n"
             << "max force " << result["max_force_N"] << " N (limit " << result["force_limit_N"]
             << " N, 0: none), clipped ticks " << result["clipped_ticks"] << "\n";
-  for (const auto& w : t["warnings"]) std::cout << "warning: " << w.get<std::string>() << "\n";
+  for (const auto& w : t["warnings"]) {
+    std::cerr << "rigidtouch: warning: " << w.get<std::string>() << "\n";
+  }
 }
 
 // What the run rendered and under which limits, for the summary.

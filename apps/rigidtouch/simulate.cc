@@ -3,6 +3,7 @@
 #include <iostream>
 #include <limits>
 
+#include "base/text.h"
 #include "command.h"
 #include "dynamics/tree.h"
 #include "io/config.h"
@@ -126,23 +127,38 @@ void RunSimulate(const SimulateFlags& f) {
     ThrowIfNonFinite(report);
     return;
   }
-  std::cout << "simulated " << f.steps << " steps of " << model.timestep_s << " s (" << data.time_s
-            << " s) of " << model.source << " with the "
+  // for people: positions to the micrometre, velocities to 0.1 mm/s (and the same in rad for
+  // angles), never "-0"; the JSON keeps every digit
+  const auto numbers = [](const auto& values, int decimals) {
+    std::string out;
+    for (const auto& v : values) {
+      out += (out.empty() ? "" : " ") + text::Fixed(static_cast<double>(v), decimals);
+    }
+    return out;
+  };
+  const auto vec = [](const Vec3& v) { return std::vector<double>{v.x(), v.y(), v.z()}; };
+  // a hinge's or slide's value is a number, a ball's or free joint's an array
+  const auto list = [](const nlohmann::json& j) {
+    return j.is_array() ? j.get<std::vector<double>>() : std::vector<double>{j.get<double>()};
+  };
+  std::cout << "simulated " << f.steps << " steps of " << text::Significant(model.timestep_s)
+            << " s (" << text::Significant(data.time_s) << " s) of " << model.source << " with the "
             << text::RendererName(model.render.renderer) << " renderer\n";
   std::cout << "impulses applied: " << impulses.size()
             << ", most contacts in a step: " << max_contacts << "\n";
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
     if (!model.has_tool && static_cast<int>(i) == model.tool) continue;
     const BodyState& s = data.bodies[i];
-    std::cout << "  " << model.bodies[i].name << ": position " << s.x_W.transpose()
-              << " m, velocity " << s.v_W.transpose() << " m/s\n";
+    std::cout << "  " << model.bodies[i].name << ": position " << numbers(vec(s.x_W), 6)
+              << " m, velocity " << numbers(vec(s.v_W), 4) << " m/s\n";
   }
   for (const nlohmann::json& j : result["joints"]) {
     std::cout << "  joint " << j["name"].get<std::string>() << " (" << j["type"].get<std::string>()
-              << "): position " << j["position"].dump() << ", velocity " << j["velocity"].dump()
+              << "): position " << numbers(list(j["position"]), 6) << ", velocity "
+              << numbers(list(j["velocity"]), 4)
               << (j["at_limit"].get<bool>() ? ", at its limit" : "") << "\n";
   }
-  PrintWarnings(result["warnings"], std::cout);
+  PrintWarnings(result["warnings"], std::cerr);
   ThrowIfNonFinite(report);
 }
 

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/text.h"
 #include "device/device_spec.h"
 #include "io/output_file.h"
 #include "rigidtouch/command.h"
@@ -281,21 +282,24 @@ void Predict(const PredictOptions& o) {
     std::cout << "Observer model, " << o.taps << " sampled taps per wall (" << source->Describe()
               << "); " << o.cohorts << " simulated cohorts of " << o.participants
               << " (intervals: 5th-95th percentile over cohorts)\n";
-    auto percent = [](double share) { return std::to_string(std::lround(100.0 * share)) + "%"; };
+    auto percent = [](double share) { return text::Percent(share); };
+    // percent-correct values are percentages already: to 0.1
+    auto pc = [](double percent_value) { return text::Fixed(percent_value, 1); };
+    auto jnd = [](double d) { return text::Significant(d, 3); };
     for (const auto& p : predictions) {
       if (p.mean_percepts.size() == 2) {
-        std::cout << "  " << p.name << ": walls " << p.distance_jnd
-                  << " JND apart; nominal observer " << p.percent_correct << "% correct\n";
+        std::cout << "  " << p.name << ": walls " << jnd(p.distance_jnd)
+                  << " JND apart; nominal observer " << pc(p.percent_correct) << "% correct\n";
       } else {
         std::cout << "  " << p.name << ": " << p.mean_percepts.size() << " walls, the nearest two "
-                  << p.distance_jnd << " JND apart; chance " << p.chance_percent
+                  << jnd(p.distance_jnd) << " JND apart; chance " << pc(p.chance_percent)
                   << "% (no nominal closed form for more than two walls: see the cohorts)\n";
       }
       if (o.cohorts == 0) continue;
       const st::CohortShare& m = p.cohort_percent_correct;
-      std::cout << "    cohort mean " << m.expected << "% correct [" << m.low << ", " << m.high
-                << "]; participants at >= 90%: " << percent(p.at_least_90.expected) << " ["
-                << percent(p.at_least_90.low) << ", " << percent(p.at_least_90.high)
+      std::cout << "    cohort mean " << pc(m.expected) << "% correct [" << pc(m.low) << ", "
+                << pc(m.high) << "]; participants at >= 90%: " << percent(p.at_least_90.expected)
+                << " [" << percent(p.at_least_90.low) << ", " << percent(p.at_least_90.high)
                 << "]; at <= 50%: " << percent(p.at_most_50.expected) << " ["
                 << percent(p.at_most_50.low) << ", " << percent(p.at_most_50.high) << "]\n";
       if (!std::isnan(p.cohorts_below_previous)) {

@@ -24,6 +24,7 @@
 #include "scene_flags.h"
 #include "simulate_nonfinite.h"
 #include "tap_run.h"
+#include "tap_table.h"
 
 namespace rigidtouch::cli {
 namespace {
@@ -151,10 +152,11 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"time_to_stop_s", t.time_to_stop_s},
                     {"bounces", t.bounces},
                     {"energy_to_user_J", t.energy_to_user_J},
-                    {"dominant_frequency_hz", t.dominant_frequency_hz},
                     {"band_energy_fraction", t.band_energy_fraction},
+                    {"spectrum_window_s", t.spectrum_window_s},
                     {"spectrum_resolution_hz", t.spectrum_resolution_hz},
-                    {"transient_dominant_frequency_hz", t.transient_dominant_frequency_hz},
+                    {"transient_repetition_hz", t.transient_repetition_hz},
+                    {"transient_periodicity", t.transient_periodicity},
                     {"transient_peak_to_mean", t.transient_peak_to_mean},
                     {"transient_band_energy_fraction", t.transient_band_energy_fraction},
                     {"transient_power_ratio", t.transient_power_ratio},
@@ -223,86 +225,30 @@ void RunPlotScript(const std::string& script, const std::vector<std::string>& ar
   throw Error("drawing " + script + " failed: " + r.message);
 }
 
-// mean over the taps of the finite values of `value`; NaN when none is finite
-template <typename F>
-double MeanPerTap(const analysis::TapRun& run, F value) {
-  double sum = 0.0;
-  int n = 0;
-  for (const analysis::TapMetrics& t : run.taps) {
-    const double v = value(t);
-    if (!std::isfinite(v)) continue;
-    sum += v;
-    ++n;
+// plot_tap.py's arguments for tap 0 of `run`: its title (what was rendered, with which
+// material, on which device), what the impulsive part is, and the tap metrics' spectral figures,
+// which the figure states as they are (one definition for the table, the JSON and the figure)
+std::vector<std::string> TapFigureArgs(const analysis::TapRun& run, const std::string& what) {
+  const Model& m = run.model;
+  const std::string material = m.render.material.name;
+  const bool event = m.render.renderer == RendererKind::kEvent;
+  std::string parts = event ? "event transient" : "impulses (Eq. 9 force)";
+  if (!material.empty()) parts += ", material " + material;
+  std::vector<std::string> args = {"--title",       what + " on the " + run.device.name + ", tap 0",
+                                   "--parts-label", parts,
+                                   "--limit",       text::FormatNumber(run.device.max_force_N)};
+  if (!run.taps.empty() && std::isfinite(run.taps.front().spectrum_window_s)) {
+    const analysis::TapMetrics& t = run.taps.front();
+    const double rate_hz = t.transient_repetition_hz;
+    args.insert(args.end(),
+                {"--window-ms", text::Significant(1e3 * t.spectrum_window_s, 3), "--resolution-hz",
+                 text::Significant(t.spectrum_resolution_hz, 3), "--repetition",
+                 !std::isfinite(rate_hz) ? "-"
+                 : rate_hz == 0.0        ? "none"
+                                         : text::Fixed(rate_hz, 1) + " Hz"});
   }
-  return n > 0 ? sum / n : std::nan("");
+  return args;
 }
-
-std::string FixedDigits(double v, int digits) {
-  if (!std::isfinite(v)) return "-";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
-
-// below this peak-to-mean power ratio the transient's spectrum is called flat in the table
-constexpr double kFlatPeakToMean = 2.0;
-
-// one row of the table; the header says which statistic over the taps each column is
-std::string Row(const std::string& name, const analysis::TapRun& run) {
-  using M = analysis::TapMetrics;
-  int bounces = 0;
-  double energy_J = 0.0;
-  for (const M& t : run.taps) {
-    bounces += t.bounces;
-    energy_J += t.energy_to_user_J;
-  }
-  const auto mean = [&run](auto f) { return MeanPerTap(run, f); };
-  const double nonzero = mean([](const M& t) {
-    return static_cast<double>(
-        std::count_if(t.impulses.begin(), t.impulses.end(),
-                      [](const auto& e) { return e.requested_force_N > 0; }));
-  });
-  std::ostringstream energy;
-  energy << std::scientific << std::setprecision(2) << energy_J;
-  const double transient_hz = mean([](const M& t) { return t.transient_dominant_frequency_hz; });
-  const double peak_to_mean = mean([](const M& t) { return t.transient_peak_to_mean; });
-  // a peak less than twice the mean power stands out of nothing: a flat (broadband) transient
-  std::string transient = "-";
-  if (std::isfinite(transient_hz)) {
-    transient =
-        (peak_to_mean < kFlatPeakToMean ? std::string("flat") : FixedDigits(transient_hz, 0)) +
-        " (" + FixedDigits(peak_to_mean, 1) + ")";
-  }
-  std::ostringstream s;
-  s << "| " << name << " | "
-    << FixedDigits(mean([](const M& t) { return t.peak_requested_force_N; }), 2) << " | "
-    << FixedDigits(mean([](const M& t) { return t.peak_force_N; }), 2) << " | "
-    << FixedDigits(mean([](const M& t) { return t.rate_hardness_N_per_m; }), 0) << " | "
-    << FixedDigits(mean([](const M& t) { return t.extended_rate_hardness_N_per_m; }), 0) << " | "
-    << FixedDigits(mean([](const M& t) { return 1e3 * t.max_penetration_m; }), 2) << " | "
-    << FixedDigits(mean([](const M& t) { return 1e3 * t.time_to_stop_s; }), 1) << " | "
-    << FixedDigits(mean([](const M& t) { return static_cast<double>(t.impulses.size()); }), 1)
-    << " / " << FixedDigits(nonzero, 1) << " | " << bounces << " | " << energy.str() << " | "
-    << FixedDigits(mean([](const M& t) { return t.dominant_frequency_hz; }), 1) << " / "
-    << FixedDigits(mean([](const M& t) { return 100.0 * t.band_energy_fraction[0]; }), 0) << " | "
-    << transient << " | "
-    << FixedDigits(mean([](const M& t) { return 100.0 * t.transient_band_energy_fraction[2]; }), 0)
-    << " | " << FixedDigits(mean([](const M& t) { return 100.0 * t.transient_power_ratio; }), 1)
-    << " |";
-  return s.str();
-}
-
-// every column: quantity [unit], statistic over the taps
-const char* kTableHeader =
-    "| renderer | requested peak force [N], mean/tap | displayed peak force [N], mean/tap | "
-    "rate hardness [N/m], mean/tap | extended rate hardness [N/m], mean/tap | "
-    "max penetration [mm], mean/tap | time to stop [ms], mean/tap | "
-    "impulses scheduled / non-zero, mean/tap | bounces, sum over taps | "
-    "energy to user [J], sum over taps | displayed force: dominant frequency [Hz] / power "
-    "below 40 Hz [%], mean/tap | transient: dominant frequency >= 40 Hz [Hz] (peak/mean "
-    "power), mean/tap | transient: power 100-400 Hz [%], mean/tap | transient / displayed "
-    "power [%], mean/tap |\n"
-    "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 std::string OutPath(const TapFlags& f, const std::string& name) {
   return (std::filesystem::path(f.out_dir) / name).string();
@@ -342,8 +288,11 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   }
   std::vector<std::string> traces, labels;
   nlohmann::json renderers = nlohmann::json::array();
-  std::ostringstream table;
-  table << kTableHeader << "\n";
+  std::ostringstream table, compact;
+  table << TapTableHeader(TapTable::kFull) << "\n";
+  compact << TapTableHeader(TapTable::kCompact) << "\n";
+  std::string note, compact_note;
+  std::vector<std::vector<std::string>> figure_args;
   std::string coupling = "direct";
   double max_force_N = 0.0;
   NonFiniteReport non_finite;
@@ -373,7 +322,11 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     entry.update(RunJson(run, coupling.c_str()));
     entry["trace"] = trace;
     renderers.push_back(entry);
-    table << Row(spec.label, run) << "\n";
+    table << TapTableRow(TapTable::kFull, spec.label, run) << "\n";
+    compact << TapTableRow(TapTable::kCompact, spec.label, run) << "\n";
+    if (i == 0) note = TapTableNote(TapTable::kFull, run);
+    if (i == 0) compact_note = TapTableNote(TapTable::kCompact, run);
+    figure_args.push_back(TapFigureArgs(run, spec.label));
     if (non_finite.count == 0 && NonFinite(run).count > 0) {
       non_finite = NonFinite(run);
       non_finite_name = spec.label;
@@ -386,7 +339,8 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     out << f.taps << " taps per renderer at " << f.speed_mps << " m/s on the " << f.device
         << " preset (" << coupling << " coupling, " << f.rate_hz
         << " Hz); each column names its statistic over the taps\n\n"
-        << table.str();
+        << table.str() << "\n"
+        << note << "\n";
     io::WriteFileAtomically(table_path, out.str(), "table");
   }
   const std::string fig = OutPath(f, set + ".png");
@@ -394,14 +348,28 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   args.push_back("--labels");
   args.insert(args.end(), labels.begin(), labels.end());
   args.insert(args.end(), {"--limit", text::FormatNumber(max_force_N), "--out", fig});
+  // the spectral figures as the tap metrics give them (TapFigureArgs: window, resolution and
+  // each renderer's repetition after the flag's name)
+  for (const char* flag : {"--window-ms", "--resolution-hz"}) {
+    const auto at = std::find(figure_args.front().begin(), figure_args.front().end(), flag);
+    if (at != figure_args.front().end()) args.insert(args.end(), {flag, *(at + 1)});
+  }
+  std::vector<std::string> repetitions;
+  for (const std::vector<std::string>& a : figure_args) {
+    const auto at = std::find(a.begin(), a.end(), "--repetition");
+    if (at != a.end()) repetitions.push_back(*(at + 1));
+  }
+  if (repetitions.size() == figure_args.size()) {
+    args.push_back("--repetitions");
+    args.insert(args.end(), repetitions.begin(), repetitions.end());
+  }
   RunPlotScript("python/plot_walls.py", args, f.json);
   std::vector<std::string> figures = {fig};
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const std::string tap_fig = OutPath(f, FileStem(specs[i]) + "_tap.png");
-    RunPlotScript("python/plot_tap.py",
-                  {traces[i], "--out", tap_fig, "--limit", text::FormatNumber(max_force_N),
-                   "--title", specs[i].label + ", tap 0"},
-                  f.json);
+    std::vector<std::string> tap_args = {traces[i], "--out", tap_fig};
+    tap_args.insert(tap_args.end(), figure_args[i].begin(), figure_args[i].end());
+    RunPlotScript("python/plot_tap.py", tap_args, f.json);
     figures.push_back(tap_fig);
   }
   auto check = [&non_finite, &non_finite_name] {
@@ -414,7 +382,8 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     check();
     return;
   }
-  std::cout << table.str() << "\ntable: " << table_path << "\nfigures: " << fig << " and "
+  std::cout << compact.str() << "\n"
+            << compact_note << "\n\nfull table: " << table_path << "\nfigures: " << fig << " and "
             << f.out_dir << "/<renderer>_tap.png\ntraces: " << f.out_dir << "/<renderer>.csv\n";
   check();
 }
@@ -479,11 +448,12 @@ void RunTap(const TapFlags& f) {
     // the temporary trace goes whether or not the figure could be drawn
     std::error_code ignored;
     try {
-      RunPlotScript(
-          "python/plot_tap.py",
-          {trace, "--out", f.plot, "--limit", text::FormatNumber(run.device.max_force_N), "--title",
-           std::string(text::RendererName(run.model.render.renderer)) + ", tap 0"},
-          f.json);
+      std::string what = text::RendererName(run.model.render.renderer);
+      if (!run.model.render.material.name.empty()) what += ": " + run.model.render.material.name;
+      std::vector<std::string> tap_args = {trace, "--out", f.plot};
+      const std::vector<std::string> more = TapFigureArgs(run, what);
+      tap_args.insert(tap_args.end(), more.begin(), more.end());
+      RunPlotScript("python/plot_tap.py", tap_args, f.json);
     } catch (...) {
       if (temporary) std::filesystem::remove(trace, ignored);
       throw;
@@ -497,8 +467,10 @@ void RunTap(const TapFlags& f) {
     ThrowIfNonFinite(NonFinite(run));
     return;
   }
-  std::cout << kTableHeader << "\n" << Row(result["renderer"].get<std::string>(), run) << "\n";
-  PrintWarnings(result["warnings"], std::cout);
+  std::cout << TapTableHeader(TapTable::kCompact) << "\n"
+            << TapTableRow(TapTable::kCompact, result["renderer"].get<std::string>(), run) << "\n\n"
+            << TapTableNote(TapTable::kCompact, run) << "\nEvery figure per tap: --json.\n";
+  PrintWarnings(result["warnings"], std::cerr);
   if (!result["displayable"].get<bool>()) {
     std::cout << "note: the rendered stiffness or damping is above what the " << run.device.name
               << " can display (its max_stiffness_N_per_m, max_damping_Ns_per_m); the simulated "
@@ -535,7 +507,8 @@ std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
       ->capture_default_str();
   app->add_option("--coupling", f->coupling,
                   "direct | virtual (default: the config's device.coupling, else direct)");
-  app->add_option("--speed", f->speed_mps, "approach speed [m/s]")->capture_default_str();
+  app->add_option("--speed", f->speed_mps, "approach speed [m/s], in (0, 2]")
+      ->capture_default_str();
   app->add_option("--spread", f->spread, "relative random spread of the speed (seeded)");
   app->add_option("--taps", f->taps, "number of taps")->capture_default_str();
   app->add_option("--seed", f->seed, "random seed, 0 to 2^64 - 1")
@@ -550,7 +523,8 @@ std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
                 "run penalty and walls 0, 1, 2; write traces, a table and figures to --out-dir");
   app->add_option("--compare", f->compare,
                   "run these renderers side by side, comma-separated: penalty, impulse, train "
-                  "(with the flags' parameters), wall0, wall1, wall2 (the method's walls); "
+                  "(with the flags' parameters), wall0, wall1, wall2 (the method's walls), "
+                  "event:MATERIAL and train:MATERIAL (e.g. penalty,train,event:wood,train:wood); "
                   "writes traces, compare.md and figures to --out-dir");
   app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
       ->capture_default_str();

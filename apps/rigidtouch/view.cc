@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "analysis/tap_experiment.h"
+#include "base/text.h"
 #include "command.h"
 #include "device/device_spec.h"
 #include "device/mouse_device.h"
@@ -34,6 +35,7 @@ struct ViewFlags {
   SceneFlags scene;
   std::string device = "mouse";
   std::string preset = "touch";
+  std::optional<std::string> connect;  // --connect: how the device is reached (then --device is it)
   double rate_hz = 1000.0;
   bool rate_given = false;
   int taps = 3;
@@ -207,10 +209,12 @@ void PrintViewResult(const ViewFlags& f, const Model& model, const Data& data,
     std::cout << result.dump() << "\n";
   } else {
     const auto& t = result["loop"];
-    std::cout << "frames " << vr.frames << " in " << vr.elapsed_s << " s; loop ticks " << t["ticks"]
-              << " at " << t["achieved_rate_hz"] << " Hz, period error p99 "
-              << 1e6 * t["period_error_p99_s"].get<double>() << " us, max "
-              << 1e6 * t["period_error_max_s"].get<double>() << " us\n";
+    std::cout << "frames " << vr.frames << " in " << text::Significant(vr.elapsed_s, 3)
+              << " s; loop ticks " << t["ticks"] << " at "
+              << text::Significant(t["achieved_rate_hz"].get<double>(), 4)
+              << " Hz, period error p99 "
+              << text::Significant(1e6 * t["period_error_p99_s"].get<double>(), 3) << " us, max "
+              << text::Significant(1e6 * t["period_error_max_s"].get<double>(), 3) << " us\n";
   }
 }
 
@@ -320,6 +324,9 @@ void RegisterView(CLI::App& root) {
                       device::DeviceSpecHelp() +
                       ": the simulated hand's taps on that device, as sim with --preset)")
       ->capture_default_str();
+  app->add_option("--connect", f->connect,
+                  "how the device is reached: mouse (default), sim, udp://HOST:PORT or "
+                  "replay:LOG, as --device's first forms (then --device names the device)");
   app->add_option("--preset", f->preset,
                   "the device (" + device::DeviceSpecHelp() +
                       "): its limits and the simulated device's model")
@@ -359,6 +366,29 @@ void RegisterView(CLI::App& root) {
   app->add_flag("--json", f->json, "print one JSON object at the end");
   app->callback([f, app] {
     f->rate_given = app->count("--rate") > 0;
+    if (f->connect) {
+      // serve's spelling: --connect says how, --device which device
+      const std::string& how = *f->connect;
+      if (how != "mouse" && !IsConnection(how)) {
+        throw Error("view: --connect " + how +
+                    ": valid: mouse, sim, udp://HOST:PORT or replay:LOG; the device itself is "
+                    "--device " +
+                    device::DeviceSpecHelp());
+      }
+      if (app->count("--device") > 0) {
+        if (f->device == "mouse" || IsConnection(f->device)) {
+          throw Error("view: --device " + f->device + " and --connect " + how +
+                      " both say how the device is reached; give it once, with --connect");
+        }
+        if (app->count("--preset") > 0) {
+          throw Error("view: --device " + f->device + " and --preset " + f->preset +
+                      " both name the device (--preset is the old spelling); give one");
+        }
+        device::ParseDeviceSpec(f->device);
+        f->preset = f->device;
+      }
+      f->device = how;
+    }
     if (f->device != "mouse" && !IsConnection(f->device)) {
       // a device spec (a preset name or FILE.json): the simulated hand taps on that device
       if (app->count("--preset") > 0) {

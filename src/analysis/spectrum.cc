@@ -122,6 +122,41 @@ double PeakToMeanPower(const Spectrum& spectrum, double min_hz) {
   return peak / (sum / bins);
 }
 
+Repetition RepetitionOf(std::span<const double> x, double h_s, double min_hz, double peak_to_mean) {
+  Repetition r;
+  // a click's spectrum is flat (peak over mean about 1): no repetition
+  if (!(peak_to_mean > kRepetitionPeakToMean) || !(h_s > 0.0) || !(min_hz > 0.0) || x.size() < 3) {
+    return r;
+  }
+  double energy = 0.0;
+  for (double v : x) energy += v * v;
+  if (!(energy > 0.0)) return r;
+  // lags bounded in double before the conversion (any h_s > 0 stays in range)
+  const double hi_lag =
+      std::min(static_cast<double>(x.size() - 1), std::floor(1.0 / (min_hz * h_s) + 1e-9));
+  if (hi_lag < 2.0) return r;
+  const auto hi = static_cast<std::size_t>(hi_lag);
+  const auto correlation = [&x, energy](std::size_t lag) {
+    double c = 0.0;
+    for (std::size_t k = 0; k + lag < x.size(); ++k) c += x[k] * x[k + lag];
+    return c / energy;
+  };
+  // a period is a peak of the autocorrelation: a smooth envelope (a ring slower than min_hz)
+  // falls from lag 0 on and has none, where the highest value alone would be the shortest lag
+  double before = correlation(1);
+  double here = correlation(2);
+  for (std::size_t lag = 2; lag <= hi; ++lag) {
+    const double after = lag + 1 < x.size() ? correlation(lag + 1) : 0.0;
+    if (here > before && here >= after && here > r.periodicity) {
+      r.periodicity = std::min(here, 1.0);
+      r.rate_hz = 1.0 / (static_cast<double>(lag) * h_s);
+    }
+    before = here;
+    here = after;
+  }
+  return r;
+}
+
 double PowerAboveDc(const Spectrum& spectrum) {
   double sum = 0.0;
   for (std::size_t k = 1; k < spectrum.power.size(); ++k) sum += spectrum.power[k];

@@ -1,5 +1,6 @@
 // Power spectrum of a sampled force signal (FFTW), its dominant frequency and band energy
-// fractions. Offline analysis: allocates, never runs inside the haptic loop.
+// fractions, and the repetition rate of a transient. Offline analysis: allocates, never runs
+// inside the haptic loop.
 #pragma once
 
 #include <array>
@@ -56,6 +57,30 @@ double PowerAboveDc(const Spectrum& spectrum);
 /// Frequency resolution of a spectrum of `samples` samples at `sample_rate_hz`: the inverse of
 /// the signal's duration [Hz]. Zero padding interpolates between such bins; it adds none.
 double ResolutionHz(int samples, double sample_rate_hz);
+
+/// A transient whose spectral peak-to-mean power (PeakToMeanPower at or above 40 Hz) is at or
+/// below this has no repetition rate: one pulse gives about 1 (a flat spectrum), two equal pulses
+/// 2, N equal evenly spaced pulses about N. A rate needs the period repeated.
+inline constexpr double kRepetitionPeakToMean = 2.0;
+
+/// How a transient repeats: the fundamental of a train of pulses (its repetition rate), or of a
+/// decaying vibration (its period), rather than its largest spectral bin (a comb of one-tick
+/// pulses has harmonics of nearly equal power, any of which can be the largest).
+struct Repetition {
+  double rate_hz = 0.0;      ///< 1 / period [Hz]; 0: none
+  double periodicity = 0.0;  ///< normalised autocorrelation at the period, in [0, 1]; 0: none
+};
+
+/// Repetition of the transient `x` sampled every `h_s` seconds, whose spectral peak-to-mean power
+/// at or above `min_hz` is `peak_to_mean`: none unless peak_to_mean > kRepetitionPeakToMean;
+/// otherwise the period is the lag L from 2 samples (the Nyquist rate) to 1 / min_hz where the
+/// biased autocorrelation c(L) = sum_k x[k] x[k + L] / sum_k x[k]^2 has its highest peak
+/// (c(L - 1) < c(L) >= c(L + 1); the shortest lag on ties), and none if no peak is positive: a
+/// ring slower than min_hz, whose c falls from lag 0 on, has none. The period is a whole number of
+/// samples: at 1 kHz a rate is 1000 / L Hz (250, 200, 166.7, ...), exact for trains, whose impulses
+/// fall on ticks. The biased estimate favours the period over its multiples (N equal pulses: (N -
+/// 1) / N at the period, (N - 2) / N at twice it).
+Repetition RepetitionOf(std::span<const double> x, double h_s, double min_hz, double peak_to_mean);
 
 /// Edges between the four reported bands [Hz]: below 40, 40-100, 100-400, above 400.
 inline constexpr std::array<double, 3> kDefaultBandEdgesHz = {40.0, 100.0, 400.0};

@@ -332,12 +332,9 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   run.energy_to_user_J = dev.energy_to_user_J();
   run.warnings = data.warnings;
 
-  TapMetricsOptions options;
-  options.collision_window_s =
-      model.render.renderer == RendererKind::kTrain ? model.render.t_collision_s : 0.1;
-  for (const auto& samples : SplitTaps(run.trace)) {
-    run.taps.push_back(ComputeTapMetrics(samples, options));
-  }
+  // every renderer's taps over the same window (TapMetricsOptions: 100 ms, the longest collision
+  // window), so that their spectral figures compare at one resolution
+  for (const auto& samples : SplitTaps(run.trace)) run.taps.push_back(ComputeTapMetrics(samples));
   run.model = std::move(model);
   run.wall = setup.wall;
   CheckTheWallWasTapped(run, config.scene_path);

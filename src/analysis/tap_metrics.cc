@@ -24,10 +24,11 @@ double ApproachSpeedMps(const TraceSample& s, const Vec3& n) {
 }
 
 void SetSpectraNaN(TapMetrics& m) {
-  m.dominant_frequency_hz = kNaN;
   m.band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+  m.spectrum_window_s = kNaN;
   m.spectrum_resolution_hz = kNaN;
-  m.transient_dominant_frequency_hz = kNaN;
+  m.transient_repetition_hz = kNaN;
+  m.transient_periodicity = kNaN;
   m.transient_peak_to_mean = kNaN;
   m.transient_band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
   m.transient_power_ratio = kNaN;
@@ -101,17 +102,22 @@ void Spectra(std::span<const TraceSample> s, std::size_t onset, const Vec3& n,
     SetSpectraNaN(m);
     return;
   }
-  m.dominant_frequency_hz = DominantFrequencyHz(spectrum);
   m.band_energy_fraction = BandEnergyFractions(spectrum, options.band_edges_hz);
+  m.spectrum_window_s = static_cast<double>(force_N.size()) / sample_rate_hz;
   m.spectrum_resolution_hz = ResolutionHz(static_cast<int>(force_N.size()), sample_rate_hz);
   const double vibration_hz = options.band_edges_hz[0];
-  m.transient_dominant_frequency_hz = DominantFrequencyHz(transient, vibration_hz);
   m.transient_peak_to_mean = PeakToMeanPower(transient, vibration_hz);
   const double transient_power = PowerAboveDc(transient);
   if (transient_power > 0.0) {
     m.transient_band_energy_fraction = BandEnergyFractions(transient, options.band_edges_hz);
+    const Repetition r =
+        RepetitionOf(transient_N, 1.0 / sample_rate_hz, vibration_hz, m.transient_peak_to_mean);
+    m.transient_repetition_hz = r.rate_hz;
+    m.transient_periodicity = r.periodicity;
   } else {
     m.transient_band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
+    m.transient_repetition_hz = kNaN;
+    m.transient_periodicity = kNaN;
   }
   const double displayed_power = PowerAboveDc(spectrum);
   m.transient_power_ratio = displayed_power > 0.0 ? transient_power / displayed_power : kNaN;

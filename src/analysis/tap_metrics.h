@@ -77,20 +77,22 @@ struct TapMetrics {
   double energy_to_user_J = 0.0;
   /// Every impulse in the tap, in time order.
   std::vector<ImpulseEvent> impulses;
-  /// Dominant frequency of the displayed normal force over the collision window, DC excluded
-  /// [Hz]. A value below spectrum_resolution_hz means the slow press (the penalty hump)
-  /// dominates: no vibration stands out of it.
-  double dominant_frequency_hz = 0.0;
   /// Fraction of the displayed normal force's power over the collision window below 40 Hz,
   /// 40-100, 100-400 and above 400 Hz (with the default edges).
   std::array<double, 4> band_energy_fraction = {0.0, 0.0, 0.0, 0.0};
+  /// Duration of the analysed window from onset (TapMetricsOptions::collision_window_s, shorter
+  /// when the tap ends first) [s]: every spectral figure below is over it.
+  double spectrum_window_s = 0.0;
   /// Inverse of the analysed window's duration: spectra resolve nothing finer [Hz].
   double spectrum_resolution_hz = 0.0;
   /// The transient part: displayed normal force minus the penalty (or coupling) force, i.e. what
   /// the impulses add to what the device displays, after its limit; zero without impulses.
-  /// Its dominant frequency at or above the lowest band edge (40 Hz: below it the transient's
-  /// envelope is felt as part of the press) [Hz]; NaN when the transient is zero.
-  double transient_dominant_frequency_hz = 0.0;
+  /// Its repetition rate (RepetitionOf, lags from 2 samples up to 1 / 40 Hz: below 40 Hz the
+  /// transient's envelope is felt as part of the press): a train's impulse rate, a vibration's
+  /// frequency [Hz]; 0 when it does not repeat (one click), NaN when the transient is zero.
+  double transient_repetition_hz = 0.0;
+  /// The normalised autocorrelation at that period, in [0, 1] (RepetitionOf); NaN as above.
+  double transient_periodicity = 0.0;
   /// Peak power over mean power of the transient's bins at or above 40 Hz: about 1 for a flat
   /// spectrum (one short pulse: no dominant frequency), large for a line (a periodic train).
   double transient_peak_to_mean = 0.0;

@@ -1,9 +1,13 @@
 // Small text helpers for messages and answers, shared by the file readers and the study code.
 #pragma once
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -58,6 +62,39 @@ inline std::string FormatNumber(double value) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.6g", value);
   return buffer;
+}
+
+/// A number for people: `decimals` digits after the point, and never "-0" (a rounding residue
+/// such as -1e-20 prints as 0); "nan", "inf" or "-inf" when not finite.
+inline std::string Fixed(double value, int decimals) {
+  char buffer[64];
+  if (!std::isfinite(value)) return std::isnan(value) ? "nan" : value > 0 ? "inf" : "-inf";
+  if (std::fabs(value) >= 1e15) {
+    std::snprintf(buffer, sizeof buffer, "%.3g", value);
+    return buffer;
+  }
+  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+  std::string s = buffer;
+  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+  return s;
+}
+
+/// A number for people: `digits` significant digits (3-4 are what a measurement means here),
+/// without an exponent from 1e-4 up to 1e7 (so 16570 prints whole, 0.000796 as it is), with one
+/// beyond; "nan", "inf" or "-inf" when not finite.
+inline std::string Significant(double value, int digits = 4) {
+  if (!std::isfinite(value) || value == 0.0) return Fixed(value, 0);
+  // the exponent after rounding to `digits` (99.996 to 4 digits is 100.0, not 100.00)
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.*e", digits - 1, value);
+  const int exponent = std::atoi(std::strchr(buffer, 'e') + 1);
+  if (exponent < -4 || exponent >= 7) return buffer;
+  return Fixed(value, std::max(0, digits - 1 - exponent));
+}
+
+/// A fraction as a percentage to 0.1 ("94.4%").
+inline std::string Percent(double fraction) {
+  return Fixed(100.0 * fraction, 1) + "%";
 }
 
 /// Appends `value` in the shortest form that reads back to the same double (the record and trace

@@ -21,23 +21,6 @@ inline constexpr int kPerceptBands = 4;
 /// Band edges in Hz: [0, 40), [40, 100), [100, 400), [400, inf).
 inline constexpr std::array<double, kPerceptBands - 1> kPerceptBandEdges_hz = {40.0, 100.0, 400.0};
 
-/// A transient whose spectral peak-to-mean power (TapMetrics::transient_peak_to_mean) is at or
-/// below this has no pitch: one pulse gives about 1 (a flat spectrum), two equal pulses 2, N
-/// equal evenly spaced pulses about N. A pitch needs the period repeated (docs/study.md).
-inline constexpr double kPitchPeakToMean = 2.0;
-
-/// Pitch of a transient force (TapPercept::dominant_frequency_hz and periodicity).
-struct TransientPitch {
-  double pitch_hz = 0.0;     ///< repetition rate [Hz]; 0: no pitch
-  double periodicity = 0.0;  ///< normalised autocorrelation at the period, in [0, 1]; 0: none
-};
-
-/// Pitch of the transient `x` sampled every `h_s` seconds whose spectral peak-to-mean power is
-/// `peak_to_mean`: none unless peak_to_mean > kPitchPeakToMean; otherwise the period is the lag
-/// between 2.5 and 25 ms (40-400 Hz) where the biased autocorrelation sum_k x[k] x[k + L] /
-/// sum_k x[k]^2 is highest (the shortest on ties), and none if that is not positive.
-TransientPitch PitchOfTransient(std::span<const double> x, double h_s, double peak_to_mean);
-
 /// What the hand felt during one tap, summarised from the force the device applied to the hand
 /// (normal component, world frame) from contact onset to the end of the collision window (at
 /// least 100 ms after onset for walls without a window, so every renderer is summarised over the
@@ -49,8 +32,9 @@ struct TapPercept {
   /// Rate hardness (Lawrence et al., IEEE T-RA 2000): initial rate of change of the contact force
   /// divided by the approach speed at onset [N/s per m/s = N/m].
   double rate_hardness_N_per_m = 0.0;
-  /// Pitch of the transient: its repetition rate [Hz] when it is periodic (peak-to-mean above
-  /// kPitchPeakToMean); 0 when it has none (a single click, or no transient).
+  /// Pitch of the transient: its repetition rate [Hz] when it is periodic
+  /// (analysis::TapMetrics::transient_repetition_hz); 0 when it has none (a single click, a ring
+  /// slower than 40 Hz, or no transient).
   double dominant_frequency_hz = 0.0;
   /// How periodic the transient is, in [0, 1]: its normalised autocorrelation at the pitch
   /// period (1 for an endless train of equal pulses, (N - 1) / N for N of them); 0 without pitch.

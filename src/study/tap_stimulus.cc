@@ -89,14 +89,12 @@ class TapStimulusSource final : public StimulusSource {
         p.band_energy_fraction[b] = std::isfinite(f) ? f : 0.0;
       }
     }
-    p.transient_peak_to_mean =
-        std::isfinite(m.transient_peak_to_mean) ? m.transient_peak_to_mean : 0.0;
-    if (run.trace.size() >= 2) {
-      const TransientPitch pitch =
-          PitchOfTransient(x, run.trace[1].time_s - run.trace[0].time_s, p.transient_peak_to_mean);
-      p.dominant_frequency_hz = pitch.pitch_hz;
-      p.periodicity = pitch.periodicity;
-    }
+    // the pitch is the tap metrics' repetition rate of the transient (one definition, as tap's
+    // table, JSON and figures report it): none for a click or a pure penalty wall
+    const auto finite_or_zero = [](double v) { return std::isfinite(v) ? v : 0.0; };
+    p.transient_peak_to_mean = finite_or_zero(m.transient_peak_to_mean);
+    p.dominant_frequency_hz = finite_or_zero(m.transient_repetition_hz);
+    p.periodicity = finite_or_zero(m.transient_periodicity);
     p.approach_speed_mps = m.approach_speed_mps;
     return p;
   }
@@ -182,7 +180,7 @@ class DeviceWallPresenter final : public WallPresenter {
               << std::flush;
     const loop::HapticLoopResult r = loop::RunHapticLoop(model, data, dev, loop, nullptr);
     if (r.invalid_device_ticks > r.timing.ticks / 2) {
-      std::cout << "  warning: the device sent no valid state for most of the series\n";
+      std::cerr << "rigidtouch: warning: the device sent no valid state for most of the series\n";
     }
   }
 
@@ -190,34 +188,6 @@ class DeviceWallPresenter final : public WallPresenter {
 };
 
 }  // namespace
-
-TransientPitch PitchOfTransient(std::span<const double> x, double h_s, double peak_to_mean) {
-  TransientPitch t;
-  // a click's spectrum is flat (peak over mean about 1): no pitch
-  if (!(peak_to_mean > kPitchPeakToMean) || !(h_s > 0.0) || x.size() < 3) return t;
-  double energy = 0.0;
-  for (double v : x) energy += v * v;
-  if (!(energy > 0.0)) return t;
-  // perceived vibrotactile frequency of pulses follows the interval between them (Birznieks &
-  // Vickery 2017), not the largest spectral bin (a comb of one-tick pulses has equal harmonics);
-  // the biased estimate favours the period over its multiples
-  // lags bounded in double before the conversion (any h_s > 0 stays in range)
-  const double lo_lag = std::max(1.0, std::ceil(0.0025 / h_s - 1e-9));
-  const double hi_lag = std::min(static_cast<double>(x.size() - 1), std::floor(0.025 / h_s + 1e-9));
-  if (lo_lag > hi_lag) return t;
-  const auto lo = static_cast<std::size_t>(lo_lag);
-  const auto hi = static_cast<std::size_t>(hi_lag);
-  for (std::size_t lag = lo; lag <= hi; ++lag) {
-    double r = 0.0;
-    for (std::size_t k = 0; k + lag < x.size(); ++k) r += x[k] * x[k + lag];
-    r /= energy;
-    if (r > t.periodicity) {
-      t.periodicity = std::min(r, 1.0);
-      t.pitch_hz = 1.0 / (static_cast<double>(lag) * h_s);
-    }
-  }
-  return t;
-}
 
 std::unique_ptr<StimulusSource> MakeTapStimulusSource(const TapSourceOptions& options) {
   return std::make_unique<TapStimulusSource>(options);

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <thread>
@@ -38,6 +39,7 @@ constexpr ImU32 kBodyColor = IM_COL32(70, 110, 200, 255);
 constexpr ImU32 kContactColor = IM_COL32(255, 0, 255, 255);
 constexpr ImU32 kNormalColor = IM_COL32(255, 255, 0, 255);
 constexpr ImU32 kForceColor = IM_COL32(0, 255, 0, 255);
+constexpr ImU32 kHeightColor = IM_COL32(170, 150, 255, 255);
 
 ImVec2 Pixel(double x, double y) {
   return ImVec2(static_cast<float>(x), static_cast<float>(y));
@@ -268,10 +270,35 @@ void DrawGeoms(SceneRenderer& scene, const Model& model, const ViewSnapshot& sna
   }
 }
 
-// over the shaded scene, never hidden by it: contacts and their normals (1 cm), then the device
-// force (1 cm per N)
-void DrawOverlays(const Camera& cam, const ViewSnapshot& snap) {
+// the depth cue under the tool: a line along the normal of the nearest static plane below it to
+// its foot there, a ring at the foot (where the tool would land) and the height in millimetres,
+// so a tool hovering over a grid shows how far above it is
+void DrawHeightCue(ImDrawList* dl, const Camera& cam, const Model& model, const Vec3& tool) {
+  double height_m = std::numeric_limits<double>::infinity();
+  Vec3 foot = tool;
+  for (const GeomModel& g : model.geoms) {
+    if (g.type != GeomType::kPlane || g.body >= 0 || g.tree >= 0) continue;
+    const Vec3 n = g.quat_B * Vec3::UnitZ();
+    const double h = (tool - g.pos_B).dot(n);
+    if (!(h >= 0.0) || h >= height_m) continue;
+    height_m = h;
+    foot = tool - h * n;
+  }
+  if (!std::isfinite(height_m)) return;
+  Line(dl, cam, tool, foot, kHeightColor, 1.0f);
+  ImVec2 q;
+  if (!Project(cam, foot, q)) return;
+  dl->AddCircle(q, 6.0f, kHeightColor, 16, 1.5f);
+  char label[32];
+  std::snprintf(label, sizeof label, "%.1f mm", 1e3 * height_m);
+  dl->AddText(ImVec2(q.x + 9.0f, q.y - 7.0f), kHeightColor, label);
+}
+
+// over the shaded scene, never hidden by it: the tool's height over the plane below it,
+// contacts and their normals (1 cm), then the device force (1 cm per N)
+void DrawOverlays(const Camera& cam, const Model& model, const ViewSnapshot& snap) {
   ImDrawList* dl = ImGui::GetBackgroundDrawList();
+  if (snap.step >= 0) DrawHeightCue(dl, cam, model, snap.sample.tool_position_m);
   for (int k = 0; k < snap.ncontact; ++k) {
     const ContactView& cv = snap.contacts[k];
     ImVec2 q;
@@ -422,7 +449,7 @@ ViewerResult RunViewer(const Model& model, ViewFeed& feed, device::MouseDevice* 
     SwitchWhenFree(o, frame, feed, switch_renderer, st, result);
     const ViewSnapshot& snap = feed.Latest();
     scope.Drain(feed);
-    DrawOverlays(cam, snap);
+    DrawOverlays(cam, model, snap);
     DrawPanel(model, o, snap, scope, static_cast<bool>(switch_renderer), mouse != nullptr, st);
     ImGui::Render();
 

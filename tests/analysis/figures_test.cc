@@ -123,6 +123,29 @@ TEST_F(FiguresTest, FiguresDrawTheDisplayedForceAndTheLimit) {
   }
 }
 
+// The figure states the tap metrics' spectral figures as rigidtouch passes them (one
+// definition: the table and the JSON give the same) and computes none of its own: the dumped
+// repetition is the one given, and without one the figure states none
+TEST_F(FiguresTest, TheTapFigureStatesTheRepetitionItIsGiven) {
+  const std::string trace = WriteTrace("wall1.csv", 25, 4);
+  const std::string out = (dir_ / "f.png").string(), dump = (dir_ / "f.json").string();
+  FigureResult r = RunPlotScript(
+      kPython + "plot_tap.py",
+      {trace, "--out", out, "--dump", dump, "--repetition", "250.0 Hz", "--window-ms", "100",
+       "--resolution-hz", "10.0", "--parts-label", "event transient, material wood"});
+  ASSERT_EQ(r.status, FigureStatus::kOk) << r.message << "\n" << r.output;
+  {
+    std::ifstream in(dump);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["panels"][0]["spectrum"]["transient_repetition"], "250.0 Hz");
+  }
+  r = RunPlotScript(kPython + "plot_tap.py", {trace, "--out", out, "--dump", dump});
+  ASSERT_EQ(r.status, FigureStatus::kOk) << r.message << "\n" << r.output;
+  std::ifstream in(dump);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_TRUE(j["panels"][0]["spectrum"]["transient_repetition"].is_null());
+}
+
 TEST_F(FiguresTest, MissingMatplotlibIsReportedDistinctly) {
   // a matplotlib package that fails to import shadows the real one
   const fs::path shim = dir_ / "shim" / "matplotlib";

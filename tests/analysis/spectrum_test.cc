@@ -163,5 +163,60 @@ TEST(SpectrumTest, PeakAboveAFrequencyAndItsProminence) {
   EXPECT_DOUBLE_EQ(ResolutionHz(100, 1000.0), 10.0);
 }
 
+// pulses of 1 N every `period` ticks of 1 ms, `count` of them, in a 100 ms window
+std::vector<double> Pulses(int count, int period) {
+  std::vector<double> x(100, 0.0);
+  for (int i = 0; i < count; ++i) x[static_cast<std::size_t>(i * period)] = 1.0;
+  return x;
+}
+
+// closed forms: N equal pulses have autocorrelation (N - 1) / N at their period; the rate is the
+// pulses' (not a harmonic); nothing at or below the peak-to-mean threshold (a click's flat
+// spectrum), nothing without a peak of the autocorrelation (a smooth envelope)
+TEST(SpectrumTest, RepetitionOfPulseTrainsClosedForms) {
+  const double h = 1e-3;
+  const double min_hz = 40.0;
+  // one pulse: flat spectrum (peak over mean 1), and no repetition even if the gate let it in
+  EXPECT_EQ(RepetitionOf(Pulses(1, 4), h, min_hz, 1.0).rate_hz, 0.0);
+  EXPECT_EQ(RepetitionOf(Pulses(1, 4), h, min_hz, 3.0).rate_hz, 0.0);
+  EXPECT_EQ(RepetitionOf(Pulses(1, 4), h, min_hz, 3.0).periodicity, 0.0);
+  // two pulses 4 ms apart: peak over mean 2, at the threshold: none; above it: 250 Hz, 1/2
+  EXPECT_EQ(RepetitionOf(Pulses(2, 4), h, min_hz, kRepetitionPeakToMean).rate_hz, 0.0);
+  EXPECT_EQ(RepetitionOf(Pulses(2, 4), h, min_hz, kRepetitionPeakToMean).periodicity, 0.0);
+  const Repetition two = RepetitionOf(Pulses(2, 4), h, min_hz, 2.5);
+  EXPECT_NEAR(two.rate_hz, 250.0, 1e-9);
+  EXPECT_NEAR(two.periodicity, 0.5, 1e-12);
+  // three pulses 20 ms apart: 50 Hz (not the 250 Hz harmonic a largest bin can give), 2/3
+  const Repetition three = RepetitionOf(Pulses(3, 20), h, min_hz, 3.0);
+  EXPECT_NEAR(three.rate_hz, 50.0, 1e-9);
+  EXPECT_NEAR(three.periodicity, 2.0 / 3.0, 1e-12);
+  // a 250 Hz train over the whole window: 25 pulses, 24/25 at 4 ms (8 ms gives 23/25)
+  const Repetition train = RepetitionOf(Pulses(25, 4), h, min_hz, 20.0);
+  EXPECT_NEAR(train.rate_hz, 250.0, 1e-9);
+  EXPECT_NEAR(train.periodicity, 24.0 / 25.0, 1e-12);
+  // the Nyquist rate: a pulse every other tick is 500 Hz, 49/50
+  const Repetition nyquist = RepetitionOf(Pulses(50, 2), h, min_hz, 20.0);
+  EXPECT_NEAR(nyquist.rate_hz, 500.0, 1e-9);
+  EXPECT_NEAR(nyquist.periodicity, 49.0 / 50.0, 1e-12);
+  // pulses 40 ms apart (25 Hz) lie below min_hz: no lag in 2-25 ms correlates
+  EXPECT_EQ(RepetitionOf(Pulses(3, 40), h, min_hz, 3.0).rate_hz, 0.0);
+  // nothing to analyse
+  EXPECT_EQ(RepetitionOf(std::vector<double>(100, 0.0), h, min_hz, 3.0).rate_hz, 0.0);
+  EXPECT_EQ(RepetitionOf(Pulses(3, 20), 0.0, min_hz, 3.0).rate_hz, 0.0);
+  // a constant, or a ring at 20 Hz (below min_hz), correlates less at every longer lag: no peak,
+  // no rate (the highest value alone would give the shortest lag, 500 Hz)
+  EXPECT_EQ(RepetitionOf(std::vector<double>(100, 1.0), h, min_hz, 3.0).rate_hz, 0.0);
+  std::vector<double> ring(100);
+  for (std::size_t k = 0; k < ring.size(); ++k) {
+    ring[k] = std::exp(-20.0 * k * h) * std::sin(2.0 * std::numbers::pi * 20.0 * k * h);
+  }
+  EXPECT_EQ(RepetitionOf(ring, h, min_hz, 3.0).rate_hz, 0.0);
+  // a decaying 125 Hz vibration: its period, 8 ticks
+  for (std::size_t k = 0; k < ring.size(); ++k) {
+    ring[k] = std::exp(-30.0 * k * h) * std::sin(2.0 * std::numbers::pi * 125.0 * k * h);
+  }
+  EXPECT_NEAR(RepetitionOf(ring, h, min_hz, 3.0).rate_hz, 125.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace rigidtouch::analysis

@@ -158,8 +158,8 @@ TEST(TapMetricsTest, ImpulsesClippingAndSpectrum) {
   EXPECT_EQ(m.impulses[1].time_s, s[kOnset + 4].time_s);
   EXPECT_EQ(m.impulses[1].kinetic_energy_after_J, 0.0);
   EXPECT_TRUE(m.force_clipped);
-  // 100 ms window at 1 kHz: 128-point FFT, 7.8 Hz bins
-  EXPECT_NEAR(m.dominant_frequency_hz, 250.0, 1000.0 / 128.0);
+  // 100 ms window at 1 kHz: 10 Hz resolution, most power in 100-400 Hz
+  EXPECT_NEAR(m.spectrum_window_s, 0.1, 1e-9);
   EXPECT_GT(m.band_energy_fraction[2], 0.9);
 }
 
@@ -282,11 +282,13 @@ TEST(TapMetricsTest, TrainOnASlowPressSeparatesDisplayedAndTransientSpectra) {
   // the press: the first bin above DC (7.8 Hz), below the 10 Hz resolution of 100 ms (exactly
   // 100 samples, although the trace's times 1.0 + k * 0.001 are rounded)
   EXPECT_NEAR(m.spectrum_resolution_hz, 1000.0 / 100.0, 1e-9);
-  EXPECT_LT(m.dominant_frequency_hz, m.spectrum_resolution_hz);
+  EXPECT_NEAR(m.spectrum_window_s, 0.1, 1e-9);
   EXPECT_GT(m.band_energy_fraction[0], 0.5);
-  // the train: 250 Hz to the bin (7.8 Hz), a line far above the mean (> 10), most of its power
-  // in 100-400 Hz and above 400 (the 500 Hz line of one-tick pulses), little below 40 Hz
-  EXPECT_NEAR(m.transient_dominant_frequency_hz, 250.0, 1000.0 / 128.0);
+  // the train: its repetition rate 250 Hz exactly (a pulse every 4 ticks; 25 pulses, 24/25 at
+  // the period), a line far above the mean (> 10), most of its power in 100-400 Hz and above 400
+  // (the 500 Hz line of one-tick pulses), little below 40 Hz
+  EXPECT_NEAR(m.transient_repetition_hz, 250.0, 1e-9);
+  EXPECT_NEAR(m.transient_periodicity, 24.0 / 25.0, 1e-12);
   EXPECT_GT(m.transient_peak_to_mean, 10.0);
   EXPECT_GT(m.transient_band_energy_fraction[2], 0.5);
   EXPECT_LT(m.transient_band_energy_fraction[0], 0.1);
@@ -294,7 +296,7 @@ TEST(TapMetricsTest, TrainOnASlowPressSeparatesDisplayedAndTransientSpectra) {
   // pure penalty: no transient part at all (NaN, not a frequency)
   for (TraceSample& x : s) x.device_force_N = x.penalty_force_N;
   m = ComputeTapMetrics(s);
-  EXPECT_TRUE(std::isnan(m.transient_dominant_frequency_hz));
+  EXPECT_TRUE(std::isnan(m.transient_repetition_hz));
   EXPECT_EQ(m.transient_power_ratio, 0.0);
 }
 

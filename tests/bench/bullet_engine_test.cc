@@ -2,8 +2,12 @@
 
 #ifdef RIGIDTOUCH_BENCH_ENABLED
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <string>
 
 #include "bench/bullet_engine.h"
 #include "bench/mujoco_engine.h"
@@ -15,7 +19,11 @@ namespace {
 Scene WriteScene(const std::string& name, const std::string& mjcf) {
   Scene scene;
   scene.name = name;
-  scene.mjcf_path = ::testing::TempDir() + name + ".xml";
+  // in this process's own folder: two runs of the suite at once do not share the file
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("rigidtouch_bench_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  scene.mjcf_path = (dir / (name + ".xml")).string();
   std::ofstream(scene.mjcf_path) << mjcf;
   return scene;
 }

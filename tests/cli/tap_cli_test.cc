@@ -105,8 +105,8 @@ TEST(TapCliTest, JsonHasThePerTapFields) {
   for (const char* key :
        {"impulses", "peak_force_N", "peak_requested_force_N", "rate_hardness_N_per_m",
         "extended_rate_hardness_N_per_m", "max_penetration_m", "bounces", "energy_to_user_J",
-        "dominant_frequency_hz", "band_energy_fraction", "spectrum_resolution_hz",
-        "transient_dominant_frequency_hz", "transient_peak_to_mean",
+        "band_energy_fraction", "spectrum_window_s", "spectrum_resolution_hz",
+        "transient_repetition_hz", "transient_periodicity", "transient_peak_to_mean",
         "transient_band_energy_fraction", "transient_power_ratio", "force_clipped"}) {
     EXPECT_TRUE(j["taps"][0].contains(key)) << key;
   }

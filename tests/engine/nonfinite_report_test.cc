@@ -24,7 +24,12 @@ TEST(NonFiniteReportTest, SimulateReportsTheNonFiniteStateOnStderrAndExitsWithTw
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("first at step "), std::string::npos) << r.err;
-  EXPECT_NE(r.out.find("warning: non_finite_state x"), std::string::npos) << r.out;
+  // the counted warning in the one warning voice, on stderr: what it counts, in how many ticks
+  EXPECT_NE(r.err.find("rigidtouch: warning: a non-finite simulation state (the state reset) in "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(" ticks (non_finite_state)\n"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("warning"), std::string::npos) << r.out;
 }
 
 TEST(NonFiniteReportTest, SimulateJsonSaysSoAndExitsWithTwo) {

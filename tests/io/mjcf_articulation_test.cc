@@ -108,6 +108,11 @@ struct Refused {
   std::string expected;
 };
 
+// gtest prints a parameter in a failure's message: its name, not its bytes
+std::ostream& operator<<(std::ostream& out, const Refused& c) {
+  return out << c.name;
+}
+
 std::vector<Refused> RefusedInputs() {
   const std::string body = "<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>";
   return {

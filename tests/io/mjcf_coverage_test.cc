@@ -334,6 +334,11 @@ struct ElementCase {
   std::string expected;
 };
 
+// gtest prints a parameter in a failure's message: its name, not its bytes
+void PrintTo(const ElementCase& c, std::ostream* out) {
+  *out << c.name;
+}
+
 std::string CaseName(const ::testing::TestParamInfo<ElementCase>& info) {
   return info.param.name;
 }

@@ -332,15 +332,13 @@ class LeverDevice final : public device::Device {
 };
 
 TEST(HapticLoop, TheTorqueIsWithinTheDevicesTorqueLimitOrZero) {
-  const std::string scene = ::testing::TempDir() + "lever_tool.xml";
-  {
-    std::ofstream f(scene);
-    f << R"(<mujoco><worldbody><geom name="wall" type="plane" size="1 1 0.1"/>
+  // in this process's own folder: two runs of the suite at once do not share the file
+  const std::string scene = test::WriteTempFile(
+      "lever_tool.xml", R"(<mujoco><worldbody><geom name="wall" type="plane" size="1 1 0.1"/>
       <body name="tool" pos="0 0 0.1"><freejoint/>
         <geom type="sphere" size="0.005" pos="0.02 0 -0.005" mass="0.05"/>
         <geom type="sphere" size="0.005" pos="-0.02 0 0.005" mass="0.05"/>
-      </body></worldbody></mujoco>)";
-  }
+      </body></worldbody></mujoco>)");
   LoadOptions o;
   o.device.coupling = Coupling::kDirect;
   o.timestep_s = 1.0 / kRateHz;

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/spectrum.h"
 #include "study/analysis.h"
 #include "study/protocol.h"
 #include "study/simulate.h"
@@ -90,48 +91,6 @@ TEST(TapStimulusTest, MaterialConditionsRenderAsTheTapCommand) {
   EXPECT_NE(peaks[0], peaks[2]);
 }
 
-// pulses of 1 N every `period` ticks of 1 ms, `count` of them, in a 100 ms window
-std::vector<double> Pulses(int count, int period) {
-  std::vector<double> x(100, 0.0);
-  for (int i = 0; i < count; ++i) x[static_cast<std::size_t>(i * period)] = 1.0;
-  return x;
-}
-
-// closed forms: N equal pulses have autocorrelation (N - 1) / N at their period; the pitch is the
-// repetition rate; nothing at or below the peak-to-mean threshold (a click's flat spectrum)
-TEST(TapStimulusTest, PitchOfTransientClosedForms) {
-  const double h = 1e-3;
-  // one pulse: flat spectrum (peak over mean 1), and no repetition even if the gate let it in
-  EXPECT_EQ(PitchOfTransient(Pulses(1, 4), h, 1.0).pitch_hz, 0.0);
-  EXPECT_EQ(PitchOfTransient(Pulses(1, 4), h, 3.0).pitch_hz, 0.0);
-  EXPECT_EQ(PitchOfTransient(Pulses(1, 4), h, 3.0).periodicity, 0.0);
-  // two pulses 4 ms apart: peak over mean 2, at the threshold: no pitch; above it: 250 Hz, 1/2
-  EXPECT_EQ(PitchOfTransient(Pulses(2, 4), h, kPitchPeakToMean).pitch_hz, 0.0);
-  EXPECT_EQ(PitchOfTransient(Pulses(2, 4), h, kPitchPeakToMean).periodicity, 0.0);
-  const TransientPitch two = PitchOfTransient(Pulses(2, 4), h, 2.5);
-  EXPECT_NEAR(two.pitch_hz, 250.0, 1e-9);
-  EXPECT_NEAR(two.periodicity, 0.5, 1e-12);
-  // three pulses 20 ms apart: 50 Hz (not a harmonic), 2/3
-  const TransientPitch three = PitchOfTransient(Pulses(3, 20), h, 3.0);
-  EXPECT_NEAR(three.pitch_hz, 50.0, 1e-9);
-  EXPECT_NEAR(three.periodicity, 2.0 / 3.0, 1e-12);
-  // a 250 Hz train over the whole window: 25 pulses, 24/25 at 4 ms (8 ms gives 23/25)
-  const TransientPitch train = PitchOfTransient(Pulses(25, 4), h, 20.0);
-  EXPECT_NEAR(train.pitch_hz, 250.0, 1e-9);
-  EXPECT_NEAR(train.periodicity, 24.0 / 25.0, 1e-12);
-  // pulses 40 ms apart (25 Hz) lie below the pitch range: no lag in 2.5-25 ms correlates
-  EXPECT_EQ(PitchOfTransient(Pulses(3, 40), h, 3.0).pitch_hz, 0.0);
-  // nothing to analyse
-  EXPECT_EQ(PitchOfTransient(std::vector<double>(100, 0.0), h, 3.0).pitch_hz, 0.0);
-  EXPECT_EQ(PitchOfTransient(Pulses(3, 20), 0.0, 3.0).pitch_hz, 0.0);
-  // sampled far finer or coarser than the pitch range: no lag of the window is in it
-  // (a constant correlates at every lag, so only the range keeps these at none)
-  const std::vector<double> constant(100, 1.0);
-  EXPECT_GT(PitchOfTransient(constant, h, 3.0).pitch_hz, 0.0);
-  EXPECT_EQ(PitchOfTransient(constant, 1e-15, 3.0).pitch_hz, 0.0);
-  EXPECT_EQ(PitchOfTransient(constant, 1.0, 3.0).pitch_hz, 0.0);
-}
-
 // the percept's vibration is the transient part (what the impulses add) and its pitch the
 // repetition rate of a periodic transient: on the Touch at 0.2 m/s wall 1's transient is a train
 // of pulses every 4 ms, wall 2's three clipped pulses 20 ms apart (docs/study.md), wall 0's one
@@ -149,12 +108,12 @@ TEST(TapStimulusTest, PitchOnlyWhereTheTransientIsPeriodic) {
     EXPECT_EQ(w0.periodicity, 0.0);
     EXPECT_GT(w0.vibration_rms_N, 0.0);
     // the 250 Hz train: a line, its period 4 ticks at 1 kHz
-    EXPECT_GT(w1.transient_peak_to_mean, kPitchPeakToMean);
+    EXPECT_GT(w1.transient_peak_to_mean, analysis::kRepetitionPeakToMean);
     EXPECT_NEAR(w1.dominant_frequency_hz, 250.0, 1e-6);
     EXPECT_GT(w1.periodicity, 0.5);
     // the 50 Hz train: its largest spectral bin is any of its equal harmonics, its pitch the
     // 20 ms between pulses
-    EXPECT_GT(w2.transient_peak_to_mean, kPitchPeakToMean);
+    EXPECT_GT(w2.transient_peak_to_mean, analysis::kRepetitionPeakToMean);
     EXPECT_NEAR(w2.dominant_frequency_hz, 50.0, 1e-6);
     EXPECT_GT(w2.periodicity, 0.0);
     EXPECT_LT(w2.periodicity, w1.periodicity);
