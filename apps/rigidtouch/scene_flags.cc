@@ -31,6 +31,7 @@ const std::map<std::string, std::string>& FlagOf() {
       {"tool", "--tool"},
       {"timestep_s", "--timestep"},
       {"render.renderer", "--renderer"},
+      {"render.joint_limit_renderer", "--joint-limit-renderer"},
       {"render.restitution", "--restitution"},
       {"render.t_collision_s", "--t-collision"},
       {"render.frequency_hz", "--frequency"},
@@ -119,6 +120,10 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
   app->add_option("--timestep", f.timestep_s, "time step h [s] (default: the MJCF option)");
   app->add_option("--renderer", f.renderer, "penalty | impulse | train | event")
       ->check(CLI::IsMember(text::RendererNames()));
+  app->add_option("--joint-limit-renderer", f.joint_limit_renderer,
+                  "how a hinge's or slide's limit renders: penalty | impulse | train (default: "
+                  "the config's, else train)")
+      ->check(CLI::IsMember({"penalty", "impulse", "train"}));
   app->add_option("--material", f.material,
                   "the event renderer's material: rubber | wood | aluminium | FILE.json "
                   "(docs/renderers.md)");
@@ -164,6 +169,10 @@ Settings ResolveSettings(const SceneFlags& f) {
   if (f.renderer) {
     o.render.renderer = io::ParseRenderer(*f.renderer);
     s.origin["render.renderer"] = "--renderer";
+  }
+  if (f.joint_limit_renderer) {
+    o.render.joint_limit_renderer = io::ParseRenderer(*f.joint_limit_renderer);
+    s.origin["render.joint_limit_renderer"] = "--joint-limit-renderer";
   }
   flag("render.restitution", o.render.restitution, f.restitution);
   flag("render.t_collision_s", o.render.t_collision_s, f.t_collision_s);

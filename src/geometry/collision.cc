@@ -105,12 +105,19 @@ struct PairWriter {
   Vec3 x_A, x_B;  // body positions
 };
 
-// the writer for points of geoms (ga, gb) whose normals point from gb towards ga
+// how a geom moves, for the order of a contact's sides: 2 on a body, 1 on a link, 0 static
+int Mobility(const GeomModel& g) {
+  return g.body >= 0 ? 2 : g.tree >= 0 ? 1 : 0;
+}
+
+// the writer for points of geoms (ga, gb) whose normals point from gb towards ga. Side a is the
+// more mobile geom (a body before a link before static geometry; two links keep their order),
+// and the tool when it takes part
 PairWriter BeginPair(const Model& model, const Data& data, int ga, int gb) {
   PairWriter w;
   const int tool = model.tool;
-  w.flip =
-      model.geoms[ga].body < 0 || (model.geoms[gb].body == tool && model.geoms[ga].body != tool);
+  const GeomModel &a = model.geoms[ga], &b = model.geoms[gb];
+  w.flip = Mobility(a) < Mobility(b) || (b.body == tool && a.body != tool);
   if (w.flip) std::swap(ga, gb);
   w.ga = ga;
   w.gb = gb;
