@@ -2,8 +2,9 @@
 // collision filter in geometry/broadphase.h, the rows in contact/tree_groups.h) against closed
 // forms: a hinged rod resting on a floor (torque balance about the hinge), a rod falling onto a
 // plane with a single plastic or elastic impulse and with a train, two slides of different trees
-// and two links of one chain colliding plastically (momentum along the slide), the parent-child
-// filter, a small humanoid-like tree dropped on a plane, and no allocation in the tick.
+// and two links of one chain colliding plastically (momentum along the slide), friction with the
+// stick anchor, the parent-child filter, a small humanoid-like tree dropped on a plane, and no
+// allocation in the tick.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -228,6 +229,50 @@ TEST(LinkContactTest, TwoLinksOfOneChainCollidePlasticallyAndKeepMomentum) {
   EXPECT_NEAR(v[2], 0.0, 1e-9);
   EXPECT_NEAR(v[0], p / total, 1e-9);
   EXPECT_NEAR(v[1], 0.0, 1e-12);
+}
+
+// A 1 kg box on a floor, its link on a slide along x below a 0.1 kg carrier on a vertical slide
+// (so that it rests on the floor under gravity), pushed along x by a motor at a constant force
+// (keyframe ctrl, N); MJCF friction 1
+std::string PushedBoxXml(double force_N) {
+  return "<mujoco><option timestep=\"0.001\"/><worldbody>"
+         "<geom name=\"floor\" type=\"plane\" size=\"2 2 0.1\"/>"
+         "<body name=\"carrier\" pos=\"0 0 0.0499\"><joint name=\"up\" type=\"slide\" "
+         "axis=\"0 0 1\"/><inertial pos=\"0 0 0\" mass=\"0.1\" diaginertia=\"1e-4 1e-4 1e-4\"/>"
+         "<body name=\"box\"><joint name=\"along\" type=\"slide\" axis=\"1 0 0\"/>"
+         "<geom type=\"box\" size=\"0.05 0.05 0.05\" mass=\"1\"/></body></body></worldbody>"
+         "<actuator><motor name=\"push\" joint=\"along\"/></actuator>"
+         "<keyframe><key name=\"initial\" qpos=\"0 0\" ctrl=\"" +
+         std::to_string(force_N) + "\"/></keyframe></mujoco>";
+}
+
+// Friction on link rows has the free bodies' stick anchor: pushed at 3 N, below mu N = 10.8 N,
+// the box holds within the anchor spring's static stretch F / k_t (15 um at 2e5 N/m) over 2 s
+// and ends at rest (1e-6 m/s); with tangential damping alone it crept at F / (b_t + h k_t),
+// 1 cm/s. Pushed at 15 N it slides with (F - mu m g) / m_x: every contact's friction within
+// its cone (1e-9 relative), the speed after 1 s within 1 % of the closed form.
+TEST(LinkContactTest, FrictionOnALinkHoldsBelowTheConeAndSlidesBeyondIt) {
+  LoadOptions o;
+  o.tool_name = "none";
+  o.render.renderer = RendererKind::kPenalty;
+  const Model held = LoadModel(test::WriteTempFile("pushed_box.xml", PushedBoxXml(3.0)), o);
+  Data d = MakeData(held);
+  const TickInput in;
+  for (int s = 0; s < 2000; ++s) Tick(held, d, in);
+  ASSERT_GT(d.ncontact, 0);
+  EXPECT_LT(std::abs(d.trees[0]->qpos[1]), 1e-4) << "crept " << d.trees[0]->qpos[1] << " m";
+  EXPECT_LT(std::abs(d.trees[0]->qvel[1]), 1e-6);
+  const Model pushed = LoadModel(test::WriteTempFile("pushed_box2.xml", PushedBoxXml(15.0)), o);
+  Data p = MakeData(pushed);
+  for (int s = 0; s < 1000; ++s) {
+    Tick(pushed, p, in);
+    for (int i = 0; i < p.ncontact; ++i) {
+      const Contact& c = p.contacts[i];
+      EXPECT_LE(c.friction_force_N_W.norm(), c.normal_force_N * (1.0 + 1e-9) + 1e-12) << s;
+    }
+  }
+  const double expected = (15.0 - 1.0 * 1.1 * 9.81) / 1.0 * 1.0;
+  EXPECT_NEAR(p.trees[0]->qvel[1] / expected, 1.0, 1e-2) << p.trees[0]->qvel[1];
 }
 
 // a chain of three hinged links whose geoms overlap by 0.5 mm pairwise (under the load's 1 mm

@@ -558,9 +558,8 @@ TEST(WorkerTest, TwoThreadsWithATreeGiveTheStateOfOne) {
   EXPECT_GT(t.d2.workspace->velocity.shared_steps, 0);  // the worker took free-body groups
 }
 
-// the pile beside a tree that lands on the floor (a free root capsule with two hinged capsule
-// legs, dropped 2 cm): link-static contacts in the tree's group, solved on the tick's thread
-// while the worker takes free-body groups; the states are the one thread's, bit for bit
+// the pile beside a tree (a free root capsule, two hinged capsule legs) landing on the floor:
+// link-static rows on the tick's thread while the worker takes free-body groups; bit for bit
 TEST(WorkerTest, TwoThreadsWithATreeOnTheFloorGiveTheStateOfOne) {
   std::string xml = test::PileXml(4, 4, 3, 0.051, 0.5);
   std::string tree =
@@ -572,8 +571,7 @@ TEST(WorkerTest, TwoThreadsWithATreeOnTheFloorGiveTheStateOfOne) {
             "<geom type=\"capsule\" fromto=\"0 0 0 0 0 -0.3\" size=\"0.03\" mass=\"1\"/>"
             "</body>";
   }
-  tree += "</body>";
-  xml.insert(xml.find("</worldbody>"), tree);
+  xml.insert(xml.find("</worldbody>"), tree + "</body>");
   OneAndTwoThreads t(test::WriteTempFile("pile_tree_floor_threads.xml", xml));
   ASSERT_EQ(t.m1.trees.size(), 1u);
   const TickInput in;
