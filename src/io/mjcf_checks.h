@@ -29,8 +29,9 @@ void CheckElements(const mjModel* m, const std::string& path, std::vector<std::s
 RenderParams SceneRender(const RenderParams& render, double h_s, const std::string& path,
                          std::vector<std::string>& warnings);
 
-/// <contact><pair>: refused when the pair would add a contact that the geoms' contype and
-/// conaffinity bits exclude (rigidtouch collides only what the filter lets through); otherwise
+/// <contact><pair>: refused when the pair would add a contact that MuJoCo's filter excludes (the
+/// contype and conaffinity bits, one body after welding, a link and its parent link unless
+/// filterparent is disabled: rigidtouch collides only what the filter lets through); otherwise
 /// the contact exists anyway and only the pair's parameters are dropped, with a warning.
 void CheckPairs(const mjModel* m, const std::string& path, std::vector<std::string>& warnings);
 
