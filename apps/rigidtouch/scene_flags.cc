@@ -31,6 +31,7 @@ const std::map<std::string, std::string>& FlagOf() {
       {"tool", "--tool"},
       {"timestep_s", "--timestep"},
       {"render.renderer", "--renderer"},
+      {"render.joint_limit_renderer", "--joint-limit-renderer"},
       {"render.restitution", "--restitution"},
       {"render.t_collision_s", "--t-collision"},
       {"render.frequency_hz", "--frequency"},
@@ -133,6 +134,10 @@ void AddSceneFlags(CLI::App* app, SceneFlags& f, bool scene_required) {
             return std::string();
           },
           "RENDERER[:MATERIAL]"));
+  app->add_option("--joint-limit-renderer", f.joint_limit_renderer,
+                  "how a hinge's or slide's limit renders: penalty | impulse | train (default: "
+                  "the config's, else train)")
+      ->check(CLI::IsMember({"penalty", "impulse", "train"}));
   app->add_option("--material", f.material,
                   "the event renderer's or the material train's material: rubber | wood | "
                   "aluminium | FILE.json (docs/renderers.md)");
@@ -190,6 +195,10 @@ Settings ResolveSettings(const SceneFlags& f) {
       material = f.renderer->substr(colon + 1);
       material_flag = "--renderer";
     }
+  }
+  if (f.joint_limit_renderer) {
+    o.render.joint_limit_renderer = io::ParseRenderer(*f.joint_limit_renderer);
+    s.origin["render.joint_limit_renderer"] = "--joint-limit-renderer";
   }
   flag("render.restitution", o.render.restitution, f.restitution);
   flag("render.t_collision_s", o.render.t_collision_s, f.t_collision_s);

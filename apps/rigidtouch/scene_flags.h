@@ -26,6 +26,7 @@ struct SceneFlags {
   std::optional<std::string> tool;
   std::optional<double> timestep_s;
   std::optional<std::string> renderer;
+  std::optional<std::string> joint_limit_renderer;
   std::optional<double> restitution;
   std::optional<double> t_collision_s;
   std::optional<double> frequency_hz;
@@ -57,8 +58,8 @@ Vec3 ToolForce(const std::vector<double>& xyz);
 void AddRateFlag(CLI::App* app, double& rate_hz, const std::string& description);
 
 /// Adds --scene (required unless `scene_required` is false), --config, --tool, --timestep,
-/// --renderer, --restitution, --t-collision, --frequency, --stiffness, --damping,
-/// --reference-solver.
+/// --renderer, --joint-limit-renderer, --restitution, --t-collision, --frequency, --stiffness,
+/// --damping, --reference-solver.
 void AddSceneFlags(CLI::App* app, SceneFlags& flags, bool scene_required = true);
 
 /// Adds --threads N (1 or 2): the threads that step the scene (LoadOptions::threads).

@@ -27,7 +27,9 @@ struct Contact {
   int pair_points = 1;  // points the geom pair has this tick (shares the stiffness)
   // what matching reads of last tick's contacts and carries over, together at the record's start
   // (bytes 0 to 104: two or three cache lines, read for every contact in every tick)
-  Vec3 p_A = Vec3::Zero();  // contact point in a's principal frame (for matching)
+  // contact point in a's principal frame (a link geom's own frame when a is a link), for
+  // matching and the friction anchors
+  Vec3 p_A = Vec3::Zero();
   // friction stick anchor on a (a's frame) and b (b's frame), placed at the contact point each
   // tick with the stretch it had (so a rolling body's anchor does not leave the contact)
   Vec3 anchor_A = Vec3::Zero();
@@ -40,7 +42,7 @@ struct Contact {
   Vec3 p_W = Vec3::Zero();      // contact point (midpoint between the surfaces)
   Vec3 n_W = Vec3::UnitZ();     // unit normal, from b towards a
   double depth_m = 0.0;         // penetration, > 0 when the geoms overlap
-  Vec3 p_B = Vec3::Zero();      // contact point in b's frame (world frame when b is static)
+  Vec3 p_B = Vec3::Zero();      // contact point in b's frame, as p_A (world frame if b is static)
   double normal_force_N = 0.0;  // penalty force this tick
   Vec3 friction_force_N_W = Vec3::Zero();  // on a
   double impulse_Ns = 0.0;                 // normal impulse this tick

@@ -133,6 +133,7 @@ struct ArticulatedTree {
   std::string name;                     // the root body's MJCF name
   std::vector<std::string> link_names;  // per tree body: the MJCF body it is
   std::vector<int> link_mj_body;        // per tree body: its id in the compiled MuJoCo model
+  std::vector<int> link_parent;         // per tree body: its parent body in the tree, -1 world
   std::vector<JointModel> joints;       // in the tree's joint order (MuJoCo's)
   std::vector<ActuatorModel> actuators;
   /// Joint-space dynamics: bodies, joints, damping, armature, springs, gravity. Shared by copies
@@ -272,6 +273,10 @@ struct Model {
   /// MJCF body is body -1 there (and welded bodies are one): excluding one static body must leave
   /// the others, and the world, in contact.
   std::vector<std::pair<int, int>> excluded_geom_pairs;
+  /// MuJoCo's parent filter: a link's geoms do not collide with the geoms of its parent link
+  /// (a tree's root link still collides with static geometry). False when the scene has
+  /// <flag filterparent="disable"/>.
+  bool filter_parent = true;
 };
 
 }  // namespace rigidtouch

@@ -7,6 +7,7 @@
 
 #include "contact/phases.h"
 #include "contact/schedule.h"
+#include "dynamics/kinematics.h"
 #include "dynamics/rigid_body.h"
 #include "dynamics/tree_stage.h"
 
@@ -31,6 +32,30 @@ Vec3 SideVelocity(const Model& model, const Data& data, const Groups& G, int bod
   const int t = geom >= 0 ? G.geom_tree[geom] : -1;
   if (t < 0) return Vec3::Zero();
   return dynamics::LinkPointVelocity(*data.trees[t], model.geoms[geom].link, p_W);
+}
+
+// the world position of a point kept in a contact side's frame: its body's, its link geom's
+// (from the tree's kinematics at this step's positions, as the collision stage placed the geom),
+// or the world's
+Vec3 SideWorldPoint(const Model& model, const Data& data, const Groups& G, int body, int geom,
+                    const Vec3& p) {
+  if (body >= 0) return dynamics::WorldPoint(data, body, p);
+  const int t = geom >= 0 ? G.geom_tree[geom] : -1;
+  if (t < 0) return p;
+  const GeomModel& gm = model.geoms[geom];
+  const dynamics::TreeData& d = *data.trees[t];
+  return d.x_W[gm.link] + d.R_WB[gm.link] * (gm.pos_L + gm.quat_L * p);
+}
+
+// SideWorldPoint's inverse: a world point in the side's frame
+Vec3 SideLocalPoint(const Model& model, const Data& data, const Groups& G, int body, int geom,
+                    const Vec3& p_W) {
+  if (body >= 0) return dynamics::LocalPoint(data, body, p_W);
+  const int t = geom >= 0 ? G.geom_tree[geom] : -1;
+  if (t < 0) return p_W;
+  const GeomModel& gm = model.geoms[geom];
+  const dynamics::TreeData& d = *data.trees[t];
+  return gm.quat_L.conjugate() * (d.R_WB[gm.link].transpose() * (p_W - d.x_W[gm.link]) - gm.pos_L);
 }
 
 Vec3 ContactVelocity(const Model& model, const Data& data, const Groups& G, const Contact& c) {
@@ -61,9 +86,11 @@ bool ContactRow(const Model& model, Data& data, ContactScratch& cs, int ci, Join
   const PenaltyLaw& law = cs.laws[ci];
   c.normal_force_N = 0.0;
   c.friction_force_N_W.setZero();
-  c.anchor_A = c.p_A;  // no anchor springs on links (tree_groups.h)
-  c.anchor_B = c.p_B;
   c.sticking = false;
+  if (!(c.depth_m > 0.0) || !law.implicit) {
+    c.anchor_A = c.p_A;  // no load, or the tool's explicit law: no anchor spring
+    c.anchor_B = c.p_B;
+  }
   if (!(c.depth_m > 0.0)) return false;
   const double h = model.timestep_s;
   row = JointRow{};
@@ -75,10 +102,16 @@ bool ContactRow(const Model& model, Data& data, ContactScratch& cs, int ci, Join
   row.mu_kinetic = law.mu_kinetic;
   row.stick = true;
   if (law.implicit) {
-    // backward Euler on the normal spring-damper, implicit tangential damping
+    // backward Euler on the normal spring-damper; the stick anchor's spring (its stretch since
+    // last step, as for free bodies: contact_forces.cc) with implicit tangential damping
     row.phi_n_N = law.k_N_per_m * c.depth_m;
     row.c_n_Ns_per_m = h * law.k_N_per_m + law.b_Ns_per_m;
     row.c_t_Ns_per_m = h * law.kt_N_per_m + law.bt_Ns_per_m;
+    const Vec3 d = SideWorldPoint(model, data, G, c.body_a, c.geom_a, c.anchor_A) -
+                   SideWorldPoint(model, data, G, c.body_b, c.geom_b, c.anchor_B);
+    const Vec3 stretch = d - d.dot(c.n_W) * c.n_W;
+    cs.anchor_displacement[ci] = stretch;
+    row.phi_t_W = -law.kt_N_per_m * stretch;
     return true;
   }
   // the tool's contact: explicit from this step's state, as ExplicitContact renders it
@@ -204,6 +237,21 @@ JointGroup PackTreeGroup(const Model& model, const Data& data, const Groups& G, 
           std::span<JointRow>(s.rows.data() + s.row_start[k], nrows)};
 }
 
+// the anchors of scene contact ci after its row's solve, as free bodies' PlaceAnchors and
+// SlideAnchor place them: a's at the contact point, b's behind it by the stretch, which is the
+// step's own while the row sticks and, once it slipped, the stretch whose spring alone exerts the
+// friction the row got
+void PlaceRowAnchors(const Model& model, Data& data, const ContactScratch& cs, int ci,
+                     const JointRow& row) {
+  Contact& c = data.contacts[ci];
+  const double kt = cs.laws[ci].kt_N_per_m;
+  const Vec3 stretch =
+      row.slipped && kt > 0.0 ? Vec3(-row.friction_force_N_W / kt) : cs.anchor_displacement[ci];
+  c.sticking = !row.slipped;
+  c.anchor_A = c.p_A;
+  c.anchor_B = SideLocalPoint(model, data, cs.groups, c.body_b, c.geom_b, c.p_W - stretch);
+}
+
 void UnpackBodies(Data& data, const Groups& G, int k, const JointGroup& group) {
   const int g = G.ngroup + k;
   for (int i = 0; i < static_cast<int>(group.bodies.size()); ++i) {
@@ -295,6 +343,7 @@ void SolveTreeGroups(const Model& model, Data& data, ContactScratch& cs,
       Contact& c = data.contacts[ci];
       c.normal_force_N = group.rows[r].normal_force_N;
       c.friction_force_N_W = group.rows[r].friction_force_N_W;
+      if (cs.laws[ci].implicit) PlaceRowAnchors(model, data, cs, ci, group.rows[r]);
     }
   }
 }

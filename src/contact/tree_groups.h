@@ -13,9 +13,10 @@
 // contacts explicit, as with a free body). Stage 5 (TreeGroupImpulses): the impulse due, if any.
 // Stage 7 (dynamics::StepTrees) moves the trees' positions with the final velocities.
 //
-// Simplification: a link contact's friction is the solver's implicit tangential damping (its
-// stick rows carry no anchor spring) bounded by the Coulomb cone; the tool's is explicit damping
-// within the cone (docs/decisions.md, "Contact groups over trees in the tick").
+// Friction: a scene contact's row carries the stick anchor's spring (anchors kept in the frames
+// of the contact's bodies and link geoms, placed after the solve as free bodies' are) with
+// implicit tangential damping, bounded by the Coulomb cone; the tool's is explicit damping within
+// the cone (docs/decisions.md, "Links collide with static geometry and with other links").
 #pragma once
 
 #include <Eigen/Core>

@@ -38,12 +38,6 @@ Aabb Bounds(const GeomModel& g, const GeomPose& pose) {
   return Aabb{pose.p_W - half, pose.p_W + half};
 }
 
-// CanCollide on the filters the broad phase keeps
-bool CanCollide(const Broadphase::Filter& a, const Broadphase::Filter& b) {
-  if (a.body == b.body) return false;  // same body, or both static
-  return (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0;
-}
-
 // signed distance of the box below the plane's surface, > 0 if some part is below
 bool BelowPlane(const Aabb& box, const GeomPose& plane) {
   const Vec3 n = plane.R_WG.col(2);
@@ -146,7 +140,7 @@ void Broadphase::Reserve(const Model& model, int pair_capacity) {
   for (int g = 0; g < ngeom; ++g) {
     const GeomModel& geom = model.geoms[g];
     (geom.type == GeomType::kPlane ? planes : order).push_back(g);
-    filters.push_back(Filter{geom.body, geom.contype, geom.conaffinity});
+    filters.push_back(CollisionFilter(model, g));
   }
   axis = 0;
   for (auto* bound : {&lo_s, &hi_s, &lo_p, &hi_p, &lo_q, &hi_q}) bound->assign(order.size(), 0.0);
@@ -181,8 +175,37 @@ void GeomPoses(const Model& model, std::span<const BodyState> bodies, std::span<
 }
 
 bool CanCollide(const GeomModel& a, const GeomModel& b) {
-  if (a.body == b.body) return false;  // same body, or both static
+  // same body, same link, or both static
+  if (a.body == b.body && a.tree == b.tree && a.link == b.link) return false;
   return (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0;
+}
+
+int LinkOwner(const Model& model, int tree, int link) {
+  int owner = static_cast<int>(model.bodies.size());
+  for (int t = 0; t < tree; ++t) owner += static_cast<int>(model.trees[t].link_names.size());
+  return owner + link;
+}
+
+Broadphase::Filter CollisionFilter(const Model& model, int g) {
+  const GeomModel& geom = model.geoms[g];
+  Broadphase::Filter f{geom.body, -2, geom.contype, geom.conaffinity};
+  if (geom.body >= 0 || geom.tree < 0) return f;
+  f.owner = LinkOwner(model, geom.tree, geom.link);
+  // MuJoCo's weldparent test applies between two links (neither welded to the world): a tree's
+  // root link still collides with the static geometry it hangs from
+  const int parent = model.trees[geom.tree].link_parent[geom.link];
+  if (model.filter_parent && parent >= 0) f.parent = LinkOwner(model, geom.tree, parent);
+  return f;
+}
+
+bool CanCollide(const Broadphase::Filter& a, const Broadphase::Filter& b) {
+  if (a.owner == b.owner) return false;  // same body or link, or both static
+  if (a.parent == b.owner || b.parent == a.owner) return false;  // a link and its parent
+  return (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0;
+}
+
+bool CanCollide(const Model& model, int a, int b) {
+  return CanCollide(CollisionFilter(model, a), CollisionFilter(model, b));
 }
 
 namespace {

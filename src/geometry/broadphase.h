@@ -38,9 +38,16 @@ struct Broadphase {
   std::vector<int> hits;  // (non-plane geoms) the places whose float boxes overlap one place's
   std::vector<int> upper_hits;  // (non-plane geoms) the same for the worker's part of the sweep
   bool wide = false;            // the float test runs eight places at once (AVX2, from the CPU)
-  // each geom's collision filter from the model (Reserve), read for every candidate pair
+  // each geom's collision filter from the model (CollisionFilter, in Reserve), read for every
+  // candidate pair
   struct Filter {
-    int body = -1, contype = 0, conaffinity = 0;
+    // what moves the geom: its body's index, nbody + the link's place among every tree's links
+    // (LinkOwner), or -1 for static geometry
+    int owner = -1;
+    // the owner of its link's parent link when MuJoCo's parent filter applies (a link geom whose
+    // parent is a link, Model::filter_parent): the two never collide; else -2, which is no owner
+    int parent = -2;
+    int contype = 0, conaffinity = 0;
   };
   std::vector<Filter> filters;             // (ngeom)
   std::vector<std::pair<int, int>> pairs;  // (capacity) candidate pairs, geom indices
@@ -66,9 +73,28 @@ struct Broadphase {
 /// World poses of every geom from the body states.
 void GeomPoses(const Model& model, std::span<const BodyState> bodies, std::span<GeomPose> poses);
 
-/// Whether two geoms may collide at all: different owners, not both static, and MuJoCo's filter
-/// (contype1 & conaffinity2) || (contype2 & conaffinity1).
+/// Whether two geoms may collide at all: different owners (bodies, links of trees), not both
+/// static, and MuJoCo's filter (contype1 & conaffinity2) || (contype2 & conaffinity1). Without
+/// the parent filter of links, which needs the trees: CanCollide(model, a, b) has it.
 bool CanCollide(const GeomModel& a, const GeomModel& b);
+
+/// The owner number of link `link` of tree `tree` in Broadphase::Filter: nbody + the link's place
+/// among every tree's links, in tree order.
+int LinkOwner(const Model& model, int tree, int link);
+
+/// Geom g's collision filter (Broadphase::Filter).
+Broadphase::Filter CollisionFilter(const Model& model, int g);
+
+/// Whether two collision filters may collide: different owners, not a link and its parent link
+/// (Filter::parent), and the contype/conaffinity bits. Static geometry (owner -1) never collides
+/// with static geometry; a link collides with it, with free bodies and with other links.
+bool CanCollide(const Broadphase::Filter& a, const Broadphase::Filter& b);
+
+/// CanCollide of geoms a and b of `model`, with MuJoCo 2.2.2's filter in full: the bits, not one
+/// body (after welding: one link, or both static), and not a link and its parent link unless the
+/// scene disables filterparent (Model::filter_parent). <contact><exclude> is applied apart
+/// (Model::excluded_geom_pairs).
+bool CanCollide(const Model& model, int a, int b);
 
 /// With fewer boxes (non-plane geoms) than this, one thread sweeps: the hand-off would cost more.
 inline constexpr int kMinBoxesForTwoThreads = 256;

@@ -72,9 +72,12 @@ SceneCapacity BoundCapacity(const Model& model) {
   // exact counts, and per dynamic geom its dynamic partners
   long static_pairs = 0, static_contacts = 0, dynamic_pairs = 0, dynamic_contacts = 0;
   std::vector<long> partners(ngeom, 0);
+  std::vector<Broadphase::Filter> filters;
+  for (int g = 0; g < ngeom; ++g) filters.push_back(CollisionFilter(model, g));
   for (int i = 0; i < ngeom; ++i) {
     for (int j = i + 1; j < ngeom; ++j) {
-      if (!CanCollide(geoms[i], geoms[j])) continue;
+      // link geoms count with the static ones (exactly): with static geometry and other links
+      if (!CanCollide(filters[i], filters[j])) continue;
       const long points = MaxPairPoints(geoms[i].type, geoms[j].type);
       if (geoms[i].body < 0 || geoms[j].body < 0) {
         ++static_pairs;

@@ -103,14 +103,25 @@ struct PairWriter {
   const Mat3* R_WA = nullptr;  // body rotations of dynamic bodies (Data::R_WB)
   const Mat3* R_WB = nullptr;
   Vec3 x_A, x_B;  // body positions
+  // a link geom's pose (its side's points are kept in the geom's frame, which moves with the link)
+  const GeomPose* link_A = nullptr;
+  const GeomPose* link_B = nullptr;
 };
 
-// the writer for points of geoms (ga, gb) whose normals point from gb towards ga
-PairWriter BeginPair(const Model& model, const Data& data, int ga, int gb) {
+// how a geom moves, for the order of a contact's sides: 2 on a body, 1 on a link, 0 static
+int Mobility(const GeomModel& g) {
+  return g.body >= 0 ? 2 : g.tree >= 0 ? 1 : 0;
+}
+
+// the writer for points of geoms (ga, gb) whose normals point from gb towards ga. Side a is the
+// more mobile geom (a body before a link before static geometry; two links keep their order),
+// and the tool when it takes part
+PairWriter BeginPair(const Model& model, const Data& data, const CollisionScratch& s, int ga,
+                     int gb) {
   PairWriter w;
   const int tool = model.tool;
-  w.flip =
-      model.geoms[ga].body < 0 || (model.geoms[gb].body == tool && model.geoms[ga].body != tool);
+  const GeomModel &a = model.geoms[ga], &b = model.geoms[gb];
+  w.flip = Mobility(a) < Mobility(b) || (b.body == tool && a.body != tool);
   if (w.flip) std::swap(ga, gb);
   w.ga = ga;
   w.gb = gb;
@@ -124,6 +135,8 @@ PairWriter BeginPair(const Model& model, const Data& data, int ga, int gb) {
     w.R_WB = &data.R_WB[w.body_b];
     w.x_B = data.bodies[w.body_b].x_W;
   }
+  if (w.body_a < 0 && model.geoms[ga].tree >= 0) w.link_A = &s.poses[ga];
+  if (w.body_b < 0 && model.geoms[gb].tree >= 0) w.link_B = &s.poses[gb];
   return w;
 }
 
@@ -146,9 +159,13 @@ void WriteContact(Contact& c, const PairWriter& w, const Vec3& p_W, const Vec3& 
   c.p_W = p_W;
   c.n_W = w.flip ? Vec3(-n_W) : n_W;
   c.depth_m = depth_m;
-  // in the bodies' frames (the world's for a static geom)
-  c.p_A = w.body_a >= 0 ? Vec3(w.R_WA->transpose() * (p_W - w.x_A)) : p_W;
-  c.p_B = w.body_b >= 0 ? Vec3(w.R_WB->transpose() * (p_W - w.x_B)) : p_W;
+  // in the bodies' frames (a link geom's own frame; the world's for a static geom)
+  c.p_A = w.body_a >= 0 ? Vec3(w.R_WA->transpose() * (p_W - w.x_A))
+          : w.link_A    ? Vec3(w.link_A->R_WG.transpose() * (p_W - w.link_A->p_W))
+                        : p_W;
+  c.p_B = w.body_b >= 0 ? Vec3(w.R_WB->transpose() * (p_W - w.x_B))
+          : w.link_B    ? Vec3(w.link_B->R_WG.transpose() * (p_W - w.link_B->p_W))
+                        : p_W;
   c.normal_force_N = 0.0;
   c.friction_force_N_W.setZero();
   c.impulse_Ns = 0.0;
@@ -183,7 +200,7 @@ void CollideWithMuJoCo(const Model& model, Data& data, CollisionScratch& s, int 
   const int n = fn(model.collision.get(), s.mj, s.mj_contacts.data(), model.geoms[g1].mj_geom,
                    model.geoms[g2].mj_geom, 0.0);
   // MuJoCo's normal points from geom1 to geom2: ours from b to a, so a = g2
-  const PairWriter w = BeginPair(model, data, g2, g1);
+  const PairWriter w = BeginPair(model, data, s, g2, g1);
   for (int i = 0; i < n; ++i) {
     const mjContact& mc = s.mj_contacts[i];
     if (!(mc.dist < 0.0) || Room(data, 1) < 1) continue;
@@ -249,7 +266,7 @@ void CollidePair(const Model& model, Data& data, CollisionScratch& s, int g1, in
                       : 0;
     if (n > 0) {
       // the narrow phase's normal points from geom 2 towards geom 1
-      const PairWriter w = BeginPair(model, data, g1, g2);
+      const PairWriter w = BeginPair(model, data, s, g1, g2);
       const int fit = Room(data, n);
       for (int i = 0; i < fit; ++i) {
         AddContact(data, w, s.points[i].p_W, s.points[i].n_W, s.points[i].depth_m);
@@ -335,7 +352,7 @@ void WriteRange(const Model& model, Data& data, CollisionScratch& s, int begin, 
     if (found.count == 0) continue;
     const auto [g1, g2] = s.broadphase.pairs[k];
     const ContactPoint* p = s.thread_points[found.thread].data() + found.offset;
-    const PairWriter w = BeginPair(model, data, g1, g2);
+    const PairWriter w = BeginPair(model, data, s, g1, g2);
     const int first = s.pair_first[k];
     for (int i = 0; i < found.count; ++i) {
       WriteContact(data.contacts[first + i], w, p[i].p_W, p[i].n_W, p[i].depth_m);
@@ -439,7 +456,7 @@ void WriteOnTwoThreads(const Model& model, Data& data, CollisionScratch& s,
       CollidePair(model, data, s, g1, g2);
     } else if (found.count > 0) {
       const ContactPoint* p = s.thread_points[found.thread].data() + found.offset;
-      const PairWriter w = BeginPair(model, data, g1, g2);
+      const PairWriter w = BeginPair(model, data, s, g1, g2);
       const int fit = Room(data, found.count);
       for (int i = 0; i < fit; ++i) AddContact(data, w, p[i].p_W, p[i].n_W, p[i].depth_m);
     }

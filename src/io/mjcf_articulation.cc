@@ -310,6 +310,7 @@ void BuildTree(const Loader& L, int root, std::vector<LinkOf>& link_of,
     tree.link_names.push_back(MjElementName(m, mjOBJ_BODY, b).substr(1));
     tree.link_names.back().pop_back();
     tree.link_mj_body.push_back(b);
+    tree.link_parent.push_back(body.parent);
     bodies.push_back(std::move(body));
   }
   try {

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "dynamics/kinematics.h"
+#include "geometry/collision.h"
 #include "io/mjcf_articulation.h"
 #include "rigidtouch/types.h"
 
@@ -50,6 +52,42 @@ const char* EqualityName(int type) {
   }
 }
 
+// MuJoCo 2.2.2's filter of geoms g1 and g2 (mj_contactFilter), which rigidtouch's broad phase
+// applies too: the contype/conaffinity bits, different bodies after welding, and not a body and
+// its parent when both move, unless the scene disables filterparent
+bool FilterPasses(const mjModel* m, int g1, int g2) {
+  if ((m->geom_contype[g1] & m->geom_conaffinity[g2]) == 0 &&
+      (m->geom_contype[g2] & m->geom_conaffinity[g1]) == 0) {
+    return false;
+  }
+  const int w1 = m->body_weldid[m->geom_bodyid[g1]], w2 = m->body_weldid[m->geom_bodyid[g2]];
+  if (w1 == w2) return false;
+  const int p1 = m->body_weldid[m->body_parentid[w1]], p2 = m->body_weldid[m->body_parentid[w2]];
+  const bool parent = (m->opt.disableflags & mjDSBL_FILTERPARENT) == 0 && w1 != 0 && w2 != 0;
+  return !(parent && (w1 == p2 || w2 == p1));
+}
+
+// whether some geom pair of the scene passes the filter (FilterPasses)
+bool AnyPairCollides(const mjModel* m) {
+  for (int g1 = 0; g1 < m->ngeom; ++g1) {
+    for (int g2 = g1 + 1; g2 < m->ngeom; ++g2) {
+      if (FilterPasses(m, g1, g2)) return true;
+    }
+  }
+  return false;
+}
+
+// a geom's MJCF name in quotes, or its index ('#3')
+std::string GeomName(const mjModel* m, const GeomModel& g) {
+  return Name(m, mjOBJ_GEOM, g.mj_geom);
+}
+
+std::string Num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 struct Reporter {
   const std::string& path;
   std::vector<std::string>& warnings;
@@ -78,25 +116,29 @@ void CheckOptions(const mjModel* m, const Reporter& r) {
              "\"> asks for fluid forces, which rigidtouch does not compute; remove it");
   }
   // rigidtouch always computes contacts, limits and dry friction; the flags only change nothing
-  // when the scene has none of them: no free body (links collide with free bodies and the tool
-  // only), and for `constraint` no limited joint and no frictionloss either
-  bool free_body = false, limited = false, friction = false;
-  for (int b = 1; b < m->nbody; ++b) free_body = free_body || io::IsLoneFreeBody(m, b);
+  // when the scene has none of them: no free body and no geom pair that may collide (links
+  // collide with static geometry, free bodies and other links), and for `constraint` no limited
+  // joint and no frictionloss either
+  bool touching = false, limited = false, friction = false;
+  if (o.disableflags & (mjDSBL_CONTACT | mjDSBL_CONSTRAINT)) {
+    for (int b = 1; b < m->nbody; ++b) touching = touching || io::IsLoneFreeBody(m, b);
+    touching = touching || AnyPairCollides(m);
+  }
   for (int j = 0; j < m->njnt; ++j) limited = limited || m->jnt_limited[j] != 0;
   for (int d = 0; d < m->nv; ++d) friction = friction || m->dof_frictionloss[d] != 0.0;
-  if ((o.disableflags & mjDSBL_CONTACT) && free_body) {
+  if ((o.disableflags & mjDSBL_CONTACT) && touching) {
     r.Refuse(
         "<flag contact=\"disable\"/>: rigidtouch always computes contacts (it is a contact "
-        "renderer) and this scene has free bodies; remove the flag");
+        "renderer) and this scene has free bodies or geoms that may collide; remove the flag");
   }
-  if ((o.disableflags & mjDSBL_CONSTRAINT) && (free_body || limited || friction)) {
+  if ((o.disableflags & mjDSBL_CONSTRAINT) && (touching || limited || friction)) {
     r.Refuse(
         "<flag constraint=\"disable\"/> turns contacts, joint limits and frictionloss off, "
-        "which rigidtouch always computes (this scene has free bodies, limited joints or "
-        "frictionloss); remove the flag");
+        "which rigidtouch always computes (this scene has free bodies, geoms that may collide, "
+        "limited joints or frictionloss); remove the flag");
   }
   const std::string unchanged =
-      "changes nothing here: the scene has no free body for its links to touch";
+      "changes nothing here: the scene has no free body and no geoms that may collide";
   if (o.disableflags & mjDSBL_CONTACT) r.Warn("<flag contact=\"disable\"/> " + unchanged);
   if (o.disableflags & mjDSBL_CONSTRAINT) {
     r.Warn("<flag constraint=\"disable\"/> " + unchanged +
@@ -118,15 +160,10 @@ void CheckOptions(const mjModel* m, const Reporter& r) {
     const char* name;
   };
   const Flag disable[] = {
-      {mjDSBL_EQUALITY, "equality"},
-      {mjDSBL_FRICTIONLOSS, "frictionloss"},
-      {mjDSBL_LIMIT, "limit"},
-      {mjDSBL_PASSIVE, "passive"},
-      {mjDSBL_CLAMPCTRL, "clampctrl"},
-      {mjDSBL_WARMSTART, "warmstart"},
-      {mjDSBL_FILTERPARENT, "filterparent"},
-      {mjDSBL_ACTUATION, "actuation"},
-      {mjDSBL_REFSAFE, "refsafe"},
+      {mjDSBL_EQUALITY, "equality"},   {mjDSBL_FRICTIONLOSS, "frictionloss"},
+      {mjDSBL_LIMIT, "limit"},         {mjDSBL_PASSIVE, "passive"},
+      {mjDSBL_CLAMPCTRL, "clampctrl"}, {mjDSBL_WARMSTART, "warmstart"},
+      {mjDSBL_ACTUATION, "actuation"}, {mjDSBL_REFSAFE, "refsafe"},
       {mjDSBL_SENSOR, "sensor"},
   };
   for (const Flag& f : disable) {
@@ -264,18 +301,72 @@ void CheckPairs(const mjModel* m, const std::string& path, std::vector<std::stri
   const Reporter r{path, warnings};
   for (int p = 0; p < m->npair; ++p) {
     const int g1 = m->pair_geom1[p], g2 = m->pair_geom2[p];
-    const bool filtered = (m->geom_contype[g1] & m->geom_conaffinity[g2]) != 0 ||
-                          (m->geom_contype[g2] & m->geom_conaffinity[g1]) != 0;
     const std::string who = "<contact><pair> " + Name(m, mjOBJ_PAIR, p) + " of geoms " +
                             Name(m, mjOBJ_GEOM, g1) + " and " + Name(m, mjOBJ_GEOM, g2);
-    if (!filtered) {
+    if (!FilterPasses(m, g1, g2)) {
       r.Refuse(who +
-               ": rigidtouch collides only the geom pairs the contype/conaffinity bits allow, and "
-               "these two are not; set the bits so that they collide and remove the pair");
+               ": rigidtouch collides only the geom pairs MuJoCo's filter allows (contype/"
+               "conaffinity bits, different bodies, not a body and its parent unless "
+               "filterparent is disabled), and these two are not; make them collide that way and "
+               "remove the pair");
     }
     r.Warn(who +
            ": the geoms collide anyway (contype/conaffinity); the pair's condim, friction, "
            "solref, solimp and margin are ignored");
+  }
+}
+
+// rigidtouch's own collision detection on the initial state (sized from the scene, as the tick's
+// is; MuJoCo's mj_collision would need its contact buffer and a stack of nbody^2 / 2 numbers):
+// free bodies that start inside each other (or inside a static geom) by more than
+// kMaxInitialOverlap are a scene error, since the penalty contact would fling them apart on the
+// first tick. Links that start inside static geometry or other links are warned about instead
+// (one warning naming three pairs and counting the rest): MuJoCo's articulated models often
+// start that way (a root link sunk into the static base it turns on) and MuJoCo collides them
+// too, and a refusal would turn those models away
+void CheckInitialOverlap(Model& model, const std::string& path) {
+  constexpr double kMaxInitialOverlap = 1e-3;  // m, deeper overlaps at start fail
+  Data data;
+  data.bodies = model.initial;
+  data.R_WB.resize(model.bodies.size());
+  dynamics::ComputeKinematics(data);
+  data.contacts.resize(model.max_contacts);
+  data.runs.resize(model.max_contacts);
+  geometry::CollisionScratch scratch;
+  scratch.Reserve(model);
+  geometry::DetectContacts(model, data, scratch);
+  std::string links;
+  int nlinks = 0;
+  const mjModel* m = model.collision.get();
+  for (int i = 0; i < data.ncontact; ++i) {
+    const Contact& c = data.contacts[i];
+    if (!(c.depth_m > kMaxInitialOverlap)) continue;
+    // in MuJoCo's geom order, as the message was when MuJoCo's collision made this check
+    const int g1 = std::min(c.geom_a, c.geom_b), g2 = std::max(c.geom_a, c.geom_b);
+    if (c.body_a < 0 && c.body_b < 0) {  // a link with static geometry or another link
+      if (i > 0 && data.contacts[i - 1].geom_a == c.geom_a &&
+          data.contacts[i - 1].geom_b == c.geom_b &&
+          data.contacts[i - 1].depth_m > kMaxInitialOverlap) {
+        continue;  // the pair is named already
+      }
+      if (++nlinks <= 3) {
+        links += std::string(nlinks > 1 ? ", " : "") + GeomName(m, model.geoms[g1]) + " and " +
+                 GeomName(m, model.geoms[g2]) + " (" + Num(c.depth_m) + " m)";
+      }
+      continue;
+    }
+    throw Error("scene file '" + path + "': geoms " + GeomName(m, model.geoms[g1]) + " and " +
+                GeomName(m, model.geoms[g2]) + " overlap by " + Num(c.depth_m) +
+                " m at the start (more than " + Num(kMaxInitialOverlap) +
+                " m); move them apart in the scene or its keyframe 'initial'");
+  }
+  if (nlinks > 0) {
+    model.load_warnings.push_back(
+        "scene file '" + path + "': link geoms overlap at the start by more than " +
+        Num(kMaxInitialOverlap) + " m: " + links +
+        (nlinks > 3 ? " and " + std::to_string(nlinks - 3) + " more pairs" : "") +
+        "; their contacts push them apart from the first step (exclude a pair with <contact>"
+        "<exclude>, or contype/conaffinity)");
   }
 }
 

@@ -29,9 +29,17 @@ void CheckElements(const mjModel* m, const std::string& path, std::vector<std::s
 RenderParams SceneRender(const RenderParams& render, double h_s, const std::string& path,
                          std::vector<std::string>& warnings);
 
-/// <contact><pair>: refused when the pair would add a contact that the geoms' contype and
-/// conaffinity bits exclude (rigidtouch collides only what the filter lets through); otherwise
+/// <contact><pair>: refused when the pair would add a contact that MuJoCo's filter excludes (the
+/// contype and conaffinity bits, one body after welding, a link and its parent link unless
+/// filterparent is disabled: rigidtouch collides only what the filter lets through); otherwise
 /// the contact exists anyway and only the pair's parameters are dropped, with a warning.
 void CheckPairs(const mjModel* m, const std::string& path, std::vector<std::string>& warnings);
+
+/// The initial state through rigidtouch's own collision detection: a free body inside another
+/// geom by more than 1 mm is refused (its penalty contact would fling it on the first step); links
+/// inside static geometry or other links by more than that are named in one load warning
+/// (MuJoCo's articulated models often start so, and MuJoCo collides them as rigidtouch does).
+/// `model` must be configured (its contact capacity sized).
+void CheckInitialOverlap(Model& model, const std::string& path);
 
 }  // namespace rigidtouch

@@ -17,9 +17,7 @@
 #include <vector>
 
 #include "base/limits.h"
-#include "dynamics/kinematics.h"
 #include "geometry/capacity.h"
-#include "geometry/collision.h"
 #include "io/mjcf_articulation.h"
 #include "io/mjcf_checks.h"
 #include "io/mjcf_compile.h"
@@ -101,7 +99,6 @@ constexpr double kMaxSpeed = 1e3;                  // m/s, keyframe linear veloc
 constexpr double kMaxAngularSpeed = 1e4;           // rad/s, keyframe angular velocity
 constexpr double kMaxGravity = 1e3;                // m/s^2, |gravity|
 constexpr double kMaxFriction = 1e2;               // friction coefficient
-constexpr double kMaxInitialOverlap = 1e-3;        // m, deeper overlaps at start fail
 
 std::string SceneNumber(double v) {
   std::ostringstream s;
@@ -435,38 +432,6 @@ void InitialState(const mjModel* m, const std::string& path, Model& model) {
   }
 }
 
-std::string GeomName(const mjModel* m, const GeomModel& g) {
-  return g.mj_geom >= 0 ? MjName(m, mjOBJ_GEOM, g.mj_geom) : g.name;
-}
-
-// rigidtouch's own collision detection on the initial state (sized from the scene, as the tick's
-// is; MuJoCo's mj_collision would need its contact buffer and a stack of nbody^2 / 2 numbers):
-// free bodies that start inside each other (or inside a static geom) by more than
-// kMaxInitialOverlap are a scene error, since the penalty contact would fling them apart on the
-// first tick
-void CheckInitialOverlap(const Model& model, const std::string& path) {
-  Data data;
-  data.bodies = model.initial;
-  data.R_WB.resize(model.bodies.size());
-  dynamics::ComputeKinematics(data);
-  data.contacts.resize(model.max_contacts);
-  data.runs.resize(model.max_contacts);
-  geometry::CollisionScratch scratch;
-  scratch.Reserve(model);
-  geometry::DetectContacts(model, data, scratch);
-  for (int i = 0; i < data.ncontact; ++i) {
-    const Contact& c = data.contacts[i];
-    if (!(c.depth_m > kMaxInitialOverlap)) continue;
-    // in MuJoCo's geom order, as the message was when MuJoCo's collision made this check
-    const int g1 = std::min(c.geom_a, c.geom_b), g2 = std::max(c.geom_a, c.geom_b);
-    const mjModel* m = model.collision.get();
-    throw Error("scene file '" + path + "': geoms '" + GeomName(m, model.geoms[g1]) + "' and '" +
-                GeomName(m, model.geoms[g2]) + "' overlap by " + SceneNumber(c.depth_m) +
-                " m at the start (more than " + SceneNumber(kMaxInitialOverlap) +
-                " m); move them apart in the scene or its keyframe 'initial'");
-  }
-}
-
 // MuJoCo's warnings while it compiles a scene (a NaN in the XML, ...), kept by the thread that
 // compiles so that they become load warnings naming the file, instead of an unprefixed line on
 // stdout and a MUJOCO_LOG.TXT in the working directory. MuJoCo's hook is one pointer for the
@@ -566,6 +531,7 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   }
 
   if (m->opt.disableflags & mjDSBL_GRAVITY) model.gravity_W.setZero();  // <flag gravity="disable"/>
+  model.filter_parent = (m->opt.disableflags & mjDSBL_FILTERPARENT) == 0;
   // bodies and joints first: an actuator or element is then refused naming what it acts on
   const std::vector<int> body_index = CopyBodies(m, path, model);
   const std::vector<io::LinkOf> link_of = io::CopyTrees(m, path, model);

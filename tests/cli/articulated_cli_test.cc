@@ -91,5 +91,32 @@ TEST(ArticulatedCliTest, BenchRunsASceneWithoutATool) {
   EXPECT_GT(j["median_ns"].get<double>(), 0.0);
 }
 
+// --joint-limit-renderer sets render.joint_limit_renderer: with the walls' renderer at penalty,
+// the door of door.xml swung onto its stop gets no impulse (penalty), single impulses of one
+// (impulse) or the impulses of a train (train); event is refused naming the flag
+TEST(ArticulatedCliTest, JointLimitRendererFlagChoosesHowTheDoorStopRenders) {
+  const std::string door =
+      std::string(RIGIDTOUCH_SOURCE_DIR) + "/tests/scenes/articulated/door.xml";
+  const auto impulses = [&door](const std::string& renderer) {
+    const CliResult r = RunCli("simulate --scene " + door +
+                               " --tool none --steps 1000 --json --renderer penalty "
+                               "--joint-limit-renderer " +
+                               renderer);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out)["impulses"];
+  };
+  EXPECT_EQ(impulses("penalty").size(), 0u);
+  const auto single = impulses("impulse");
+  ASSERT_GE(single.size(), 1u);
+  for (const auto& e : single) EXPECT_EQ(e["total"], 1);
+  const auto train = impulses("train");
+  ASSERT_GT(train.size(), single.size());
+  EXPECT_GT(train[0]["total"].get<int>(), 1);
+  const CliResult bad =
+      RunCli("simulate --scene " + door + " --tool none --steps 10 --joint-limit-renderer event");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--joint-limit-renderer"), std::string::npos) << bad.err;
+}
+
 }  // namespace
 }  // namespace rigidtouch::test

@@ -234,12 +234,45 @@ TEST(MjcfArticulationTest, IdleActuatorWithActivationIsLeftOutWithAWarning) {
   EXPECT_TRUE(HasWarning(m, "<actuator> 'state' has activation dynamics")) << m.load_warnings[0];
 }
 
-// <flag constraint="disable"/> with nothing it could turn off here: warned, not refused
+// <flag constraint="disable"/> with nothing it could turn off here (a link that collides with
+// nothing: its bits are 0): warned, not refused
 TEST(MjcfArticulationTest, ConstraintFlagIsWarnedWhenTheSceneHasNoConstraintToTurnOff) {
-  const Model m =
-      LoadTreeXml(World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>",
-                        "<option><flag constraint=\"disable\"/></option>"));
+  const Model m = LoadTreeXml(
+      World("<body name=\"b\"><joint name=\"j\"/><geom type=\"box\" size=\"0.05 0.05 0.05\" "
+            "mass=\"1\" contype=\"0\" conaffinity=\"0\"/></body>",
+            "<option><flag constraint=\"disable\"/></option>"));
   EXPECT_TRUE(HasWarning(m, "<flag constraint=\"disable\"/> changes nothing here"));
+}
+
+// links collide with static geometry (the floor): the flags would turn those contacts off
+TEST(MjcfArticulationTest, ContactFlagIsRefusedWhenALinkMayTouchTheFloor) {
+  for (const char* flag : {"contact", "constraint"}) {
+    try {
+      LoadTreeXml(World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>",
+                        std::string("<option><flag ") + flag + "=\"disable\"/></option>"));
+      FAIL() << flag << " accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("geoms that may collide"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+// a <contact><pair> of a link and its parent link: the parent filter keeps them apart, so the
+// pair is refused rather than said to collide anyway
+TEST(MjcfArticulationTest, PairOfALinkAndItsParentIsRefused) {
+  try {
+    LoadTreeXml(
+        World("<body name=\"b\"><joint name=\"j\"/><geom name=\"gb\" type=\"box\" "
+              "size=\"0.05 0.05 0.05\" mass=\"1\"/><body name=\"c\" pos=\"0.2 0 0\">"
+              "<joint name=\"k\"/><geom name=\"gc\" type=\"box\" size=\"0.05 0.05 0.05\" "
+              "mass=\"1\"/></body></body>",
+              "<contact><pair name=\"p\" geom1=\"gb\" geom2=\"gc\"/></contact>"));
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not a body and its parent"), std::string::npos)
+        << e.what();
+  }
 }
 
 // limit softness on many joints: one warning naming three of them and the count of the rest

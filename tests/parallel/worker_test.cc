@@ -558,5 +558,43 @@ TEST(WorkerTest, TwoThreadsWithATreeGiveTheStateOfOne) {
   EXPECT_GT(t.d2.workspace->velocity.shared_steps, 0);  // the worker took free-body groups
 }
 
+// the pile beside a tree (a free root capsule, two hinged capsule legs) landing on the floor:
+// link-static rows on the tick's thread while the worker takes free-body groups; bit for bit
+TEST(WorkerTest, TwoThreadsWithATreeOnTheFloorGiveTheStateOfOne) {
+  std::string xml = test::PileXml(4, 4, 3, 0.051, 0.5);
+  std::string tree =
+      "<body name=\"torso\" pos=\"0.5 0 0.52\"><freejoint/>"
+      "<geom type=\"capsule\" fromto=\"0 0 -0.1 0 0 0.1\" size=\"0.05\" mass=\"4\"/>";
+  for (const char* y : {"-0.06", "0.06"}) {
+    tree += std::string("<body pos=\"0 ") + y +
+            " -0.15\"><joint type=\"hinge\" axis=\"0 1 0\" damping=\"0.5\"/>"
+            "<geom type=\"capsule\" fromto=\"0 0 0 0 0 -0.3\" size=\"0.03\" mass=\"1\"/>"
+            "</body>";
+  }
+  xml.insert(xml.find("</worldbody>"), tree + "</body>");
+  OneAndTwoThreads t(test::WriteTempFile("pile_tree_floor_threads.xml", xml));
+  ASSERT_EQ(t.m1.trees.size(), 1u);
+  const TickInput in;
+  int floor_rows = 0;
+  for (int step = 0; step < 600; ++step) {
+    Tick(t.m1, t.d1, in);
+    Tick(t.m2, t.d2, in);
+    for (int i = 0; i < t.d2.ncontact; ++i) {
+      const Contact& c = t.d2.contacts[i];
+      floor_rows += t.m2.geoms[c.geom_a].tree >= 0 && t.m2.geoms[c.geom_b].body < 0 &&
+                    t.m2.geoms[c.geom_b].tree < 0;
+    }
+    for (std::size_t i = 0; i < t.d1.bodies.size(); ++i) {
+      ASSERT_EQ(std::memcmp(&t.d1.bodies[i], &t.d2.bodies[i], sizeof(BodyState)), 0)
+          << "step " << step << " body " << i;
+    }
+    ASSERT_EQ(t.d1.trees[0]->qpos, t.d2.trees[0]->qpos) << "step " << step;
+    ASSERT_EQ(t.d1.trees[0]->qvel, t.d2.trees[0]->qvel) << "step " << step;
+  }
+  EXPECT_GT(floor_rows, 100);                           // the tree stood or lay on the floor
+  EXPECT_GT(t.d2.workspace->velocity.shared_steps, 0);  // the worker took free-body groups
+  EXPECT_GT(t.d2.trees[0]->qpos[2], 0.0);               // above the floor
+}
+
 }  // namespace
 }  // namespace rigidtouch::parallel
