@@ -144,8 +144,8 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
                 if (auto name = in.OneOf("coupling", text::CouplingNames(), "coupling")) {
                   d.coupling = ParseCoupling(*name);
                 }
-                if (auto text = in.String("connect")) {
-                  const std::string connection = ConnectionSetting(*text, path);
+                if (auto value = in.String("connect")) {
+                  const std::string connection = ConnectionSetting(*value, path);
                   if (connect != nullptr) *connect = connection;
                 }
               });
