@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 
 #include "bench/mujoco_engine.h"
 #include "io/mjcf_compile.h"
@@ -141,6 +142,13 @@ void BulletEngine::Load(const Scene& scene) {
   solver_ = std::make_unique<btSequentialImpulseConstraintSolver>();
   world_ = std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(),
                                                      solver_.get(), configuration_.get());
+  settings_ = scene.peer_settings;
+  if (settings_ == PeerSettings::kStacking) {
+    const BulletStackingSettings stacking;
+    btContactSolverInfo& info = world_->getSolverInfo();
+    info.m_numIterations = stacking.iterations;
+    info.m_solverMode = stacking.solver_mode;
+  }
   const mjtNum* gravity = model.opt.gravity;
   world_->setGravity(btVector3(gravity[0], gravity[1], gravity[2]));
   timestep_s_ = model.opt.timestep;
@@ -333,13 +341,31 @@ bool BulletEngine::StateIsFinite() const {
 
 std::string BulletEngine::Configuration() const {
   const btContactSolverInfo& info = world_->getSolverInfo();
+  const auto mode = [&info](int flag) { return (info.m_solverMode & flag) ? "on" : "off"; };
+  const auto number = [](double value) {
+    std::array<char, 32> text{};
+    std::snprintf(text.data(), text.size(), "%g", value);
+    return std::string(text.data());
+  };
+  double box_margin_m = -1;
+  for (const auto& shape : shapes_) {
+    if (shape->getShapeType() == BOX_SHAPE_PROXYTYPE) box_margin_m = shape->getMargin();
+  }
   return "Bullet " + std::to_string(btGetVersion()) +
-         (btIsDoublePrecision() ? " double" : " single") +
-         " precision, btSequentialImpulseConstraintSolver defaults: iterations " +
-         std::to_string(info.m_numIterations) + ", erp " + std::to_string(info.m_erp).substr(0, 4) +
+         (btIsDoublePrecision() ? " double" : " single") + " precision, settings " +
+         PeerSettingsName(settings_) + ": " + "btSequentialImpulseConstraintSolver" +
+         ", iterations " + std::to_string(info.m_numIterations) + ", erp2 " + number(info.m_erp2) +
          ", split impulse " + (info.m_splitImpulse ? "on" : "off") + ", warm starting " +
-         ((info.m_solverMode & SOLVER_USE_WARMSTARTING) ? "on" : "off") +
-         ", btDbvtBroadphase, deactivation disabled, stepSimulation(h, 0)";
+         mode(SOLVER_USE_WARMSTARTING) + " (factor " + number(info.m_warmstartingFactor) +
+         "), 2 friction directions " + mode(SOLVER_USE_2_FRICTION_DIRECTIONS) +
+         ", friction direction caching " + mode(SOLVER_ENABLE_FRICTION_DIRECTION_CACHING) +
+         ", randomized order " + mode(SOLVER_RANDMIZE_ORDER) + ", linear slop " +
+         number(info.m_linearSlop) + ", residual threshold " +
+         number(info.m_leastSquaresResidualThreshold) + ", contact breaking threshold " +
+         number(gContactBreakingThreshold) +
+         (box_margin_m >= 0 ? ", box margin " + number(box_margin_m) : std::string()) +
+         ", btDbvtBroadphase, deactivation disabled, stepSimulation(h, 0) with h " +
+         number(timestep_s_) + " s";
 }
 
 std::unique_ptr<Engine> MakeBulletEngine() {

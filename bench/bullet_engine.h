@@ -1,6 +1,7 @@
 // Bullet peer: a btDiscreteDynamicsWorld built from the compiled mjModel of the same MJCF file
 // (geom types, sizes and poses, body masses and inertias), stepped with one fixed step of the
-// MJCF timestep per Step() and Bullet's default solver settings.
+// MJCF timestep per Step(), with Bullet's default solver settings or the ones Bullet's own
+// documentation and examples give for stable stacks (PeerSettings::kStacking).
 #pragma once
 
 #include <btBulletDynamicsCommon.h>
@@ -15,6 +16,17 @@
 #include "bench/engine.h"
 
 namespace rigidtouch::bench {
+
+/// The solver and contact settings of PeerSettings::kStacking, each from Bullet's own
+/// documentation or examples (docs/performance.md, "Peer configuration", gives the source of
+/// each). The time step is the scene's: one step of it per Step(), never sub-stepped.
+struct BulletStackingSettings {
+  int iterations = 50;  ///< Bullet's default: 10
+  /// Bullet's default: warm starting and SIMD only
+  int solver_mode = SOLVER_USE_WARMSTARTING | SOLVER_SIMD | SOLVER_RANDMIZE_ORDER |
+                    SOLVER_USE_2_FRICTION_DIRECTIONS | SOLVER_ENABLE_FRICTION_DIRECTION_CACHING |
+                    SOLVER_DISABLE_VELOCITY_DEPENDENT_FRICTION_DIRECTION;
+};
 
 /// The Bullet engine: the constant tool force goes through applyCentralForce every step.
 /// Sleeping (deactivation) is disabled for every body, as MuJoCo has none.
@@ -72,6 +84,7 @@ class BulletEngine final : public Engine {
   btRigidBody* tool_ = nullptr;
   btVector3 tool_force_N_{0, 0, 0};
   double timestep_s_ = 0.0;
+  PeerSettings settings_ = PeerSettings::kDefaults;
 };
 
 /// Makes an unloaded Bullet engine.

@@ -22,6 +22,27 @@ std::string Scientific(double value) {
 
 }  // namespace
 
+void ApplyMujocoStackingSettings(mjModel& model, const MujocoStackingSettings& settings) {
+  mjOption& opt = model.opt;
+  opt.solver = settings.solver;
+  opt.iterations = settings.iterations;
+  opt.tolerance = settings.tolerance;
+  opt.cone = settings.elliptic_cone ? mjCONE_ELLIPTIC : mjCONE_PYRAMIDAL;
+  opt.impratio = settings.impratio;
+  opt.noslip_iterations = settings.noslip_iterations;
+  opt.noslip_tolerance = settings.noslip_tolerance;
+  // every geom's contact softness: a contact takes the two geoms' (equal) values
+  for (int g = 0; g < model.ngeom; ++g) {
+    mjtNum* solref = model.geom_solref + mjNREF * g;
+    solref[0] = settings.solref_timeconst_s;
+    solref[1] = settings.solref_dampratio;
+    mjtNum* solimp = model.geom_solimp + mjNIMP * g;
+    solimp[0] = settings.solimp_dmin;
+    solimp[1] = settings.solimp_dmax;
+    solimp[2] = settings.solimp_width_m;
+  }
+}
+
 std::unique_ptr<mjModel, void (*)(mjModel*)> LoadMjcf(const std::string& path) {
   std::array<char, 1024> error{};
   mjModel* model = mj_loadXML(path.c_str(), nullptr, error.data(), static_cast<int>(error.size()));
@@ -48,6 +69,10 @@ MujocoEngine::~MujocoEngine() {
 void MujocoEngine::Load(const Scene& scene) {
   auto model = LoadMjcf(scene.mjcf_path);
   tool_id_ = MjBodyId(*model, scene.tool_body, scene.mjcf_path);
+  settings_ = scene.peer_settings;
+  if (settings_ == PeerSettings::kStacking) {
+    ApplyMujocoStackingSettings(*model, MujocoStackingSettings());
+  }
   if (snapshot_ != nullptr) mj_deleteData(snapshot_);
   if (data_ != nullptr) mj_deleteData(data_);
   if (model_ != nullptr) mj_deleteModel(model_);
@@ -157,14 +182,25 @@ std::string MujocoEngine::Configuration() const {
   static constexpr const char* kSolvers[] = {"PGS", "CG", "Newton"};
   static constexpr const char* kCones[] = {"pyramidal", "elliptic"};
   const mjOption& opt = model_->opt;
-  return std::string("MuJoCo ") + mj_versionString() + ", MJCF defaults: solver " +
-         kSolvers[opt.solver] + ", iterations " + std::to_string(opt.iterations) + ", tolerance " +
-         Scientific(opt.tolerance) + ", cone " + kCones[opt.cone] + ", integrator " +
-         (opt.integrator == mjINT_EULER ? "Euler"
-          : opt.integrator == mjINT_RK4 ? "RK4"
-                                        : "implicit") +
-         ", nconmax " + std::to_string(model_->nconmax) + ", njmax " +
-         std::to_string(model_->njmax);
+  std::string line =
+      std::string("MuJoCo ") + mj_versionString() + ", settings " + PeerSettingsName(settings_) +
+      ": solver " + kSolvers[opt.solver] + ", iterations " + std::to_string(opt.iterations) +
+      ", tolerance " + Scientific(opt.tolerance) + ", cone " + kCones[opt.cone] + ", impratio " +
+      Scientific(opt.impratio) + ", noslip iterations " + std::to_string(opt.noslip_iterations);
+  if (model_->ngeom > 0) {
+    // every geom has the same values in the benchmark scenes; the first one's are printed
+    const mjtNum* solref = model_->geom_solref;
+    const mjtNum* solimp = model_->geom_solimp;
+    line += ", geom solref " + Scientific(solref[0]) + " " + Scientific(solref[1]) + ", solimp " +
+            Scientific(solimp[0]) + " " + Scientific(solimp[1]) + " " + Scientific(solimp[2]);
+  }
+  line += std::string(", integrator ") +
+          (opt.integrator == mjINT_EULER ? "Euler"
+           : opt.integrator == mjINT_RK4 ? "RK4"
+                                         : "implicit") +
+          ", timestep " + Scientific(opt.timestep) + " s, nconmax " +
+          std::to_string(model_->nconmax) + ", njmax " + std::to_string(model_->njmax);
+  return line;
 }
 
 std::unique_ptr<Engine> MakeMujocoEngine() {

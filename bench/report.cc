@@ -45,6 +45,16 @@ std::string RatioCell(const RunResult* reference, const RunResult* peer) {
          FixedDecimals(reference->time.p999_ns / peer->time.p999_ns, 2) + ")" + flag;
 }
 
+// the gates' measured values, so that a pass shows its margin: the watched body's largest
+// displacement (stack) and the deepest penetration, in millimetres
+std::string GateValues(const RunResult& r) {
+  std::string values = " (";
+  if (r.gates.watch_displacement_m >= 0) {
+    values += "moved " + FixedDecimals(r.gates.watch_displacement_m * 1e3, 3) + " mm, ";
+  }
+  return values + "deepest " + FixedDecimals(r.gates.deepest_penetration_m * 1e3, 3) + " mm)";
+}
+
 }  // namespace
 
 std::vector<RunResult> MergeRepetitions(const std::vector<RunResult>& results,
@@ -68,6 +78,8 @@ std::vector<RunResult> MergeRepetitions(const std::vector<RunResult>& results,
         m.gates.deepest_penetration_m =
             std::max(m.gates.deepest_penetration_m, r.gates.deepest_penetration_m);
         m.gates.finite = m.gates.finite && r.gates.finite;
+        m.gates.watch_displacement_m =
+            std::max(m.gates.watch_displacement_m, r.gates.watch_displacement_m);
         for (const std::string& failure : r.gates.failures) {
           if (std::find(m.gates.failures.begin(), m.gates.failures.end(), failure) ==
               m.gates.failures.end()) {
@@ -99,7 +111,7 @@ std::string FormatResultTable(const std::vector<RunResult>& results) {
         << Pad(FixedDecimals(r.time.p999_ns * 1e-3, 1), 11)
         << Pad(FixedDecimals(r.time.max_ns * 1e-3, 1), 11)
         << Pad(FixedDecimals(r.mean_contacts, 1), 10) << Pad(std::to_string(r.time.count), 8)
-        << (r.gates.ok() ? "ok" : "FAILED") << "\n";
+        << (r.gates.ok() ? "ok" : "FAILED") << GateValues(r) << "\n";
     for (const std::string& failure : r.gates.failures) {
       failures << "  " << r.scene << " / " << r.engine << ": " << failure << "\n";
     }

@@ -6,6 +6,16 @@
 
 namespace rigidtouch::bench {
 
+PeerSettings ParsePeerSettings(const std::string& text) {
+  if (text == "defaults") return PeerSettings::kDefaults;
+  if (text == "stacking") return PeerSettings::kStacking;
+  throw Error("peer settings '" + text + "' are unknown: use defaults or stacking");
+}
+
+const char* PeerSettingsName(PeerSettings settings) {
+  return settings == PeerSettings::kDefaults ? "defaults" : "stacking";
+}
+
 std::string DefaultScenesDir() {
   return RIGIDTOUCH_SCENES;
 }

@@ -16,6 +16,19 @@ enum class SceneKind {
   kStrike,  ///< every measured step is the one that resolves a tool strike on the settled scene
 };
 
+/// How the peers (MuJoCo, Bullet) are configured; rigidtouch's own settings never change.
+enum class PeerSettings {
+  kDefaults,  ///< every solver and contact setting at the engine's default (as the MJCF gives)
+  kStacking,  ///< the settings each peer's documentation recommends for resting contact and
+              ///< stacks (docs/performance.md, "Peer configuration"); the suite's default
+};
+
+/// Parses "defaults" or "stacking". Throws `rigidtouch::Error` naming the value otherwise.
+PeerSettings ParsePeerSettings(const std::string& text);
+
+/// Returns "defaults" or "stacking".
+const char* PeerSettingsName(PeerSettings settings);
+
 /// One benchmark scene with its measurement plan and quality gates (immutable once built).
 struct Scene {
   std::string name;       ///< benchmark name, e.g. "pile-strike"
@@ -24,6 +37,7 @@ struct Scene {
   std::string tool_body = "tool";
   Vec3 tool_force_N = Vec3(0.0, 0.0, -2.0);  ///< constant, world frame, at the tool's centre
   double tool_radius_m = 0.005;
+  PeerSettings peer_settings = PeerSettings::kStacking;
 
   int warmup_steps = 2000;  ///< steps after load before the snapshot
   int measured_steps = 0;   ///< steady: measured steps; strike: measured strikes

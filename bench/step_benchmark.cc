@@ -12,6 +12,9 @@
 //   --rigidtouch_only=A,B     only the scenes named (both modes; e.g. pile400,pile1000)
 //   --rigidtouch_engines=A,B  interleaved mode: only these engines (e.g. rigidtouch,bullet: MuJoCo
 //                             2.2 cannot hold pile1000's or pile2000's contacts)
+//   --rigidtouch_peer_settings=stacking|defaults
+//                             the peers' solver settings: those their documentation recommends
+//                             for stacks (the default), or every setting at its default
 // With --benchmark_repetitions=N --benchmark_enable_random_interleaving=true every scene and
 // engine runs N times in random order and the tables pool the repetitions: each engine's steps
 // then spread over the same stretch of a shared machine's changing speed, though at the scale of
@@ -143,6 +146,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) large |= std::string(argv[i]) == "--rigidtouch_large";
   const std::string only = FlagValue(argc, argv, "rigidtouch_only");
   const std::string only_engines = FlagValue(argc, argv, "rigidtouch_engines");
+  const std::string peer_settings_text = FlagValue(argc, argv, "rigidtouch_peer_settings");
   DropFlags(argc, argv);
   int interleave = 0;
   if (!interleave_text.empty()) {
@@ -157,6 +161,9 @@ int main(int argc, char** argv) {
   static std::vector<Scene> scenes;
   try {
     const double scale = scale_text.empty() ? 1.0 : std::atof(scale_text.c_str());
+    const PeerSettings peer_settings = peer_settings_text.empty()
+                                           ? PeerSettings::kStacking
+                                           : ParsePeerSettings(peer_settings_text);
     scenes = BenchmarkScenes(scenes_dir, scale);
     if (large || !only.empty()) {
       for (Scene& scene : LargeBenchmarkScenes(scenes_dir, scale)) scenes.push_back(scene);
@@ -173,6 +180,7 @@ int main(int argc, char** argv) {
       }
       scenes = kept;
     }
+    for (Scene& scene : scenes) scene.peer_settings = peer_settings;
   } catch (const rigidtouch::Error& error) {
     std::cerr << "error: " << error.what() << "\n";
     return 2;

@@ -170,7 +170,9 @@ Settings ResolveSettings(const SceneFlags& f) {
   Settings s;
   LoadOptions& o = s.load;
   if (!f.config.empty()) {
-    for (const std::string& field : io::ApplyConfigFile(f.config, o)) s.origin[field] = f.config;
+    for (const std::string& field : io::ApplyConfigFile(f.config, o, &s.connect)) {
+      s.origin[field] = f.config;
+    }
   }
   auto flag = [&s](const std::string& field, auto& out, const auto& value) {
     if (!value) return;
@@ -322,11 +324,12 @@ void RefuseDeviceSettings(const Settings& s, const std::string& command) {
   const std::string why =
       command + " has no device (the tool is pushed by the constant --tool-force)";
   if (s.load.device.coupling != Coupling::kNone) RefuseUnused(s, {"device.coupling"}, why);
-  RefuseUnused(s,
-               {"device.max_force_N", "device.coupling_stiffness_N_per_m",
-                "device.coupling_damping_Ns_per_m", "device.plausible_radius_m",
-                "device.plausible_speed_mps", "device.plausible_angular_speed_radps"},
-               why);
+  RefuseUnused(
+      s,
+      {"device.max_force_N", "device.coupling_stiffness_N_per_m",
+       "device.coupling_damping_Ns_per_m", "device.plausible_radius_m",
+       "device.plausible_speed_mps", "device.plausible_angular_speed_radps", "device.connect"},
+      why);
 }
 
 std::string OriginNote(const Settings& s, const std::string& message) {

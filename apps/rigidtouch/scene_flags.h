@@ -71,6 +71,7 @@ void AddThreadsFlag(CLI::App* app, SceneFlags& flags);
 /// by field path ("contact.stiffness_N_per_m" -> "--stiffness" or "k.json").
 struct Settings {
   LoadOptions load;
+  std::optional<std::string> connect;  // the config file's device.connect (serve's --connect)
   std::map<std::string, std::string> origin;
   bool Given(const std::string& field) const { return origin.count(field) != 0; }
 };

@@ -397,6 +397,11 @@ void RegisterServe(CLI::App& root) {
   // an error about a parameter the user wrote says where it was written
   app->callback([f, app] {
     f->rate_given = app->count("--rate") > 0;
+    // no connection on the command line (--connect, or the old --device udp://...|sim): the
+    // config file's device.connect, if any
+    if (!f->connect && !(f->device && IsConnection(*f->device))) {
+      f->connect = ResolveSettings(f->scene).connect;
+    }
     const auto replay = [](const std::optional<std::string>& v) {
       return v && v->starts_with(kReplayPrefix);
     };

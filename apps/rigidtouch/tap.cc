@@ -97,6 +97,7 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     c.load.render.frequency_hz = r.frequency_hz;
   }
   const Settings settings = ResolveSettings(f.scene);
+  RefuseUnused(settings, {"device.connect"}, "tap runs its own simulated device in process");
   if (f.coupling) {
     c.load.device.coupling = io::ParseCoupling(*f.coupling);
   } else if (!settings.Given("device.coupling")) {

@@ -40,6 +40,20 @@ std::string MaterialPath(const std::string& text, const std::string& config_path
   return (std::filesystem::path(config_path).parent_path() / p).string();
 }
 
+// a connection named in a config file (device.connect): sim, udp://HOST:PORT, or replay:LOG with
+// a relative LOG taken from the config file's folder
+std::string ConnectionSetting(const std::string& text, const std::string& config_path) {
+  const std::string udp = "udp://", replay = "replay:";
+  if (text == "sim" || (text.starts_with(udp) && text.size() > udp.size())) return text;
+  if (text.starts_with(replay) && text.size() > replay.size()) {
+    const std::filesystem::path log(text.substr(replay.size()));
+    if (log.is_absolute()) return text;
+    return replay + (std::filesystem::path(config_path).parent_path() / log).string();
+  }
+  throw Error(config_path + ": device.connect: " + text::Quote(text) +
+              " is not a connection; valid connections: sim, udp://HOST:PORT, replay:LOG");
+}
+
 }  // namespace
 
 RendererKind ParseRenderer(const std::string& name) {
@@ -60,7 +74,8 @@ Coupling ParseCoupling(const std::string& name) {
   return static_cast<Coupling>(i);
 }
 
-std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options) {
+std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options,
+                                         std::optional<std::string>* connect) {
   const nlohmann::json root = ReadJsonFile(path, "config file");
   const JsonSource source(path);
   const StrictObject top(source, root, "",
@@ -125,9 +140,13 @@ std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& o
                {"plausible_radius_m", &d.plausible_radius_m},
                {"plausible_speed_mps", &d.plausible_speed_mps},
                {"plausible_angular_speed_radps", &d.plausible_angular_speed_radps}},
-              given, {"coupling"}, [&d](const StrictObject& in) {
+              given, {"coupling", "connect"}, [&d, &path, connect](const StrictObject& in) {
                 if (auto name = in.OneOf("coupling", text::CouplingNames(), "coupling")) {
                   d.coupling = ParseCoupling(*name);
+                }
+                if (auto value = in.String("connect")) {
+                  const std::string connection = ConnectionSetting(*value, path);
+                  if (connect != nullptr) *connect = connection;
                 }
               });
   return given;

@@ -2,6 +2,7 @@
 // (docs/architecture.md).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,8 +18,12 @@ namespace rigidtouch::io {
 /// field (listing the valid ones), a wrong type or a non-finite number, and naming the file when
 /// it is missing, empty or not JSON (with line and column). Ranges are checked by Configure.
 /// Returns the fields the file gives, as paths ("tool", "contact.stiffness_N_per_m"), so a caller
-/// can tell a value the user wrote from a default.
-std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options);
+/// can tell a value the user wrote from a default. "device" may also name the connection to the
+/// device, "connect": sim, udp://HOST:PORT or replay:LOG (a relative LOG is taken from the
+/// file's folder); it is checked (any other value throws Error naming the file and
+/// "device.connect") and stored in `*connect` when `connect` is given.
+std::vector<std::string> ApplyConfigFile(const std::string& path, LoadOptions& options,
+                                         std::optional<std::string>* connect = nullptr);
 
 /// Parses a renderer name (text::RendererNames); throws Error listing them.
 RendererKind ParseRenderer(const std::string& name);

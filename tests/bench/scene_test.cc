@@ -182,6 +182,22 @@ TEST(BenchmarkScenes, FourScenesWithTheirGates) {
   EXPECT_NEAR(pile->body_pos[3 * target + 2], 0.178, kTolerance);
 }
 
+TEST(BenchmarkScenes, PeerSettingsAreStackingUnlessAskedAndUnknownNamesAreRefused) {
+  for (const Scene& scene : BenchmarkScenes(RIGIDTOUCH_SCENES)) {
+    EXPECT_EQ(scene.peer_settings, PeerSettings::kStacking) << scene.name;
+  }
+  EXPECT_EQ(ParsePeerSettings("defaults"), PeerSettings::kDefaults);
+  EXPECT_EQ(ParsePeerSettings("stacking"), PeerSettings::kStacking);
+  EXPECT_STREQ(PeerSettingsName(PeerSettings::kDefaults), "defaults");
+  EXPECT_STREQ(PeerSettingsName(PeerSettings::kStacking), "stacking");
+  try {
+    ParsePeerSettings("tuned");
+    FAIL() << "expected rigidtouch::Error";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("'tuned'"), std::string::npos) << error.what();
+  }
+}
+
 TEST(BenchmarkScenes, ScaleShortensMeasurementOnlyAndIsChecked) {
   const std::vector<Scene> full = BenchmarkScenes("scenes");
   const std::vector<Scene> tenth = BenchmarkScenes("scenes", 0.1);

@@ -143,5 +143,35 @@ TEST(ServeCliTest, PlausibilityLimitsFromTheConfigAndTheFlags) {
   std::filesystem::remove_all(dir);
 }
 
+// the connection a config file names (device.connect) is serve's; --connect overrides it; a value
+// that is no connection is refused naming the file and the field
+TEST(ServeCliTest, ConnectionFromTheConfigAndTheFlag) {
+  const std::filesystem::path dir = TempDir("connect");
+  const std::string config = (dir / "c.json").string();
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  std::ofstream(config) << R"({"device": {"connect": ")" << addr << R"("}})";
+  const std::string serve = "serve --rate 1000 --duration 0.2 --json --config " + config;
+  // nothing answers at the config's address: the bridge was tried
+  const CliResult bridged = RunCli(serve + " --startup-timeout 0.3");
+  EXPECT_EQ(bridged.exit_code, 5) << bridged.err;
+  EXPECT_NE(bridged.err.find("no state from the device at " + addr), std::string::npos)
+      << bridged.err;
+  const CliResult sim = RunCli(serve + " --connect sim --taps 1");
+  EXPECT_EQ(sim.exit_code, 0) << sim.err;
+  for (const char* bad : {"tcp://127.0.0.1:9", "udp://", "touch"}) {
+    std::ofstream(config) << R"({"device": {"connect": ")" << bad << R"("}})";
+    const CliResult r = RunCli(serve);
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.err;
+    EXPECT_NE(r.err.find(config + ": device.connect"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(bad), std::string::npos) << r.err;
+  }
+  // tap, simulate and bench connect to no device: the field is refused, not ignored
+  std::ofstream(config) << R"({"device": {"connect": "sim"}})";
+  const CliResult tap = RunCli("tap --taps 1 --json --config " + config);
+  EXPECT_EQ(tap.exit_code, 2) << tap.err;
+  EXPECT_NE(tap.err.find("device.connect"), std::string::npos) << tap.err;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace rigidtouch::test

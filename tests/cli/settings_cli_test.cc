@@ -261,6 +261,8 @@ TEST_F(SettingsCliTest, SimulateAndBenchRefuseDeviceSettings) {
       ExpectRefused(command + wall + " --config " + one,
                     {"device." + std::string(field) + " (set in " + one});
     }
+    const std::string connect = Config("connect.json", R"({"device": {"connect": "sim"}})");
+    ExpectRefused(command + wall + " --config " + connect, {"device.connect (set in " + connect});
     // the coupling simulate and bench run is none: writing it is not refused
     const std::string none = Config("none.json", R"({"device": {"coupling": "none"}})");
     EXPECT_EQ(RunCli(command + wall + " --config " + none).exit_code, 0) << command;

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -106,6 +108,31 @@ TEST(ConfigTest, TheMaterialIsAPresetOrAFileBesideTheConfig) {
   EXPECT_TRUE(Has(bad, "m3.json: render.material: ")) << bad;
   EXPECT_TRUE(Has(bad, "marshmallow")) << bad;
   std::filesystem::remove_all(dir);
+}
+
+// device.connect: a connection, checked by the reader; a relative replay log is beside the config
+TEST(ConfigTest, TheConnectionIsCheckedAndAReplayLogIsBesideTheConfig) {
+  for (const std::string connection : {"sim", "udp://127.0.0.1:5005", "replay:/srv/s.csv"}) {
+    LoadOptions o;
+    std::optional<std::string> connect;
+    const std::string path =
+        WriteTempFile("conn.json", R"({"device": {"connect": ")" + connection + R"("}})");
+    const std::vector<std::string> given = ApplyConfigFile(path, o, &connect);
+    EXPECT_EQ(connect, connection);
+    EXPECT_NE(std::find(given.begin(), given.end(), "device.connect"), given.end());
+  }
+  LoadOptions o;
+  std::optional<std::string> connect;
+  const std::string path = WriteTempFile("conn.json", R"({"device": {"connect": "replay:s.csv"}})");
+  ApplyConfigFile(path, o, &connect);
+  EXPECT_EQ(connect, "replay:" + (std::filesystem::path(path).parent_path() / "s.csv").string());
+  for (const char* bad : {"tcp://host:1", "udp://", "replay:", "touch", ""}) {
+    const std::string error =
+        ConfigErrorOf(std::string(R"({"device": {"connect": ")") + bad + R"("}})", "conn_bad.json");
+    EXPECT_TRUE(Has(error, "conn_bad.json: device.connect: ")) << error;
+  }
+  const std::string wrong_type = ConfigErrorOf(R"({"device": {"connect": 5}})", "conn5.json");
+  EXPECT_TRUE(Has(wrong_type, "device.connect")) << wrong_type;
 }
 
 TEST(ConfigTest, AbsentFieldsKeepTheirValues) {
