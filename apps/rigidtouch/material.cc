@@ -18,6 +18,7 @@
 #include "io/output_file.h"
 #include "io/resources.h"
 #include "io/tap_recording.h"
+#include "material_run.h"
 
 namespace rigidtouch::cli {
 namespace {
@@ -108,25 +109,15 @@ void RunMaterialFit(const MaterialFitFlags& f) {
     CheckMaterialFigurePath(f.plot);
     io::CheckOutputPath(f.plot, "figure");
   }
-  if (!(f.rate_hz >= 100.0 && f.rate_hz <= 100000.0)) {
-    throw Error("--rate " + text::FormatNumber(f.rate_hz) + ": valid 100 to 100000 Hz");
-  }
-  const device::DeviceSpec spec = device::ParseDeviceSpec(f.device);
-  analysis::MaterialFitOptions o;
-  o.name = f.name.empty() ? std::filesystem::path(f.out).stem().string() : f.name;
-  o.device = f.device;
-  o.effective_mass_kg = f.effective_mass_kg > 0.0
-                            ? f.effective_mass_kg
-                            : spec.model.apparent_mass_kg + device::HandParams{}.mass_kg;
-  o.display_limit_hz = 0.5 * f.rate_hz;
-  o.max_force_N = spec.limits.max_force_N;
+  MaterialFitRequest request;
+  request.name = f.name.empty() ? std::filesystem::path(f.out).stem().string() : f.name;
+  request.device = f.device;
+  request.rate_hz = f.rate_hz;
+  request.effective_mass_kg = f.effective_mass_kg;
   std::vector<io::TapRecording> recordings;
   for (const std::string& path : f.recordings) recordings.push_back(io::ReadTapRecording(path));
-  const analysis::MaterialFit fit = analysis::FitMaterial(recordings, o);
-  nlohmann::json file = analysis::MaterialFileJson(fit);
-  file["fit"]["version"] = RIGIDTOUCH_VERSION;
-  // the reader must take what was written: checked before the file exists
-  io::ReadMaterialJson(io::JsonSource(f.out), file, "", o.name);
+  analysis::MaterialFit fit;
+  const nlohmann::json file = FitMaterialFile(recordings, request, fit);
   io::WriteFileAtomically(f.out, file.dump(2) + "\n", "material file");
   if (!f.plot.empty()) DrawMaterialFigure(fit, f.plot, f.json);
   for (const std::string& w : fit.warnings) std::cerr << "rigidtouch: warning: " << w << "\n";
@@ -212,4 +203,30 @@ void RegisterMaterial(CLI::App& root) {
 const CommandRegistrar material_registrar("material", &RegisterMaterial);
 
 }  // namespace
+
+nlohmann::json FitMaterialFile(const std::vector<io::TapRecording>& recordings,
+                               const MaterialFitRequest& request, analysis::MaterialFit& fit) {
+  if (!(request.rate_hz >= 100.0 && request.rate_hz <= 100000.0)) {
+    throw Error("--rate " + text::FormatNumber(request.rate_hz) + ": valid 100 to 100000 Hz");
+  }
+  if (!(request.effective_mass_kg >= 0.0 && request.effective_mass_kg <= 1000.0)) {
+    throw Error("--effective-mass-kg " + text::FormatNumber(request.effective_mass_kg) +
+                ": valid 0 (the device's and the hand's) to 1000 kg");
+  }
+  const device::DeviceSpec spec = device::ParseDeviceSpec(request.device);
+  analysis::MaterialFitOptions o;
+  o.name = request.name;
+  o.device = request.device;
+  o.effective_mass_kg = request.effective_mass_kg > 0.0
+                            ? request.effective_mass_kg
+                            : spec.model.apparent_mass_kg + device::HandParams{}.mass_kg;
+  o.display_limit_hz = 0.5 * request.rate_hz;
+  o.max_force_N = spec.limits.max_force_N;
+  fit = analysis::FitMaterial(recordings, o);
+  nlohmann::json file = analysis::MaterialFileJson(fit);
+  file["fit"]["version"] = RIGIDTOUCH_VERSION;
+  // the reader must take what is written: checked before any file exists
+  io::ReadMaterialJson(io::JsonSource(request.name), file, "", o.name);
+  return file;
+}
 }  // namespace rigidtouch::cli

@@ -46,8 +46,8 @@ TEST(MaterialCliTest, FitsASyntheticRecordingIntoAMaterialTheRenderersTake) {
   EXPECT_EQ(text.exit_code, 0) << text.err;
   EXPECT_NE(text.out.find("A(v) ="), std::string::npos) << text.out;
   for (const std::string renderer : {"event", "train"}) {
-    const CliResult tap = RunCli("tap --renderer " + renderer + " --material " + out.string() +
-                                 " --taps 1 --json --out-dir " + (dir / renderer).string());
+    const CliResult tap =
+        RunCli("tap --renderer " + renderer + " --material " + out.string() + " --taps 1 --json");
     ASSERT_EQ(tap.exit_code, 0) << renderer << ": " << tap.err;
     EXPECT_EQ(nlohmann::json::parse(tap.out)["material"], "my_wood") << renderer;
   }
@@ -74,8 +74,9 @@ TEST(MaterialCliTest, AStudyProtocolRendersTheFittedMaterial) {
          {"conditions", {"event:fitted", "train:fitted"}},
          {"keys", {"e", "t"}}}}}};
   std::ofstream(dir / "protocol.json") << protocol.dump(2);
-  const CliResult r = RunCli("study simulate --protocol " + (dir / "protocol.json").string() +
-                             " --participants 1 --log-dir " + (dir / "logs").string() + " --json");
+  const CliResult r =
+      RunCli("study simulate --protocol " + (dir / "protocol.json").string() +
+             " --participants 1 --seed 1 --log-dir " + (dir / "logs").string() + " --json");
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
@@ -148,6 +149,31 @@ TEST(MaterialCliTest, WarnsWhenTheDeviceCannotDisplayTheFrequency) {
   const CliResult ok = RunCli("material fit " + csv.string() + " --out " +
                               (dir / "alu.json").string() + " --device omni --rate 1000");
   EXPECT_EQ(ok.err.find("the fitted frequency"), std::string::npos) << ok.err;
+}
+
+// the shipped synthetic recordings are what `material synth` writes (so their documented model is
+// the one behind them), and each fits back to its preset within 2 %
+TEST(MaterialCliTest, ShippedRecordingsAreTheGeneratorsOutput) {
+  const fs::path dir = TempDir("material_shipped");
+  const std::vector<std::vector<double>> presets = {{10, 40, 30}, {15, 60, 100}, {25, 90, 300}};
+  const std::vector<std::string> names = {"rubber", "wood", "aluminium"};
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const fs::path shipped =
+        fs::path(RIGIDTOUCH_SOURCE_DIR) / "materials" / "synthetic" / (names[i] + ".csv");
+    const fs::path made = dir / (names[i] + ".csv");
+    ASSERT_EQ(RunCli("material synth " + names[i] + " --taps-per-speed 3 --out " + made.string())
+                  .exit_code,
+              0);
+    EXPECT_EQ(ReadAll(made), ReadAll(shipped)) << names[i];
+    const fs::path out = dir / (names[i] + ".json");
+    ASSERT_EQ(RunCli("material fit " + shipped.string() + " --out " + out.string()).exit_code, 0);
+    const nlohmann::json m = nlohmann::json::parse(ReadAll(out));
+    const std::vector<std::string> keys = {"amplitude_Ns_per_m", "decay_per_s", "frequency_hz"};
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      EXPECT_NEAR(m[keys[k]].get<double>(), presets[i][k], 0.02 * presets[i][k])
+          << names[i] << " " << keys[k];
+    }
+  }
 }
 
 }  // namespace
