@@ -54,7 +54,7 @@ def main():
     line_v = [0.0, 1.1 * v_max]
     slope = fig_data["slope"]
     ax_a.plot(line_v, [slope * v for v in line_v], color="C3",
-              label=f"A = {slope:.4g} v (± {fig_data['slope_sd']:.2g}); "
+              label=f"A = {slope:.4g} v (± {fig_data['slope_sd']:.2g}) [{unit}/(m/s)]; "
                     f"residual {fig_data['residual_rms']:.2g}")
     ax_a.set_xlabel("impact speed v [m/s]")
     ax_a.set_ylabel(f"amplitude A at onset [{unit}]")

@@ -16,12 +16,17 @@ CLI = os.environ.get("RIGIDTOUCH_CLI", os.path.join(ROOT, "build", "rigidtouch")
 
 def read_taps(path):
     """The recording's taps as dicts of arrays, split on the tap column."""
-    data = np.genfromtxt(path, delimiter=",", names=True, comments="#")
+    with open(path, encoding="utf-8") as f:
+        lines = [line for line in f if line.strip() and not line.startswith("#")]
+    names = lines[0].strip().split(",")
+    values = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
+    columns = {name: values[:, i] for i, name in enumerate(names)}
     taps = []
-    for k in np.unique(data["tap"]):
-        rows = data[data["tap"] == k]
-        taps.append({"time_s": rows["time_s"], "acceleration_mps2": rows["acceleration_mps2"],
-                     "velocity_mps": rows["velocity_mps"]})
+    for k in np.unique(columns["tap"]):
+        rows = columns["tap"] == k
+        taps.append({"time_s": columns["time_s"][rows],
+                     "acceleration_mps2": columns["acceleration_mps2"][rows],
+                     "velocity_mps": columns["velocity_mps"][rows]})
     return taps
 
 

@@ -45,6 +45,14 @@ TEST(MaterialCliTest, FitsASyntheticRecordingIntoAMaterialTheRenderersTake) {
   const CliResult text = RunCli("material fit " + csv.string() + " --out " + out.string());
   EXPECT_EQ(text.exit_code, 0) << text.err;
   EXPECT_NE(text.out.find("A(v) ="), std::string::npos) << text.out;
+  // the figure, when matplotlib is there (the material is written either way)
+  const fs::path png = dir / "fit.png";
+  const CliResult plot =
+      RunCli("material fit " + csv.string() + " --out " + out.string() + " --plot " + png.string());
+  EXPECT_EQ(plot.exit_code, 0) << plot.err;
+  if (plot.err.find("matplotlib is missing") == std::string::npos) {
+    EXPECT_GT(fs::file_size(png), 10000u);
+  }
   for (const std::string renderer : {"event", "train"}) {
     const CliResult tap =
         RunCli("tap --renderer " + renderer + " --material " + out.string() + " --taps 1 --json");
