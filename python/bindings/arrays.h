@@ -32,4 +32,7 @@ py::dtype TraceDtype();
 /// owns them: no copy.
 py::array TraceArray(std::vector<TraceSample>&& samples);
 
+/// Adds _fit_material (python/bindings/material.cc): `material fit` on numpy arrays.
+void DefineMaterial(py::module_& m);
+
 }  // namespace rigidtouch::python

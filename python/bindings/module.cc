@@ -621,6 +621,7 @@ void DefineTapAndStudy(py::module_& m) {
 void DefineModule(py::module_& m) {
   DefineDocAndErrors(m);
   DefineParams(m);
+  DefineMaterial(m);
   DefineModel(m);
   DefineData(m);
   DefineTick(m);

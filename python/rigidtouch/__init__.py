@@ -47,8 +47,8 @@ from . import _rigidtouch
 __all__ = [
     "ContactParams", "Data", "DeviceParams", "LoadOptions", "Model", "OutputError",
     "RenderParams", "SimulatedDevice", "TapResult", "analyze_logs", "configure", "contact_dtype",
-    "kinetic_energy", "load_model", "make_data", "prepare_tap", "reset_data", "run",
-    "simulate_cohort", "sweep", "tap", "tap_args", "tick", "trace_dtype",
+    "fit_material", "kinetic_energy", "load_model", "make_data", "prepare_tap", "reset_data",
+    "run", "simulate_cohort", "sweep", "tap", "tap_args", "tick", "trace_dtype",
 ]
 
 _SECTIONS = {"contact": ContactParams, "render": RenderParams, "device": DeviceParams}
@@ -168,3 +168,19 @@ def sweep(spec, out, *, scheduler=None, workers=None, progress=None):
     """Runs a sweep of tap experiments (see rigidtouch.sweeps.run_sweep)."""
     from .sweeps import run_sweep
     return run_sweep(spec, out, scheduler=scheduler, workers=workers, progress=progress)
+
+
+def fit_material(taps, *, name="fitted", device="touch", rate_hz=1000.0, effective_mass_kg=0.0):
+    """Fits a material to recorded taps, as ``rigidtouch material fit`` does (docs/materials.md).
+
+    ``taps`` is a list of dicts, one per tap, of 1-D arrays (numpy or sequences) named like the
+    recording's columns: ``time_s`` and one of ``acceleration_mps2`` and ``force_N``, with
+    ``velocity_mps``, ``position_m`` or ``impact_speed_mps`` (an array or one number) for the
+    impact speed. ``device``, ``rate_hz`` and ``effective_mass_kg`` are the CLI's ``--device``,
+    ``--rate`` and ``--effective-mass-kg``. Returns the material file's content as a dict (write
+    it with ``json.dump`` and any ``--material FILE.json`` reads it); the same numbers as the CLI
+    on the same samples. A tap that cannot support a fit raises ValueError naming the tap and the
+    sample ("NAME:SAMPLE: tap K: ...", samples counted from 1).
+    """
+    return _rigidtouch._fit_material(list(taps), name=name, device=device, rate_hz=rate_hz,
+                                     effective_mass_kg=effective_mass_kg)

@@ -45,3 +45,6 @@ def prepare_tap(**params: Any) -> tuple[Model, SimulatedDevice, dict[str, Any]]:
 def sweep(spec: Union[str, dict[str, Any]], out: str, *, scheduler: Optional[str] = None,
           workers: Optional[int] = None,
           progress: Optional[Callable[[int, int], None]] = None) -> dict[str, Any]: ...
+
+def fit_material(taps: list[dict[str, Any]], *, name: str = "fitted", device: str = "touch",
+                 rate_hz: float = 1000.0, effective_mass_kg: float = 0.0) -> dict[str, Any]: ...

@@ -35,6 +35,34 @@ double RequiredMaterialNumber(const io::StrictObject& o, const std::string& key,
   return *value;
 }
 
+// `material fit` writes these in "fit"; the reader checks the names and leaves the values alone
+const std::vector<std::string> kFitFields = {
+    "method", "version",        "recordings", "device",   "taps",     "uncertainty",
+    "spread", "amplitude_line", "per_tap",    "warnings", "synthetic"};
+
+// amplitude_quantity "force" (the default: amplitude_Ns_per_m is the force at the device) or
+// "acceleration" (measured as the handle's acceleration: amplitude_mps2_per_mps, converted with
+// effective_mass_kg, and amplitude_Ns_per_m must be their product, so neither is edited alone)
+void ReadAmplitudeSource(const io::StrictObject& o, double amplitude_Ns_per_m) {
+  const std::string quantity =
+      o.OneOf("amplitude_quantity", {"force", "acceleration"}, "amplitude quantities")
+          .value_or("force");
+  if (quantity == "force") {
+    for (const char* key : {"amplitude_mps2_per_mps", "effective_mass_kg"}) {
+      if (o.Has(key)) o.FailAt(key, "only with \"amplitude_quantity\": \"acceleration\"");
+    }
+    return;
+  }
+  const double a = RequiredMaterialNumber(o, "amplitude_mps2_per_mps", 0.0, 1e6, "(m/s^2)/(m/s)");
+  const double mass = RequiredMaterialNumber(o, "effective_mass_kg", 1e-6, 1e3, "kg");
+  if (std::abs(mass * a - amplitude_Ns_per_m) > 1e-6 * std::max(1e-9, amplitude_Ns_per_m)) {
+    o.FailAt("amplitude_Ns_per_m", text::FormatNumber(amplitude_Ns_per_m) +
+                                       " is not effective_mass_kg x " +
+                                       "amplitude_mps2_per_mps = " + text::FormatNumber(mass * a) +
+                                       " (docs/materials.md, \"From acceleration to force\")");
+  }
+}
+
 }  // namespace
 
 std::span<const Material> MaterialPresets() {
@@ -58,9 +86,11 @@ const Material* FindPreset(const Material& material) {
 
 Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& value,
                           const std::string& path, const std::string& default_name) {
-  const io::StrictObject o(source, value, path,
-                           {"name", "amplitude_Ns_per_m", "decay_per_s", "frequency_hz"},
-                           "a material");
+  const io::StrictObject o(
+      source, value, path,
+      {"name", "amplitude_Ns_per_m", "decay_per_s", "frequency_hz", "amplitude_quantity",
+       "amplitude_mps2_per_mps", "effective_mass_kg", "fit"},
+      "a material");
   Material m;
   m.name = o.String("name").value_or(default_name);
   if (m.name.empty()) o.FailAt("name", "must not be empty");
@@ -68,6 +98,11 @@ Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& va
   m.decay_per_s = RequiredMaterialNumber(o, "decay_per_s", 1e-3, 1e5, "1/s");
   // the frequency's upper bound depends on the time step (Nyquist): Configure checks it
   m.frequency_hz = RequiredMaterialNumber(o, "frequency_hz", 1e-3, 1e5, "Hz");
+  ReadAmplitudeSource(o, m.amplitude_Ns_per_m);
+  if (o.Has("fit")) {
+    // the fit's provenance (docs/materials.md): kept for people, not used to render
+    o.Object("fit", kFitFields, "the fit's record");
+  }
   return m;
 }
 

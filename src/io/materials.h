@@ -19,8 +19,11 @@ namespace rigidtouch::io {
 std::span<const Material> MaterialPresets();
 
 /// Reads a JSON material: {"name": optional (default the file's stem), "amplitude_Ns_per_m",
-/// "decay_per_s", "frequency_hz"}, all three required. Throws Error "FILE: FIELD: ..." naming
-/// the field.
+/// "decay_per_s", "frequency_hz"}, all three required; optional "amplitude_quantity" ("force",
+/// the default, or "acceleration" with "amplitude_mps2_per_mps" and "effective_mass_kg", whose
+/// product must be amplitude_Ns_per_m to 1e-6) and "fit" (`material fit`'s record: its field
+/// names are checked, its values not used; docs/materials.md). Throws Error "FILE: FIELD: ..."
+/// naming the field.
 Material ReadMaterial(const std::string& path);
 
 /// Reads a material from a parsed JSON object, the way ReadMaterial reads a file's: the fields
