@@ -370,4 +370,24 @@ void CheckInitialOverlap(Model& model, const std::string& path) {
   }
 }
 
+void HonourDisabledConstraints(mjModel* m, const std::string& path, const std::string& tool_name,
+                               std::vector<std::string>& warnings) {
+  const int flags = m->opt.disableflags & (mjDSBL_CONTACT | mjDSBL_CONSTRAINT);
+  if (flags == 0 || tool_name != "none") return;
+  for (int b = 1; b < m->nbody; ++b) {
+    if (io::IsLoneFreeBody(m, b)) return;  // a free body needs its contacts: refused later
+  }
+  for (int g = 0; g < m->ngeom; ++g) m->geom_contype[g] = m->geom_conaffinity[g] = 0;
+  const bool constraint = (flags & mjDSBL_CONSTRAINT) != 0;
+  if (constraint) {
+    for (int j = 0; j < m->njnt; ++j) m->jnt_limited[j] = 0;
+    for (int d = 0; d < m->nv; ++d) m->dof_frictionloss[d] = 0.0;
+  }
+  m->opt.disableflags &= ~flags;
+  warnings.push_back("scene file '" + path + "': <flag " + (constraint ? "constraint" : "contact") +
+                     "=\"disable\"/> honoured as in MuJoCo: no contacts" +
+                     (constraint ? ", joint limits or frictionloss" : "") +
+                     " in this scene (it has no tool and no free body)");
+}
+
 }  // namespace rigidtouch

@@ -23,6 +23,15 @@ namespace rigidtouch {
 /// passive tendons.
 void CheckElements(const mjModel* m, const std::string& path, std::vector<std::string>& warnings);
 
+/// `<flag contact="disable"/>` or `<flag constraint="disable"/>` in a scene without a tool
+/// (`tool_name` "none") and without free bodies: honoured as MuJoCo does, by clearing from the
+/// compiled model what rigidtouch would compute (every geom's contype and conaffinity; with
+/// `constraint`, every joint's limit and frictionloss too) and then the flag, with a warning
+/// saying so. Elsewhere nothing changes (CheckElements then refuses the flag where it matters: a
+/// tool or a free body needs contacts).
+void HonourDisabledConstraints(mjModel* m, const std::string& path, const std::string& tool_name,
+                               std::vector<std::string>& warnings);
+
 /// `render` for a scene stepped at h: the default train frequency (250 Hz, not given by the user)
 /// lowered to 1/h with a warning when h is longer than 1/250 s (MuJoCo's humanoid: 5 ms), so
 /// that such a scene runs without a flag; everything else as it is (Configure checks it).

@@ -531,6 +531,7 @@ Model LoadModel(const std::string& path, const LoadOptions& options) {
   }
 
   if (m->opt.disableflags & mjDSBL_GRAVITY) model.gravity_W.setZero();  // <flag gravity="disable"/>
+  HonourDisabledConstraints(raw, path, options.tool_name, model.load_warnings);
   model.filter_parent = (m->opt.disableflags & mjDSBL_FILTERPARENT) == 0;
   // bodies and joints first: an actuator or element is then refused naming what it acts on
   const std::vector<int> body_index = CopyBodies(m, path, model);

@@ -129,11 +129,6 @@ std::vector<Refused> RefusedInputs() {
              "</keyframe>"),
        "<joint> 'j' of body 'b': its rotation of 1 rad in keyframe 'initial' is beyond its "
        "range 0.5 rad"},
-      {"constraint_disabled_with_a_limit",
-       World("<body name=\"b\"><joint name=\"j\" limited=\"true\" range=\"-1 1\"/>" +
-                 std::string(kLink) + "</body>",
-             "<option><flag constraint=\"disable\"/></option>"),
-       "<flag constraint=\"disable\"/> turns contacts, joint limits and frictionloss off"},
       {"range_min_above_max",
        World("<body name=\"b\"><joint name=\"j\" limited=\"true\" range=\"1 -1\"/>" +
              std::string(kLink) + "</body>"),
@@ -236,20 +231,32 @@ TEST(MjcfArticulationTest, IdleActuatorWithActivationIsLeftOutWithAWarning) {
 
 // <flag constraint="disable"/> with nothing it could turn off here (a link that collides with
 // nothing: its bits are 0): warned, not refused
-TEST(MjcfArticulationTest, ConstraintFlagIsWarnedWhenTheSceneHasNoConstraintToTurnOff) {
-  const Model m = LoadTreeXml(
-      World("<body name=\"b\"><joint name=\"j\"/><geom type=\"box\" size=\"0.05 0.05 0.05\" "
-            "mass=\"1\" contype=\"0\" conaffinity=\"0\"/></body>",
-            "<option><flag constraint=\"disable\"/></option>"));
-  EXPECT_TRUE(HasWarning(m, "<flag constraint=\"disable\"/> changes nothing here"));
+// without a tool and free bodies the flags are honoured, as MuJoCo honours them (the motion is
+// checked in tests/engine/disabled_constraints_test.cc), and said so
+TEST(MjcfArticulationTest, ConstraintFlagIsHonouredInASceneWithoutATool) {
+  const Model m =
+      LoadTreeXml(World("<body name=\"b\"><joint name=\"j\" limited=\"true\" range=\"-1 1\"/>" +
+                            std::string(kLink) + "</body>",
+                        "<option><flag constraint=\"disable\"/></option>"));
+  EXPECT_TRUE(HasWarning(m,
+                         "<flag constraint=\"disable\"/> honoured as in MuJoCo: no contacts, "
+                         "joint limits or frictionloss"));
+  EXPECT_FALSE(m.trees[0].joints[0].limited);
 }
 
-// links collide with static geometry (the floor): the flags would turn those contacts off
-TEST(MjcfArticulationTest, ContactFlagIsRefusedWhenALinkMayTouchTheFloor) {
+// with a tool (a free body) the flags would turn the tool's contacts off: refused
+TEST(MjcfArticulationTest, ContactFlagIsRefusedWhenTheSceneHasATool) {
+  const std::string tool =
+      "<body name=\"tool\" pos=\"0.5 0 0.5\"><freejoint/><geom type=\"sphere\" "
+      "size=\"0.01\" mass=\"0.1\"/></body>";
   for (const char* flag : {"contact", "constraint"}) {
     try {
-      LoadTreeXml(World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>",
-                        std::string("<option><flag ") + flag + "=\"disable\"/></option>"));
+      LoadModel(
+          test::WriteTempFile(
+              "tool_flag.xml",
+              World("<body name=\"b\"><joint name=\"j\"/>" + std::string(kLink) + "</body>" + tool,
+                    std::string("<option><flag ") + flag + "=\"disable\"/></option>")),
+          {});
       FAIL() << flag << " accepted";
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find("geoms that may collide"), std::string::npos)
