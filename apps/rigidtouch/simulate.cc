@@ -141,9 +141,9 @@ void RunSimulate(const SimulateFlags& f) {
   const auto list = [](const nlohmann::json& j) {
     return j.is_array() ? j.get<std::vector<double>>() : std::vector<double>{j.get<double>()};
   };
-  std::cout << "simulated " << f.steps << " steps of " << text::Significant(model.timestep_s)
-            << " s (" << text::Significant(data.time_s) << " s) of " << model.source << " with the "
-            << text::RendererName(model.render.renderer) << " renderer\n";
+  std::cout << "simulated " << f.steps << " steps of " << text::FormatNumber(model.timestep_s)
+            << " s (" << text::FormatNumber(data.time_s) << " s) of " << model.source
+            << " with the " << text::RendererName(model.render.renderer) << " renderer\n";
   std::cout << "impulses applied: " << impulses.size()
             << ", most contacts in a step: " << max_contacts << "\n";
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {

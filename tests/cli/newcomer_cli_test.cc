@@ -30,7 +30,8 @@ TEST(NewcomerCliTest, ATypodFlagOrSubcommandGetsTheClosestValidOne) {
   EXPECT_NE(r.err.find("rigidtouch study simulate --help"), std::string::npos) << r.err;
   r = RunCli("simulat --scene x.xml");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("unknown subcommand 'simulat' (did you mean 'simulate'?); valid: bench, "), std::string::npos)
+  EXPECT_NE(r.err.find("unknown subcommand 'simulat' (did you mean 'simulate'?); valid: bench, "),
+            std::string::npos)
       << r.err;
   // nothing close: no guess, the valid ones listed
   r = RunCli("tap --xyzzy 1");
