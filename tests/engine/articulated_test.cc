@@ -90,13 +90,14 @@ Energy TreeEnergy(const Model& m, const Data& d) {
   return {kinetic_J, kinetic_J + dynamics::TreePotentialEnergy(tree, copy)};
 }
 
-// a three-link chain (hinge, hinge, ball) released from rest with no damping: over 5 s its total
-// energy stays within 0.1 % of the largest kinetic energy it reaches (the potential's zero is
-// arbitrary, so the swing's energy is the scale). The step is semi-implicit Euler, first order:
-// the drift measured 8.8e-3 at h = 1e-4 s, 4.4e-3 at 5e-5 s, 2.2e-3 at 2.5e-5 s, so h = 1e-5 s
-TEST(ArticulatedTest, PassiveChainConservesEnergyWithinATenthOfAPercent) {
+// a three-link chain (hinge, hinge, ball) released from rest with no damping, stepped at h for
+// `seconds`: the largest change of its total energy over the largest kinetic energy it reaches
+// (the potential's zero is arbitrary, so the swing's energy is the scale), energy read every
+// `every` ticks
+double ChainEnergyDrift(double h, double seconds, int every) {
   const std::string xml =
-      "<mujoco><option timestep=\"0.00001\"/><worldbody>"
+      "<mujoco><option timestep=\"" + std::to_string(h) +
+      "\"/><worldbody>"
       "<body name=\"l1\"><joint name=\"j1\" axis=\"0 1 0\"/>"
       "<geom type=\"capsule\" fromto=\"0 0 0 0.3 0 0\" size=\"0.02\" mass=\"1\"/>"
       "<body name=\"l2\" pos=\"0.3 0 0\"><joint name=\"j2\" axis=\"0 1 0\"/>"
@@ -107,18 +108,34 @@ TEST(ArticulatedTest, PassiveChainConservesEnergyWithinATenthOfAPercent) {
       "<keyframe><key name=\"initial\" qpos=\"0.2 -0.3 0.98 0 0.2 0\"/></keyframe></mujoco>";
   const Model m = LoadWithoutTool(test::WriteTempFile("chain.xml", xml));
   Data d = MakeData(m);
-  const int steps = static_cast<int>(5.0 / m.timestep_s + 0.5);
+  const int steps = static_cast<int>(seconds / m.timestep_s + 0.5);
   const double e0 = TreeEnergy(m, d).total_J;
   const TickInput in;
   double worst = 0.0, scale_J = 0.0;
-  for (int s = 0; s < steps; ++s) {
+  for (int s = 1; s <= steps; ++s) {
     Tick(m, d, in);
+    if (s % every != 0) continue;
     const Energy e = TreeEnergy(m, d);
     worst = std::max(worst, std::abs(e.total_J - e0));
     scale_J = std::max(scale_J, e.kinetic_J);
   }
   EXPECT_GT(scale_J, 1.0);  // it did swing (about 4 J)
-  EXPECT_LT(worst / scale_J, 1e-3) << "energy drift " << worst << " J of " << scale_J << " J";
+  return worst / scale_J;
+}
+
+// The step is semi-implicit Euler, first order: the drift halves with the step. Over 2 s it
+// measured 3.61e-3 at h = 1e-4 s and 1.80e-3 at 5e-5 s (ratio 2.002); the ratio is held within
+// 10 % of 2 and the finer drift under 0.3 %
+TEST(ArticulatedTest, PassiveChainsEnergyDriftIsFirstOrderInTheStep) {
+  const double coarse = ChainEnergyDrift(1e-4, 2.0, 1), fine = ChainEnergyDrift(5e-5, 2.0, 1);
+  EXPECT_NEAR(coarse / fine, 2.0, 0.2) << coarse << " at 1e-4 s, " << fine << " at 5e-5 s";
+  EXPECT_LT(fine, 3e-3);
+}
+
+// over 5 s at h = 1e-5 s the total energy stays within 0.1 % of the largest kinetic energy
+// (500000 ticks: 85 s under AddressSanitizer, so in the release build's slow pass only)
+TEST(ArticulatedTest, SlowPassiveChainConservesEnergyWithinATenthOfAPercent) {
+  EXPECT_LT(ChainEnergyDrift(1e-5, 5.0, 10), 1e-3);
 }
 
 // a 1 kg sphere on a 0.4 m arm hinged about -y (q lifts it), held by a position actuator at
