@@ -147,7 +147,9 @@ TEST(ViewFeed, TreeLinksAndJointsAreCopiedWithoutAllocating) {
     feed.OnTick(model, data, sample);
     allocations = guard.allocations();
   }
-  if (test::kMallocCounting) EXPECT_EQ(allocations, 0);
+  if (test::kMallocCounting) {
+    EXPECT_EQ(allocations, 0);
+  }
   const ViewSnapshot& v = feed.Latest();
   const dynamics::TreeData& d = *data.trees[0];
   ASSERT_EQ(v.nlink, static_cast<int>(d.x_W.size()));
