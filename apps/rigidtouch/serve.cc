@@ -365,9 +365,8 @@ void CheckServeFlags(const ServeFlags& f, const CLI::App& app) {
   }
   if (bridged && (app.count("--wall-geom") + app.count("--wall-point")) > 0) {
     throw Error(
-        std::string("serve: --wall-geom and --wall-point aim the simulated hand; a "
-                    "device through the bridge is moved by its own hand (place its "
-                    "workspace with --workspace-offset)"));
+        "serve: --wall-geom and --wall-point aim the simulated hand; a device through the bridge "
+        "is moved by its own hand (place its workspace with --workspace-offset)");
   }
   if (!bridged && app.count("--workspace-offset") > 0) {
     throw Error("serve: --workspace-offset applies to --connect udp://HOST:PORT only");
@@ -431,9 +430,9 @@ void RegisterServe(CLI::App& root) {
   app->add_option("--speed", f->speed_mps, "approach speed of the simulated hand [m/s] (sim)")
       ->capture_default_str();
   auto* wall_geom = app->add_option("--wall-geom", f->wall_geom,
-                                    "sim, replay: the geom the simulated hand taps (a static plane "
-                                    "or box, or a link's geom; default: the surface below the "
-                                    "scene's tool)");
+                                    "sim, replay: the geom the simulated hand taps, as tap's "
+                                    "--wall-geom takes it (default: the surface below the scene's "
+                                    "tool)");
   auto* wall_point =
       app->add_option("--wall-point", f->wall_point,
                       "sim, replay: a point of the surface the hand taps X Y Z [m] (with "
