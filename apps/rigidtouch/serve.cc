@@ -43,6 +43,13 @@ struct ServeFlags {
   std::string key_file;  // udp: empty means the per-user default key, created on first use
   int taps = 3;
   double speed_mps = 0.2;
+  // sim and replay: what the simulated hand taps (as `tap`'s flags); default the surface below
+  // the scene's tool
+  std::string wall_geom;
+  std::vector<double> wall_point, wall_normal;
+  // udp: tool position = device position + this [m] (where the device's workspace sits in the
+  // scene)
+  std::vector<double> workspace_offset;
   double startup_timeout_s = 1.0;
   // default: the config's device.plausible_radius_m / plausible_speed_mps, else DeviceParams'
   std::optional<double> max_device_radius_m;
@@ -93,7 +100,8 @@ nlohmann::json RenderJson(const Model& model, const Data& data) {
             {"max_damping_Ns_per_m", d.limits.max_damping_Ns_per_m},
             {"plausible_radius_m", d.plausible_radius_m},
             {"plausible_speed_mps", d.plausible_speed_mps}}},
-          {"warnings", WarningsJson(data)}};
+          {"warnings", WarningsJson(data)},
+          {"joints", loop::JointsJson(model, data)}};
 }
 
 void SetPlausibility(const ServeFlags& f, DeviceParams& d) {
@@ -139,8 +147,14 @@ analysis::TapSetup PrepareServeTap(const ServeRun& s) {
   analysis::TapExperimentConfig c =
       TapConfig(s.f.scene, s.choice.spec_text, s.rate_hz, s.f.speed_mps, s.f.taps);
   c.load.device.coupling = Coupling::kDirect;
-  // the hand taps what lies below the scene's tool (a pile's top box, not the floor under it)
-  c.aim_below_tool = true;
+  c.wall_geom = s.f.wall_geom;
+  if (!s.f.wall_point.empty()) {
+    c.wall_point_m = Vec3(s.f.wall_point[0], s.f.wall_point[1], s.f.wall_point[2]);
+    c.wall_normal = Vec3(s.f.wall_normal[0], s.f.wall_normal[1], s.f.wall_normal[2]);
+  }
+  // without a wall named, the hand taps what lies below the scene's tool (a pile's top box, not
+  // the floor under it)
+  c.aim_below_tool = s.f.wall_geom.empty();
   analysis::TapSetup setup = analysis::PrepareTap(c);
   PrintLoadWarnings(setup.model);
   return setup;
@@ -212,6 +226,10 @@ bool ServeUdp(const ServeRun& s, nlohmann::json& result, loop::HapticLoopResult&
   load.device.position_resolution_m = s.choice.spec.model.encoder_resolution_m;
   device::TightenDeviceParams(load.device, preset);
   SetPlausibility(s.f, load.device);
+  if (!s.f.workspace_offset.empty()) {
+    load.device.workspace_offset_m =
+        Vec3(s.f.workspace_offset[0], s.f.workspace_offset[1], s.f.workspace_offset[2]);
+  }
   const std::string scene =
       s.f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : s.f.scene.scene;
   // Configure refuses what the preset cannot display
@@ -332,6 +350,40 @@ void RunServe(const ServeFlags& f) {
   PrintResult(result, f.json);
 }
 
+// flags that belong to another connection than the one chosen are refused, not ignored
+void CheckServeFlags(const ServeFlags& f, const CLI::App& app) {
+  const auto replay = [](const std::optional<std::string>& v) {
+    return v && v->starts_with(kReplayPrefix);
+  };
+  const bool replaying = replay(f.device) || replay(f.connect);
+  const auto udp = [](const std::optional<std::string>& v) {
+    return v && v->starts_with("udp://");
+  };
+  const bool bridged = udp(f.device) || udp(f.connect);
+  if (!replaying && app.count("--replay-pace") > 0) {
+    throw Error("serve: --replay-pace applies to --connect replay:LOG only");
+  }
+  if (bridged && (app.count("--wall-geom") + app.count("--wall-point")) > 0) {
+    throw Error(
+        "serve: --wall-geom and --wall-point aim the simulated hand; a device through the bridge "
+        "is moved by its own hand (place its workspace with --workspace-offset)");
+  }
+  if (!bridged && app.count("--workspace-offset") > 0) {
+    throw Error("serve: --workspace-offset applies to --connect udp://HOST:PORT only");
+  }
+  if ((replaying || bridged) && (app.count("--taps") + app.count("--speed")) > 0) {
+    throw Error(std::string("serve: --taps and --speed script the simulated hand; ") +
+                (replaying ? "a replay moves the handle as recorded"
+                           : "a device through the bridge is moved by its own hand"));
+  }
+  // the bridge's own settings: unused by the in-process simulated device and by a replay
+  for (const char* flag : {"--key", "--watchdog", "--startup-timeout", "--test-drop"}) {
+    if (!bridged && app.count(flag) > 0) {
+      throw Error(std::string("serve: ") + flag + " applies to --connect udp://HOST:PORT only");
+    }
+  }
+}
+
 void RegisterServe(CLI::App& root) {
   auto f = std::make_shared<ServeFlags>();
   CLI::App* app = root.add_subcommand("serve", "run the real-time haptic loop against a device");
@@ -377,6 +429,24 @@ void RegisterServe(CLI::App& root) {
   app->add_option("--taps", f->taps, "taps of the simulated hand (sim)")->capture_default_str();
   app->add_option("--speed", f->speed_mps, "approach speed of the simulated hand [m/s] (sim)")
       ->capture_default_str();
+  auto* wall_geom = app->add_option("--wall-geom", f->wall_geom,
+                                    "sim, replay: the geom the simulated hand taps, as tap's "
+                                    "--wall-geom takes it (default: the surface below the scene's "
+                                    "tool)");
+  auto* wall_point =
+      app->add_option("--wall-point", f->wall_point,
+                      "sim, replay: a point of the surface the hand taps X Y Z [m] (with "
+                      "--wall-normal)")
+          ->expected(3);
+  auto* wall_normal = app->add_option("--wall-normal", f->wall_normal,
+                                      "sim, replay: that surface's outward normal X Y Z; the hand "
+                                      "taps along its opposite")
+                          ->expected(3);
+  wall_point->needs(wall_normal)->excludes(wall_geom);
+  wall_normal->needs(wall_point);
+  app->add_option("--workspace-offset", f->workspace_offset,
+                  "udp: the tool is at the device's position plus this X Y Z [m] (default 0 0 0)")
+      ->expected(3);
   app->add_option("--trace", f->trace, "write the trace CSV here");
   app->add_option("--record", f->record,
                   "write every tick's device state and command here (replay with --device "
@@ -402,28 +472,7 @@ void RegisterServe(CLI::App& root) {
     if (!f->connect && !(f->device && IsConnection(*f->device))) {
       f->connect = ResolveSettings(f->scene).connect;
     }
-    const auto replay = [](const std::optional<std::string>& v) {
-      return v && v->starts_with(kReplayPrefix);
-    };
-    const bool replaying = replay(f->device) || replay(f->connect);
-    const auto udp = [](const std::optional<std::string>& v) {
-      return v && v->starts_with("udp://");
-    };
-    const bool bridged = udp(f->device) || udp(f->connect);
-    if (!replaying && app->count("--replay-pace") > 0) {
-      throw Error("serve: --replay-pace applies to --connect replay:LOG only");
-    }
-    if ((replaying || bridged) && (app->count("--taps") + app->count("--speed")) > 0) {
-      throw Error(std::string("serve: --taps and --speed script the simulated hand; ") +
-                  (replaying ? "a replay moves the handle as recorded"
-                             : "a device through the bridge is moved by its own hand"));
-    }
-    // the bridge's own settings: unused by the in-process simulated device and by a replay
-    for (const char* flag : {"--key", "--watchdog", "--startup-timeout", "--test-drop"}) {
-      if (!bridged && app->count(flag) > 0) {
-        throw Error(std::string("serve: ") + flag + " applies to --connect udp://HOST:PORT only");
-      }
-    }
+    CheckServeFlags(*f, *app);
     WithOrigins(ResolveSettings(f->scene), [&] { RunServe(*f); });
   });
 }

@@ -200,6 +200,7 @@ void PrintViewResult(const ViewFlags& f, const Model& model, const Data& data,
   result["finite"] = totals.finite;
   result["device"] = f.device;
   result["warnings"] = WarningsJson(data);
+  result["joints"] = loop::JointsJson(model, data);
   if (!f.screenshot.empty()) result["screenshot"] = f.screenshot;
   if (record.queue) {
     result["record_queue"] = FinishRecord(record, f.record);

@@ -7,6 +7,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "analysis/tap_experiment.h"
 #include "analysis/tap_metrics.h"
 #include "arrays.h"
+#include "dynamics/tree.h"
 #include "io/config.h"
 #include "io/output_file.h"
 #include "rigidtouch/command.h"
@@ -304,6 +307,61 @@ void DefineParams(py::module_& m) {
                      "same bit for bit)");
 }
 
+// f(joint, qpos address, dof address) for every joint of every tree, the addresses into the
+// trees' coordinates laid end to end (Data.qpos, Data.qvel)
+template <typename F>
+void ForEachJoint(const Model& model, F&& f) {
+  int q0 = 0, v0 = 0;
+  for (const ArticulatedTree& tree : model.trees) {
+    for (const JointModel& j : tree.joints) f(j, q0 + j.qpos_adr, v0 + j.dof_adr);
+    q0 += tree.nq;
+    v0 += tree.nv;
+  }
+}
+
+std::vector<std::string> JointStrings(const Model& model, bool types) {
+  std::vector<std::string> out;
+  ForEachJoint(model, [&](const JointModel& j, int, int) {
+    if (!types) {
+      out.push_back(j.name);
+      return;
+    }
+    out.push_back(j.type == JointKind::kHinge   ? "hinge"
+                  : j.type == JointKind::kSlide ? "slide"
+                  : j.type == JointKind::kBall  ? "ball"
+                                                : "free");
+  });
+  return out;
+}
+
+py::array_t<double> JointRanges(const Model& model) {
+  std::vector<double> r;
+  ForEachJoint(model, [&](const JointModel& j, int, int) {
+    const double inf = std::numeric_limits<double>::infinity();
+    r.push_back(j.limited ? j.range_lo_rad_or_m : -inf);
+    r.push_back(j.limited ? j.range_hi_rad_or_m : inf);
+  });
+  py::array_t<double> out({static_cast<py::ssize_t>(r.size() / 2), py::ssize_t{2}});
+  std::copy(r.begin(), r.end(), out.mutable_data());
+  return out;
+}
+
+py::array_t<int> JointAddresses(const Model& model, bool dof) {
+  std::vector<int> out;
+  ForEachJoint(model, [&](const JointModel&, int q, int v) { out.push_back(dof ? v : q); });
+  return py::array_t<int>(py::cast(out));
+}
+
+// every tree's qpos (or qvel) laid end to end
+py::array_t<double> TreeVector(const Data& d, bool velocity) {
+  std::vector<double> out;
+  for (const auto& tree : d.trees) {
+    const Eigen::VectorXd& x = velocity ? tree->qvel : tree->qpos;
+    out.insert(out.end(), x.data(), x.data() + x.size());
+  }
+  return py::array_t<double>(py::cast(out));
+}
+
 // the loaded scene
 void DefineModel(py::module_& m) {
   py::class_<Model>(m, "Model",
@@ -349,6 +407,32 @@ void DefineModel(py::module_& m) {
                             "impulses"_a = model.schedule.impulses);
           },
           "impulse schedule derived by configure (Eq. 6, Eq. 7), in steps")
+      .def_readonly("has_tool", &Model::has_tool,
+                    "whether the scene has a tool (False when loaded with tool=None)")
+      .def_property_readonly(
+          "joint_names", [](const Model& model) { return JointStrings(model, false); },
+          "every tree's joints, tree after tree in joint order (MuJoCo's)")
+      .def_property_readonly(
+          "joint_types", [](const Model& model) { return JointStrings(model, true); },
+          "each joint's type: 'hinge', 'slide', 'ball' or 'free'")
+      .def_property_readonly("joint_ranges", &JointRanges,
+                             "each joint's range, (njoint, 2): [rad] for a hinge, [m] for a "
+                             "slide, [0, max angle] for a ball; (-inf, inf) when not limited")
+      .def_property_readonly(
+          "joint_limited",
+          [](const Model& model) {
+            std::vector<bool> out;
+            ForEachJoint(model, [&](const JointModel& j, int, int) { out.push_back(j.limited); });
+            return py::array_t<bool>(py::cast(out));
+          },
+          "whether each joint's range is enforced (hinge, slide) or reported (ball)")
+      .def_property_readonly(
+          "joint_qpos_adr", [](const Model& model) { return JointAddresses(model, false); },
+          "each joint's first coordinate in Data.qpos (1 for a hinge or slide, 4 for a ball, 7 "
+          "for a free joint)")
+      .def_property_readonly(
+          "joint_dof_adr", [](const Model& model) { return JointAddresses(model, true); },
+          "each joint's first velocity in Data.qvel (1, 3 or 6 of them)")
       .def_readonly("max_contacts", &Model::max_contacts, "contact capacity")
       .def_readonly("load_warnings", &Model::load_warnings,
                     "problems found at load that do not stop the scene, one sentence each");
@@ -374,6 +458,23 @@ void DefineData(py::module_& m) {
       .def_property_readonly(
           "w_W", [](py::object self) { return BodyStateView(self.cast<Data&>().bodies, 3, self); },
           "angular velocities, world frame, (nbody, 3) [rad/s]; a writable view")
+      .def_property_readonly(
+          "qpos", [](const Data& d) { return TreeVector(d, false); },
+          "every tree's joint coordinates, tree after tree (MuJoCo's qpos: rad, m, quaternions w "
+          "x y z), (nq,); a copy")
+      .def_property_readonly(
+          "qvel", [](const Data& d) { return TreeVector(d, true); },
+          "every tree's joint velocities, tree after tree (rad/s, m/s), (nv,); a copy")
+      .def_property_readonly(
+          "joint_at_limit",
+          [](const Data& d) {
+            std::vector<bool> out;
+            for (const auto& tree : d.joint_at_limit) {
+              for (const unsigned char a : tree) out.push_back(a != 0);
+            }
+            return py::array_t<bool>(py::cast(out));
+          },
+          "whether each joint is at or beyond a limit of its range, (njoint,); a copy")
       .def_readonly("ncontact", &Data::ncontact, "valid contacts this tick")
       .def_property_readonly(
           "contacts",
@@ -425,20 +526,66 @@ void RequireDataOf(const Model& model, const Data& data) {
   }
 }
 
+// a force or torque on the tool of a scene loaded without one is an error, as in `simulate`
+void RequireToolFor(const Model& model, const std::optional<Vec3>& force,
+                    const std::optional<Vec3>& torque) {
+  const bool pushed = (force && !force->isZero(0.0)) || (torque && !torque->isZero(0.0));
+  if (!model.has_tool && pushed) {
+    throw py::value_error("tool_force_N / tool_torque_Nm need a tool; the scene '" + model.source +
+                          "' was loaded with tool=None");
+  }
+}
+
+// every joint as `rigidtouch simulate --json` lists it, as arrays: a hinge's or slide's position
+// and velocity, NaN for a ball or free joint (whose coordinates are in Data.qpos and qvel)
+py::dict JointState(const Model& model, const Data& data) {
+  RequireDataOf(model, data);
+  const py::array_t<double> qpos = TreeVector(data, false), qvel = TreeVector(data, true);
+  std::vector<double> q, v;
+  ForEachJoint(model, [&](const JointModel& j, int qa, int va) {
+    const bool scalar = j.type == JointKind::kHinge || j.type == JointKind::kSlide;
+    q.push_back(scalar ? qpos.at(qa) : std::numeric_limits<double>::quiet_NaN());
+    v.push_back(scalar ? qvel.at(va) : std::numeric_limits<double>::quiet_NaN());
+  });
+  std::vector<bool> limited, at_limit;
+  ForEachJoint(model, [&](const JointModel& j, int, int) { limited.push_back(j.limited); });
+  for (const auto& tree : data.joint_at_limit) {
+    for (const unsigned char a : tree) at_limit.push_back(a != 0);
+  }
+  return py::dict("names"_a = JointStrings(model, false), "types"_a = JointStrings(model, true),
+                  "position"_a = py::array_t<double>(py::cast(q)),
+                  "velocity"_a = py::array_t<double>(py::cast(v)), "range"_a = JointRanges(model),
+                  "limited"_a = py::array_t<bool>(py::cast(limited)),
+                  "at_limit"_a = py::array_t<bool>(py::cast(at_limit)));
+}
+
 // loading, configuring and stepping a scene
 void DefineTick(py::module_& m) {
   m.def(
       "load_model",
-      [](const std::string& path, std::optional<LoadOptions> options, const std::string& config) {
+      [](const std::string& path, std::optional<LoadOptions> options, const std::string& config,
+         py::object tool) {
         LoadOptions o = options.value_or(LoadOptions{});
+        // tool=None: no tool (the CLI's --tool none); a name: that free body; left out: the
+        // options' tool_name
+        if (tool.is_none()) {
+          o.tool_name = "none";
+        } else if (py::isinstance<py::str>(tool)) {
+          o.tool_name = tool.cast<std::string>();
+        } else if (!py::isinstance<py::ellipsis>(tool)) {
+          throw py::value_error("tool must be a body's name or None, got " +
+                                py::repr(tool).cast<std::string>());
+        }
         py::gil_scoped_release release;
         if (!config.empty()) io::ApplyConfigFile(config, o);
         return LoadModel(path, o);
       },
-      "path"_a, "options"_a = py::none(), py::kw_only(), "config"_a = "",
+      "path"_a, "options"_a = py::none(), py::kw_only(), "config"_a = "", "tool"_a = py::ellipsis(),
       "Loads an MJCF scene (compiled by MuJoCo) with rigidtouch's options; a JSON config file "
-      "(the CLI's --config) overrides the options' fields it gives. Raises ValueError naming the "
-      "file, element or parameter on bad input.");
+      "(the CLI's --config) overrides the options' fields it gives. tool: the free body that is "
+      "the tool (default: options.tool_name, 'tool'), or None for a scene without a tool (as "
+      "the CLI's --tool none). Raises ValueError naming the file, element or parameter on bad "
+      "input.");
   m.def(
       "configure",
       [](Model& model, std::optional<ContactParams> contact, std::optional<RenderParams> render,
@@ -464,6 +611,7 @@ void DefineTick(py::module_& m) {
       [](const Model& model, Data& data, std::optional<py::dict> device_state,
          std::optional<Vec3> tool_force_N, std::optional<Vec3> tool_torque_Nm) {
         RequireDataOf(model, data);
+        RequireToolFor(model, tool_force_N, tool_torque_Nm);
         TickInput input;
         if (device_state) input.device = MakeDeviceState(*device_state);
         if (tool_force_N) input.tool_wrench.force_N = *tool_force_N;
@@ -485,6 +633,7 @@ void DefineTick(py::module_& m) {
       [](const Model& model, Data& data, long steps, std::optional<Vec3> tool_force_N) {
         if (steps < 0) throw py::value_error("steps = " + std::to_string(steps) + ": valid >= 0");
         RequireDataOf(model, data);
+        RequireToolFor(model, tool_force_N, std::nullopt);
         TickInput input;
         if (tool_force_N) input.tool_wrench.force_N = *tool_force_N;
         py::gil_scoped_release release;
@@ -493,6 +642,11 @@ void DefineTick(py::module_& m) {
       "model"_a, "data"_a, "steps"_a, "tool_force_N"_a = py::none(),
       "Runs `steps` ticks with a constant user force on the tool [N] (coupling none), without "
       "the GIL, as `rigidtouch simulate` does.");
+  m.def("joint_state", &JointState, "model"_a, "data"_a,
+        "Every tree's joints as numpy arrays: names, types ('hinge', 'slide', 'ball', 'free'), "
+        "position [rad or m] and velocity [rad/s or m/s] of each hinge and slide (NaN for a ball "
+        "or free joint: see Data.qpos, Data.qvel and Model.joint_qpos_adr), range (njoint, 2), "
+        "limited and at_limit; the values `rigidtouch simulate --json` lists.");
   m.def(
       "kinetic_energy",
       [](const Model& model, const Data& data) {

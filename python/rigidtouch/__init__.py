@@ -9,6 +9,13 @@ The engine's C++ API in snake_case::
     command = rt.tick(model, data)            # one haptic tick; command["force_N"] in N
     rt.kinetic_energy(model, data)            # J
 
+Articulated scenes: every tree's joints as numpy arrays, and scenes without a tool::
+
+    model = rt.load_model("scenes/arm.xml", tool=None)
+    data = rt.make_data(model)
+    rt.run(model, data, 100)
+    rt.joint_state(model, data)["position"]  # rad (hinges), m (slides)
+
 The tap experiment, with the ``rigidtouch tap`` flags as keywords (``stiffness=3000`` is
 ``--stiffness 3000``), so every name the CLI takes (renderers, devices, materials, config files)
 works here unchanged::
@@ -33,6 +40,7 @@ from ._rigidtouch import (  # noqa: F401  (re-exported)
     SimulatedDevice,
     analyze_logs,
     contact_dtype,
+    joint_state,
     kinetic_energy,
     load_model,
     make_data,
@@ -47,8 +55,8 @@ from . import _rigidtouch
 __all__ = [
     "ContactParams", "Data", "DeviceParams", "LoadOptions", "Model", "OutputError",
     "RenderParams", "SimulatedDevice", "TapResult", "analyze_logs", "configure", "contact_dtype",
-    "fit_material", "kinetic_energy", "load_model", "make_data", "prepare_tap", "reset_data",
-    "run", "simulate_cohort", "sweep", "tap", "tap_args", "tick", "trace_dtype",
+    "fit_material", "joint_state", "kinetic_energy", "load_model", "make_data", "prepare_tap",
+    "reset_data", "run", "simulate_cohort", "sweep", "tap", "tap_args", "tick", "trace_dtype",
 ]
 
 _SECTIONS = {"contact": ContactParams, "render": RenderParams, "device": DeviceParams}

@@ -16,6 +16,7 @@ from ._rigidtouch import (
     SimulatedDevice as SimulatedDevice,
     analyze_logs as analyze_logs,
     contact_dtype as contact_dtype,
+    joint_state as joint_state,
     kinetic_energy as kinetic_energy,
     load_model as load_model,
     make_data as make_data,

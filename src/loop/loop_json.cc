@@ -1,5 +1,7 @@
 #include "loop/loop_json.h"
 
+#include "dynamics/tree.h"
+
 namespace rigidtouch::loop {
 
 nlohmann::json ToJson(const LoopStats& stats) {
@@ -34,6 +36,47 @@ nlohmann::json ToJson(const TraceQueueStats& stats) {
       {"pushed", stats.pushed},           {"dropped", stats.dropped},   {"written", stats.written},
       {"sink_failed", stats.sink_failed}, {"capacity", stats.capacity},
   };
+}
+
+namespace {
+
+const char* JointTypeName(JointKind k) {
+  switch (k) {
+    case JointKind::kFree:
+      return "free";
+    case JointKind::kBall:
+      return "ball";
+    case JointKind::kSlide:
+      return "slide";
+    case JointKind::kHinge:
+      break;
+  }
+  return "hinge";
+}
+
+}  // namespace
+
+nlohmann::json JointsJson(const Model& model, const Data& data) {
+  nlohmann::json joints = nlohmann::json::array();
+  for (std::size_t t = 0; t < model.trees.size() && t < data.trees.size(); ++t) {
+    const ArticulatedTree& tree = model.trees[t];
+    const dynamics::TreeData& d = *data.trees[t];
+    for (std::size_t j = 0; j < tree.joints.size(); ++j) {
+      const JointModel& jm = tree.joints[j];
+      const int nq = jm.type == JointKind::kFree ? 7 : jm.type == JointKind::kBall ? 4 : 1;
+      const int nv = jm.type == JointKind::kFree ? 6 : jm.type == JointKind::kBall ? 3 : 1;
+      nlohmann::json q = nlohmann::json::array(), v = nlohmann::json::array();
+      for (int k = 0; k < nq; ++k) q.push_back(d.qpos[jm.qpos_adr + k]);
+      for (int k = 0; k < nv; ++k) v.push_back(d.qvel[jm.dof_adr + k]);
+      joints.push_back({{"name", jm.name},
+                        {"tree", tree.name},
+                        {"type", JointTypeName(jm.type)},
+                        {"position", nq == 1 ? q[0] : q},
+                        {"velocity", nv == 1 ? v[0] : v},
+                        {"at_limit", data.joint_at_limit[t][j] != 0}});
+    }
+  }
+  return joints;
 }
 
 }  // namespace rigidtouch::loop

@@ -6,6 +6,7 @@
 
 #include "loop/rate_loop.h"
 #include "loop/trace_queue.h"
+#include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::loop {
 
@@ -14,5 +15,11 @@ nlohmann::json ToJson(const LoopStats& stats);
 
 /// All fields of TraceQueueStats.
 nlohmann::json ToJson(const TraceQueueStats& stats);
+
+/// Every joint of every tree, as `rigidtouch simulate --json` lists them: name, tree, type
+/// ("hinge", "slide", "ball", "free"), position (rad or m; a ball's quaternion w x y z, a free
+/// joint's position and quaternion, as arrays), velocity (rad/s or m/s; arrays for ball and free)
+/// and at_limit. Empty for a scene without trees.
+nlohmann::json JointsJson(const Model& model, const Data& data);
 
 }  // namespace rigidtouch::loop

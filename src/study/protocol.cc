@@ -41,14 +41,34 @@ const std::vector<std::string> kTestKeys = {"name",           "conditions",     
 const std::vector<std::string> kRandomizationKeys = {"series_order", "test_order", "seed"};
 const std::vector<std::string> kSeriesOrders = {"balanced", "independent"};  // SeriesOrder
 const std::vector<std::string> kTestOrders = {"fixed", "shuffled"};          // TestOrder
-const std::vector<std::string> kAllConditionKeys = {
-    "renderer",         "restitution", "t_collision_s", "frequency_hz",       "stiffness_N_per_m",
-    "damping_Ns_per_m", "scene",       "device",        "approach_speed_mps", "material",
-    "passivity_control"};
+const std::vector<std::string> kAllConditionKeys = {"renderer",
+                                                    "restitution",
+                                                    "t_collision_s",
+                                                    "frequency_hz",
+                                                    "stiffness_N_per_m",
+                                                    "damping_Ns_per_m",
+                                                    "scene",
+                                                    "device",
+                                                    "approach_speed_mps",
+                                                    "material",
+                                                    "passivity_control",
+                                                    "joint_limit_renderer",
+                                                    "wall_geom",
+                                                    "wall_point_m",
+                                                    "wall_normal"};
 std::vector<std::string> ConditionKeysFor(RendererKind renderer) {
-  std::vector<std::string> keys = {
-      "renderer", "stiffness_N_per_m",  "damping_Ns_per_m", "scene",
-      "device",   "approach_speed_mps", "material",         "passivity_control"};
+  std::vector<std::string> keys = {"renderer",
+                                   "stiffness_N_per_m",
+                                   "damping_Ns_per_m",
+                                   "scene",
+                                   "device",
+                                   "approach_speed_mps",
+                                   "material",
+                                   "passivity_control",
+                                   "joint_limit_renderer",
+                                   "wall_geom",
+                                   "wall_point_m",
+                                   "wall_normal"};
   // the event renderer plays its material's transient: it has no restitution, and penalty and
   // impulse walls take no material (as the CLI refuses --material with them)
   if (renderer == RendererKind::kImpulse || renderer == RendererKind::kTrain) {
@@ -196,6 +216,50 @@ void ParseConditionLaw(const StrictObject& in, Condition& c) {
   }
 }
 
+// a finite 3-vector written as an array of three numbers
+Vec3 ParseVec3(const StrictObject& in, const char* key) {
+  const json& v = in.Get(key);
+  if (!v.is_array() || v.size() != 3 ||
+      !std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); })) {
+    in.FailAt(key, "expected an array of three numbers, got " + v.dump());
+  }
+  const Vec3 out(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+  if (!out.allFinite()) in.FailAt(key, "must be finite, got " + v.dump());
+  return out;
+}
+
+// an articulated scene's joint-limit rendering and where the simulated taps aim
+void ParseConditionScene(const StrictObject& in, Condition& c) {
+  if (auto r = in.String("joint_limit_renderer")) {
+    RendererKind kind = RendererKind::kPenalty;
+    try {
+      kind = io::ParseRenderer(*r);
+    } catch (const Error& e) {
+      in.FailAt("joint_limit_renderer", e.what());
+    }
+    if (kind != RendererKind::kPenalty && kind != RendererKind::kImpulse &&
+        kind != RendererKind::kTrain) {
+      in.FailAt("joint_limit_renderer",
+                text::Quote(*r) + " is not a joint-limit renderer; valid: penalty, impulse, train");
+    }
+    c.joint_limit_renderer = kind;
+  }
+  if (auto g = in.String("wall_geom")) {
+    if (g->empty()) in.FailAt("wall_geom", "must not be empty (omit it for the default)");
+    c.wall_geom = *g;
+  }
+  if (in.Has("wall_point_m") != in.Has("wall_normal")) {
+    in.FailAt(in.Has("wall_point_m") ? "wall_point_m" : "wall_normal",
+              "\"wall_point_m\" and \"wall_normal\" go together: give both or neither");
+  }
+  if (in.Has("wall_point_m")) {
+    if (c.wall_geom) in.FailAt("wall_point_m", "give \"wall_geom\" or \"wall_point_m\", not both");
+    c.wall_point_m = ParseVec3(in, "wall_point_m");
+    c.wall_normal = ParseVec3(in, "wall_normal");
+    if (c.wall_normal->norm() < 1e-9) in.FailAt("wall_normal", "must not be zero");
+  }
+}
+
 Condition ParseCondition(const JsonSource& ctx, const std::string& label, const json& value,
                          const std::string& path) {
   Condition c;
@@ -231,6 +295,7 @@ Condition ParseCondition(const JsonSource& ctx, const std::string& label, const 
   if (c.renderer == RendererKind::kTrain && !c.material) ParseTrainWindow(ctx, in, path, c);
   c.passivity_control = in.Bool("passivity_control").value_or(false);
   ParseConditionLaw(in, c);
+  ParseConditionScene(in, c);
   return c;
 }
 
@@ -377,6 +442,12 @@ nlohmann::json Condition::ToJson() const {
   if (scene) j["scene"] = *scene;
   if (device) j["device"] = *device;
   if (approach_speed_mps) j["approach_speed_mps"] = *approach_speed_mps;
+  // each absent when not given, so older protocols keep their hash
+  if (joint_limit_renderer) j["joint_limit_renderer"] = text::RendererName(*joint_limit_renderer);
+  if (wall_geom) j["wall_geom"] = *wall_geom;
+  const auto array = [](const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); };
+  if (wall_point_m) j["wall_point_m"] = array(*wall_point_m);
+  if (wall_normal) j["wall_normal"] = array(*wall_normal);
   return j;
 }
 
@@ -390,6 +461,7 @@ RenderParams Condition::ToRenderParams() const {
   }
   if (material) io::ApplyMaterial(r, *material);
   r.passivity_control = passivity_control;
+  if (joint_limit_renderer) r.joint_limit_renderer = *joint_limit_renderer;
   return r;
 }
 

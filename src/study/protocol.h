@@ -36,6 +36,13 @@ struct Condition {
   /// covers what is rendered and a log does not need the file
   std::optional<Material> material;
   bool passivity_control = false;  ///< the passivity observer and controller, as the CLI flag
+  /// an articulated scene's joint limits: penalty, impulse or train, as --joint-limit-renderer
+  std::optional<RendererKind> joint_limit_renderer;
+  /// what the simulated taps aim at, as `tap --wall-geom` (a static plane or box, or a link's
+  /// geom) or `--wall-point X Y Z --wall-normal X Y Z`; default the scene's wall
+  std::optional<std::string> wall_geom;
+  std::optional<Vec3> wall_point_m;
+  std::optional<Vec3> wall_normal;
 
   /// The render parameters of this condition, as `rigidtouch tap --renderer R [--restitution e]
   /// [--t-collision t --frequency f] [--material M] [--passivity-control]` gives them.

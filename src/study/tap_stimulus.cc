@@ -34,6 +34,15 @@ analysis::TapExperimentConfig TapConfig(const Condition& c, const std::string& s
   config.damping_Ns_per_m = c.damping_Ns_per_m;
   config.script.approach_speed_mps =
       c.approach_speed_mps ? *c.approach_speed_mps : (speed_mps > 0.0 ? speed_mps : 0.2);
+  if (c.wall_geom) config.wall_geom = *c.wall_geom;
+  if (c.wall_point_m) {
+    config.wall_point_m = *c.wall_point_m;
+    config.wall_normal = *c.wall_normal;
+    // the simulated hand works in the scene's coordinates: a wall far from the origin (a door's
+    // panel 1 m up) must not read as an implausible device state
+    DeviceParams& d = config.load.device;
+    d.plausible_radius_m = std::max(d.plausible_radius_m, c.wall_point_m->norm() + 0.5);
+  }
   return config;
 }
 

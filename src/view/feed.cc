@@ -3,7 +3,32 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dynamics/tree.h"
+
 namespace rigidtouch::view {
+
+int FirstViewLink(const Model& model, int t) {
+  int first = 0;
+  for (int k = 0; k < t; ++k) first += static_cast<int>(model.trees[k].link_names.size());
+  return first;
+}
+
+void SnapshotTrees(const Model& model, const Data& data, ViewSnapshot& v) noexcept {
+  v.nlink = 0;
+  v.njoint = 0;
+  for (std::size_t t = 0; t < model.trees.size() && t < data.trees.size(); ++t) {
+    const dynamics::TreeData& d = *data.trees[t];
+    for (std::size_t l = 0; l < d.x_W.size() && v.nlink < kMaxViewLinks; ++l, ++v.nlink) {
+      v.link_x_W[v.nlink] = d.x_W[l];
+      v.link_R_WB[v.nlink] = d.R_WB[l];
+    }
+    for (const JointModel& j : model.trees[t].joints) {
+      if (j.type != JointKind::kHinge && j.type != JointKind::kSlide) continue;
+      if (v.njoint == kMaxViewJoints) break;
+      v.joint_q[v.njoint++] = d.qpos[j.qpos_adr];
+    }
+  }
+}
 
 ViewFeed::ViewFeed(double rate_hz, std::size_t scope_capacity)
     : period_s_(1.0 / rate_hz), scope_(scope_capacity) {}
@@ -46,6 +71,7 @@ void ViewFeed::OnTick(const Model& model, const Data& data, const TraceSample& s
     v.x_W[b] = data.bodies[b].x_W;
     v.q_WB[b] = data.bodies[b].q_WB;
   }
+  SnapshotTrees(model, data, v);
   v.ncontact = std::min(data.ncontact, kMaxViewContacts);
   for (int k = 0; k < v.ncontact; ++k) {
     const Contact& c = data.contacts[k];

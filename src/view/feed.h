@@ -43,6 +43,10 @@ class TripleBuffer {
 /// Largest numbers of bodies and contacts a snapshot carries (the rest are not drawn).
 inline constexpr int kMaxViewBodies = 256;
 inline constexpr int kMaxViewContacts = 64;
+/// Largest numbers of tree links (over every tree, in tree order) and of hinge and slide joints a
+/// snapshot carries.
+inline constexpr int kMaxViewLinks = 64;
+inline constexpr int kMaxViewJoints = 32;
 
 /// One contact as drawn.
 struct ContactView {
@@ -59,6 +63,13 @@ struct ViewSnapshot {
   int nbody = 0;
   std::array<Vec3, kMaxViewBodies> x_W{};
   std::array<Quat, kMaxViewBodies> q_WB{};
+  // tree links' poses (every tree's links one after the other, Model::trees order)
+  int nlink = 0;
+  std::array<Vec3, kMaxViewLinks> link_x_W{};
+  std::array<Mat3, kMaxViewLinks> link_R_WB{};
+  // hinge and slide positions (rad, m), every tree's in joint order; other joints are skipped
+  int njoint = 0;
+  std::array<double, kMaxViewJoints> joint_q{};
   int ncontact = 0;
   std::array<ContactView, kMaxViewContacts> contacts{};
   TraceSample sample;  // the tick's forces, tool state and penetration
@@ -79,6 +90,13 @@ struct ScopeSample {
   double penetration_m = 0.0;
   int impulses = 0;
 };
+
+/// Index of tree t's first link in ViewSnapshot's link arrays.
+int FirstViewLink(const Model& model, int t);
+
+/// Copies the trees' link poses and hinge and slide positions into `v` (up to the snapshot's
+/// sizes); no allocation.
+void SnapshotTrees(const Model& model, const Data& data, ViewSnapshot& v) noexcept;
 
 /// The haptic loop's observer that feeds a viewer.
 class ViewFeed : public loop::TickObserver {

@@ -36,6 +36,7 @@ constexpr ImU32 kPenetrationColor = IM_COL32(255, 220, 0, 255);
 constexpr ImU32 kFloorColor = IM_COL32(90, 90, 90, 255);
 constexpr ImU32 kStaticColor = IM_COL32(150, 160, 175, 255);
 constexpr ImU32 kBodyColor = IM_COL32(70, 110, 200, 255);
+constexpr ImU32 kLinkColor = IM_COL32(60, 170, 110, 255);
 constexpr ImU32 kContactColor = IM_COL32(255, 0, 255, 255);
 constexpr ImU32 kNormalColor = IM_COL32(255, 255, 0, 255);
 constexpr ImU32 kForceColor = IM_COL32(0, 255, 0, 255);
@@ -253,20 +254,28 @@ void DrawGeoms(SceneRenderer& scene, const Model& model, const ViewSnapshot& sna
   for (std::size_t gi = 0; gi < model.geoms.size(); ++gi) {
     const GeomModel& g = model.geoms[gi];
     Vec3 pos;
-    Quat q;
-    if (g.body < 0) {
+    Mat3 R;
+    const int link = g.tree >= 0 ? FirstViewLink(model, g.tree) + g.link : -1;
+    if (g.tree >= 0 && snap.step >= 0 && link < snap.nlink) {
+      // a tree's link geom where the trees stage put its link
+      pos = snap.link_x_W[link] + snap.link_R_WB[link] * g.pos_L;
+      R = snap.link_R_WB[link] * g.quat_L.toRotationMatrix();
+    } else if (g.body < 0) {  // static, or a link geom at its initial pose
       pos = g.pos_B;
-      q = g.quat_B;
+      R = g.quat_B.toRotationMatrix();
     } else if (snap.step < 0 || g.body >= snap.nbody) {
       const BodyState& b = model.initial[g.body];
       pos = b.x_W + b.q_WB * g.pos_B;
-      q = b.q_WB * g.quat_B;
+      R = (b.q_WB * g.quat_B).toRotationMatrix();
     } else {
       pos = snap.x_W[g.body] + snap.q_WB[g.body] * g.pos_B;
-      q = snap.q_WB[g.body] * g.quat_B;
+      R = (snap.q_WB[g.body] * g.quat_B).toRotationMatrix();
     }
-    const ImU32 c = g.body == model.tool ? kToolColor : g.body < 0 ? kStaticColor : kBodyColor;
-    scene.DrawGeom(static_cast<int>(gi), pos, q.toRotationMatrix(), ToRgb(c));
+    const ImU32 c = g.body == model.tool ? kToolColor
+                    : g.tree >= 0        ? kLinkColor
+                    : g.body < 0         ? kStaticColor
+                                         : kBodyColor;
+    scene.DrawGeom(static_cast<int>(gi), pos, R, ToRgb(c));
   }
 }
 
@@ -345,8 +354,33 @@ void PanelWarnings(const ViewSnapshot& snap) {
   if (!any) ImGui::Text("no warnings");
 }
 
-// the panel: device, renderer (switchable), wall, loop timing, the tick's numbers, the scope and
-// the warnings
+// every hinge's angle (degrees) and slide's position (mm), with its range, as the last tick
+// left them (the initial state before it)
+void PanelJoints(const Model& model, const ViewSnapshot& snap) {
+  int k = 0;
+  for (std::size_t t = 0; t < model.trees.size(); ++t) {
+    const ArticulatedTree& tree = model.trees[t];
+    for (const JointModel& j : tree.joints) {
+      if (j.type != JointKind::kHinge && j.type != JointKind::kSlide) continue;
+      if (k == kMaxViewJoints) return;
+      const double q =
+          snap.step >= 0 && k < snap.njoint ? snap.joint_q[k] : tree.initial_qpos[j.qpos_adr];
+      ++k;
+      const bool hinge = j.type == JointKind::kHinge;
+      const double unit = hinge ? 180.0 / std::numbers::pi : 1e3;
+      const char* name = hinge ? "deg" : "mm";
+      if (j.limited) {
+        ImGui::Text("%s %.1f %s  [%.1f, %.1f]", j.name.c_str(), unit * q, name,
+                    unit * j.range_lo_rad_or_m, unit * j.range_hi_rad_or_m);
+      } else {
+        ImGui::Text("%s %.1f %s", j.name.c_str(), unit * q, name);
+      }
+    }
+  }
+}
+
+// the panel: device, renderer (switchable), wall, loop timing, the tick's numbers, the joints, the
+// scope and the warnings
 void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& snap,
                const Scope& scope, bool can_switch, bool has_mouse, FrameState& st) {
   const float force_scale = static_cast<float>(
@@ -379,6 +413,12 @@ void DrawPanel(const Model& model, const ViewerOptions& o, const ViewSnapshot& s
               snap.sample.tool_contacts, 1e3 * snap.sample.penetration_m);
   ImGui::Text("force %.2f N (penalty %.2f, impulsive %.2f)", snap.sample.device_force_N.norm(),
               snap.sample.penalty_force_N.norm(), snap.sample.impulsive_force_N.norm());
+  if (!model.trees.empty()) {
+    ImGui::Separator();
+    ImGui::Text("joints (joint-limit renderer %s)",
+                text::RendererName(model.render.joint_limit_renderer));
+    PanelJoints(model, snap);
+  }
   ImGui::Separator();
   ImGui::Text("last %.1f s", o.scope_window_s);
   // each trace's full scale written over it: the force panels span 0 to the device's limit

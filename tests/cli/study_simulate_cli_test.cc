@@ -7,9 +7,11 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <regex>
 #include <set>
 #include <string>
 #include <thread>
@@ -230,6 +232,49 @@ TEST(StudySimulateCliTest, ProgressOnStderrAndCtrlCKeepsResumableLogs) {
     for (const auto& a : list) series.insert({a[0], a[1]});
     EXPECT_EQ(series.size(), list.size()) << log;
   }
+  fs::remove_all(dir);
+}
+
+// a protocol on an articulated scene: two conditions on scenes/door.xml that differ only in how
+// the door's stop renders (penalty, or a train at the stop), the simulated taps aimed at the
+// panel's -y face, pushing the door into its stop; `study simulate` runs it end to end and the
+// log keeps each condition's joint-limit renderer
+TEST(StudySimulateCliTest, DoorStopProtocolWithTwoJointLimitRenderers) {
+  const fs::path dir = TempDir("simdoor");
+  const std::string door = std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/door.xml";
+  const std::string aim = R"("wall_point_m": [0.6, -0.02, 1.0], "wall_normal": [0, -1, 0])";
+  const std::string condition = R"({"renderer": "train", "t_collision_s": 0.1, "frequency_hz": )"
+                                R"(250, "scene": ")" +
+                                door + R"(", )" + aim + R"(, "joint_limit_renderer": )";
+  std::ofstream(dir / "door.json")
+      << R"({"format": "rigidtouch-study-protocol", "format_version": 1, "name": "door stop",)"
+      << R"( "description": "the door's stop as penalty or train", "instructions": "push",)"
+      << R"( "familiarization_taps": 1, "series": 4, "taps_per_series": 1,)"
+      << R"( "randomization": {"series_order": "balanced", "test_order": "fixed"},)"
+      << R"( "conditions": {"penalty stop": )" << condition << R"("penalty"}, "train stop": )"
+      << condition << R"("train"}},)"
+      << R"( "tests": [{"name": "stop", "conditions": ["penalty stop", "train stop"],)"
+      << R"( "keys": ["p", "t"], "instructions": "which stop?"}]})";
+  const CliResult r =
+      RunCli("study simulate --protocol " + (dir / "door.json").string() +
+             " --participants 1 --seed 5 --quiet --log-dir " + (dir / "logs").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto answers = Answers(dir / "logs");
+  ASSERT_EQ(answers.size(), 1u);
+  EXPECT_EQ(AnswerCount(answers), 4u);  // one test of 4 series
+  // the log's protocol holds both joint-limit renderers and the aim
+  const std::string log = ReadAll(fs::directory_iterator(dir / "logs")->path());
+  EXPECT_NE(log.find(R"("joint_limit_renderer":"penalty")"), std::string::npos);
+  EXPECT_NE(log.find(R"("joint_limit_renderer":"train")"), std::string::npos);
+  EXPECT_NE(log.find(R"("wall_normal":[0.0,-1.0,0.0])"), std::string::npos);
+  // a joint-limit renderer that cannot render a stop is refused, naming the field
+  std::ofstream(dir / "bad.json") << std::regex_replace(
+      ReadAll(dir / "door.json"), std::regex(R"("penalty"\})"), R"("event"})");
+  const CliResult bad =
+      RunCli("study simulate --protocol " + (dir / "bad.json").string() +
+             " --participants 1 --seed 5 --quiet --log-dir " + (dir / "bad").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("joint_limit_renderer"), std::string::npos) << bad.err;
   fs::remove_all(dir);
 }
 

@@ -98,11 +98,11 @@ Blob Find(const Image& im, int r, int g, int b, int x0 = 0, bool shaded = false)
   return out;
 }
 
-// runs the viewer for 60 frames at 60 Hz off-screen and loads the last one
-Image View(const std::string& args, const std::string& png) {
+// runs the viewer for `frames` frames at 60 Hz off-screen and loads the last one
+Image View(const std::string& args, const std::string& png, int frames = 60) {
   const std::string cmd = "xvfb-run -a -s '-screen 0 1280x720x24' " + std::string(RIGIDTOUCH_CLI) +
-                          " view --frames 60 --screenshot " + png + " " + args + " --json >" + png +
-                          ".json 2>" + png + ".err";
+                          " view --frames " + std::to_string(frames) + " --screenshot " + png +
+                          " " + args + " --json >" + png + ".json 2>" + png + ".err";
   const int status = std::system(cmd.c_str());
   EXPECT_EQ(status, 0) << cmd << "\n" << ReadAll(png + ".err");
   return Load(png);
@@ -346,6 +346,56 @@ TEST(ViewCliTest, NearerBoxHidesTheOneBehind) {
   // and the tool's box shows where nothing is in front of it: above the front box
   const auto [ax, ay] = sv.Pixel(Vec3(0.0, 0.025, 0.055));
   EXPECT_TRUE(im.IsShadeOf(ax, ay, kTool)) << ax << "," << ay;
+  std::filesystem::remove_all(dir);
+}
+
+// the links of a kinematic tree are drawn where the tree holds them, in the link colour, as their
+// own shapes (the door's box panel, the arm's capsules), and the viewer reports every joint; they
+// were once drawn at their link-frame offsets from the world's origin, in the static colour
+constexpr int kLink[3] = {60, 170, 110};
+
+TEST(ViewCliTest, TreeLinksAreDrawnWhereTheirJointsHoldThem) {
+  if (!HaveXvfb())
+    GTEST_SKIP()
+        << "no X server can be started (xvfb-run missing or failing; apt-get install xvfb xauth)";
+  const auto dir = TempDir("view_trees");
+  const std::string door = std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/door.xml";
+  const std::string png = (dir / "door.png").string();
+  const Image im = View("--scene " + door, png, 10);
+  ASSERT_EQ(im.w, 1280);
+  const SceneView sv(door);
+  // the panel's -y face (x from 0.02 to 0.82, z from 0.1 to 1.9, y = -0.02), at rest on its stop:
+  // a grid of points well inside it, clear of the knob (x = 0.74)
+  for (const double x : {0.15, 0.3, 0.5}) {
+    for (const double z : {0.4, 1.0, 1.6}) {
+      const auto [px, py] = sv.Pixel(Vec3(x, -0.02, z));
+      EXPECT_TRUE(im.IsShadeOf(px, py, kLink)) << "panel at " << x << ", " << z;
+    }
+  }
+  const auto j = nlohmann::json::parse(ReadAll(png + ".json"));
+  ASSERT_EQ(j["joints"].size(), 1u) << j.dump();
+  EXPECT_EQ(j["joints"][0]["name"], "hinge");
+  EXPECT_LT(std::abs(j["joints"][0]["position"].get<double>()), 1e-3);  // closed
+
+  const std::string arm = std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/arm.xml";
+  const std::string arm_png = (dir / "arm.png").string();
+  const Image a = View("--scene " + arm, arm_png, 10);
+  ASSERT_EQ(a.w, 1280);
+  const SceneView av(arm);
+  // the arm straight out along +x: points on the axes of the upper arm (z = 0.25, x from 0 to 0.3,
+  // radius 35 mm) and the forearm (x from 0.34 to 0.58, radius 30 mm); gravity sags them under
+  // the servos by under 0.02 rad (measured after 1 s), under 15 mm at the forearm's end, inside
+  // the capsules
+  for (const double x : {0.08, 0.15, 0.22, 0.4, 0.46}) {
+    const auto [px, py] = av.Pixel(Vec3(x, 0.0, 0.25));
+    EXPECT_TRUE(a.AnyShadeNear(px, py, kLink, 1)) << "arm at x = " << x;
+  }
+  const auto ja = nlohmann::json::parse(ReadAll(arm_png + ".json"));
+  ASSERT_EQ(ja["joints"].size(), 6u) << ja.dump();
+  for (const auto& joint : ja["joints"]) {
+    EXPECT_EQ(joint["type"], "hinge");
+    EXPECT_LT(std::abs(joint["position"].get<double>()), 0.1) << joint.dump();  // held out
+  }
   std::filesystem::remove_all(dir);
 }
 

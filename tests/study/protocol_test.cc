@@ -320,6 +320,60 @@ TEST(ProtocolTest, TestsOfMoreConditionsAreCheckedAsTwo) {
   EXPECT_EQ(ProtocolErrorOf(d), "");
 }
 
+// an articulated scene's condition: its joint-limit renderer and the taps' aim reach the render
+// parameters and the tap's configuration, stand in the canonical JSON (so the hash covers them),
+// round-trip, and are absent from a protocol that does not give them (its hash unchanged)
+TEST(ProtocolTest, JointLimitRendererAndWallAimOfAnArticulatedScene) {
+  json doc = Minimal();
+  const std::string before = ProtocolHash(ParseProtocol(doc, "p.json"));
+  json& b = doc["conditions"]["b"];
+  b["scene"] = "scenes/door.xml";
+  b["joint_limit_renderer"] = "penalty";
+  b["wall_point_m"] = {0.6, -0.02, 1.0};
+  b["wall_normal"] = {0, -1, 0};
+  const Protocol p = ParseProtocol(doc, "p.json");
+  const Condition& c = p.conditions[1];
+  ASSERT_TRUE(c.joint_limit_renderer.has_value());
+  EXPECT_EQ(*c.joint_limit_renderer, RendererKind::kPenalty);
+  EXPECT_EQ(c.ToRenderParams().joint_limit_renderer, RendererKind::kPenalty);
+  EXPECT_EQ(p.conditions[0].ToRenderParams().joint_limit_renderer,
+            RenderParams{}.joint_limit_renderer);
+  EXPECT_EQ(*c.wall_point_m, Vec3(0.6, -0.02, 1.0));
+  EXPECT_EQ(*c.wall_normal, Vec3(0.0, -1.0, 0.0));
+  EXPECT_EQ(c.ToJson()["joint_limit_renderer"], "penalty");
+  EXPECT_EQ(c.ToJson()["wall_normal"], json({0.0, -1.0, 0.0}));
+  EXPECT_FALSE(p.conditions[0].ToJson().contains("joint_limit_renderer"));
+  EXPECT_NE(ProtocolHash(p), before);
+  EXPECT_EQ(ProtocolHash(ParseProtocol(p.ToJson(), "again.json")), ProtocolHash(p));
+  doc["conditions"]["b"]["joint_limit_renderer"] = "train";
+  EXPECT_NE(ProtocolHash(ParseProtocol(doc, "p.json")), ProtocolHash(p));
+}
+
+TEST(ProtocolTest, JointLimitRendererAndWallAimErrorsNameTheField) {
+  const struct {
+    json fields;
+    std::string message;
+  } cases[] = {
+      {{{"joint_limit_renderer", "event"}},
+       "conditions[\"b\"].joint_limit_renderer: \"event\" is not a joint-limit renderer"},
+      {{{"joint_limit_renderer", "springy"}}, "conditions[\"b\"].joint_limit_renderer"},
+      {{{"wall_point_m", {0, 0, 1}}}, "\"wall_point_m\" and \"wall_normal\" go together"},
+      {{{"wall_point_m", {0, 0}}, {"wall_normal", {0, 0, 1}}},
+       "conditions[\"b\"].wall_point_m: expected an array of three numbers"},
+      {{{"wall_point_m", {0, 0, 1}}, {"wall_normal", {0, 0, 0}}},
+       "conditions[\"b\"].wall_normal: must not be zero"},
+      {{{"wall_geom", "panel"}, {"wall_point_m", {0, 0, 1}}, {"wall_normal", {0, 0, 1}}},
+       "give \"wall_geom\" or \"wall_point_m\", not both"},
+      {{{"wall_geom", ""}}, "conditions[\"b\"].wall_geom: must not be empty"},
+  };
+  for (const auto& k : cases) {
+    json doc = Minimal();
+    for (const auto& [key, value] : k.fields.items()) doc["conditions"]["b"][key] = value;
+    const std::string e = ProtocolErrorOf(doc);
+    EXPECT_NE(e.find(k.message), std::string::npos) << k.fields.dump() << ": " << e;
+  }
+}
+
 TEST(ProtocolTest, UnknownRendererListsTheValidOnes) {
   json d = Minimal();
   d["conditions"]["b"]["renderer"] = "trian";

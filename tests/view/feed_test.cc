@@ -8,6 +8,7 @@
 #include <pthread.h>
 
 #include <atomic>
+#include <cmath>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -15,6 +16,7 @@
 
 #include "analysis/tap_experiment.h"
 #include "device/mouse_device.h"
+#include "dynamics/tree.h"
 #include "limit_malloc.h"
 #include "loop/haptic_loop.h"
 
@@ -124,6 +126,43 @@ TEST(ViewFeed, HapticThreadNeitherAllocatesNorLocks) {
   EXPECT_EQ(locks, 0);
   EXPECT_EQ(r.timing.ticks, 600);
   EXPECT_GT(r.impulses, 0);  // the tap hit the wall: the contact path ran too
+}
+
+// a tree's links and joints reach the viewer: every link's pose and every hinge's position as the
+// tick left them, copied on the haptic thread without an allocation (scenes/arm.xml: one tree of
+// six links and six hinges)
+TEST(ViewFeed, TreeLinksAndJointsAreCopiedWithoutAllocating) {
+  LoadOptions o;
+  o.tool_name = "none";
+  const Model model = LoadModel(std::string(RIGIDTOUCH_SOURCE_DIR) + "/scenes/arm.xml", o);
+  ASSERT_EQ(model.trees.size(), 1u);
+  Data data = MakeData(model);
+  for (int k = 0; k < 200; ++k) Tick(model, data, TickInput{});  // the arm sags under gravity
+  ViewFeed feed(1000.0, 16);
+  TraceSample sample;
+  sample.step = data.step;
+  long allocations = 0;
+  {
+    test::LimitMalloc guard;
+    feed.OnTick(model, data, sample);
+    allocations = guard.allocations();
+  }
+  if (test::kMallocCounting) {
+    EXPECT_EQ(allocations, 0);
+  }
+  const ViewSnapshot& v = feed.Latest();
+  const dynamics::TreeData& d = *data.trees[0];
+  ASSERT_EQ(v.nlink, static_cast<int>(d.x_W.size()));
+  for (int l = 0; l < v.nlink; ++l) {
+    EXPECT_EQ(v.link_x_W[l], d.x_W[l]) << l;
+    EXPECT_EQ(v.link_R_WB[l], d.R_WB[l]) << l;
+  }
+  ASSERT_EQ(v.njoint, 6);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_EQ(v.joint_q[j], d.qpos[model.trees[0].joints[j].qpos_adr]) << j;
+  }
+  EXPECT_GT(std::abs(v.joint_q[1]), 1e-4);  // the shoulder moved: not the initial zeros
+  EXPECT_EQ(FirstViewLink(model, 0), 0);
 }
 
 }  // namespace
