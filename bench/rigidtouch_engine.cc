@@ -109,6 +109,10 @@ class RigidtouchEngine final : public Engine {
     for (const auto& tree : data_->trees) snapshot_.trees.push_back(*tree);
     snapshot_.joint_at_limit = data_->joint_at_limit;
     snapshot_.tree_window = data_->tree_window;
+    // the link geoms' poses, which the trees stage writes after integrating and collision reads
+    // at the next tick
+    snapshot_.geom_poses = data_->workspace->collision.poses;
+    snapshot_.geom_check = data_->workspace->collision.geom_check;
   }
 
   void RestoreSnapshot() override {
@@ -123,6 +127,8 @@ class RigidtouchEngine final : public Engine {
     data_->joint_at_limit = snapshot_.joint_at_limit;
     std::copy(snapshot_.tree_window.begin(), snapshot_.tree_window.end(),
               data_->tree_window.begin());
+    data_->workspace->collision.poses = snapshot_.geom_poses;
+    data_->workspace->collision.geom_check = snapshot_.geom_check;
   }
 
   bool StateIsFinite() const override {
@@ -171,6 +177,8 @@ class RigidtouchEngine final : public Engine {
     std::vector<dynamics::TreeData> trees;
     std::vector<std::vector<unsigned char>> joint_at_limit;
     std::vector<WindowState> tree_window;
+    std::vector<geometry::GeomPose> geom_poses;
+    std::vector<geometry::GeomCheck> geom_check;
   };
 
   int threads_ = 1;
