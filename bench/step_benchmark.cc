@@ -2,7 +2,8 @@
 // MuJoCo, Bullet) on every benchmark scene, then tables of the results and of the ratios.
 //
 // Extra flags (after Google Benchmark's own):
-//   --rigidtouch_scenes=DIR   folder with tap.xml, stack.xml, pile.xml (default: the source tree)
+//   --rigidtouch_scenes=DIR   folder with tap.xml, stack.xml, pile.xml and the articulated
+//                             door.xml, drawer.xml, lever.xml, arm.xml (default: the source tree)
 //   --rigidtouch_scale=X      measure X (0 < X <= 1) of the specified steps, for smoke runs
 //   --rigidtouch_interleave=N instead of Google Benchmark's runs, measure every engine of a scene
 //                             in turns of N steps (strikes), the engines' order rotating: each

@@ -27,21 +27,16 @@ void JointTangents(const Vec3& n, Vec3& t1, Vec3& t2) {
 
 // in-place Cholesky of the leading m x m block (lower triangle); false at a non-positive pivot
 bool JointCholesky(Eigen::MatrixXd& k, int m) {
-  // right-looking by columns (k is column-major): every entry receives the same subtractions in
-  // the same order (c ascending) as the row-by-row form, so the factor is the same bit for bit
-  const std::ptrdiff_t stride = k.rows();
   for (int j = 0; j < m; ++j) {
-    double* column_j = k.data() + j * stride;
-    const double d = column_j[j];
+    double d = k(j, j);
+    for (int c = 0; c < j; ++c) d -= k(j, c) * k(j, c);
     if (!(d > 0.0)) return false;
     const double l = std::sqrt(d);
-    column_j[j] = l;
-    for (int i = j + 1; i < m; ++i) column_j[i] /= l;
-    // column j's contributions to the columns after it, diagonal included
-    for (int c = j + 1; c < m; ++c) {
-      const double kcj = column_j[c];
-      double* column_c = k.data() + c * stride;
-      for (int i = c; i < m; ++i) column_c[i] -= column_j[i] * kcj;
+    k(j, j) = l;
+    for (int i = j + 1; i < m; ++i) {
+      double s = k(i, j);
+      for (int c = 0; c < j; ++c) s -= k(i, c) * k(j, c);
+      k(i, j) = s / l;
     }
   }
   return true;

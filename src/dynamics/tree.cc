@@ -379,12 +379,8 @@ bool TreeFactor(const TreeModel& model, TreeData& data, double h_s) {
 void TreeSolve(const TreeData& data, Eigen::Ref<Eigen::VectorXd> x) {
   const Eigen::MatrixXd& L = data.factor;
   const int n = static_cast<int>(x.size());
-  // forward substitution by columns (L is column-major): each x[i] receives the same subtractions
-  // in the same order (k ascending) as row by row, so the results are the same bit for bit
-  for (int k = 0; k < n; ++k) {
-    const double xk = x[k];
-    const double* column = L.data() + static_cast<std::ptrdiff_t>(k) * L.rows();
-    for (int i = k + 1; i < n; ++i) x[i] -= column[i] * xk;
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < i; ++k) x[i] -= L(i, k) * x[k];
   }
   for (int i = 0; i < n; ++i) x[i] /= L(i, i);
   for (int i = n - 1; i >= 0; --i) {
