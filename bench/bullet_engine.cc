@@ -13,70 +13,12 @@ namespace {
 
 const EngineRegistrar kBulletRegistrar{"bullet", &MakeBulletEngine};
 
-// pose from MuJoCo's world position (3) and row-major rotation matrix (9)
-Eigen::Isometry3d MjPose(const mjtNum* position, const mjtNum* rotation) {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.translation() = Vec3(position[0], position[1], position[2]);
-  pose.linear() = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rotation);
-  return pose;
-}
-
-btTransform ToBullet(const Eigen::Isometry3d& pose) {
-  const Mat3& r = pose.linear();
-  const Vec3& p = pose.translation();
-  return btTransform(
-      btMatrix3x3(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)),
-      btVector3(p.x(), p.y(), p.z()));
-}
-
-Eigen::Isometry3d FromBullet(const btTransform& transform) {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  const btMatrix3x3& r = transform.getBasis();
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) pose.linear()(i, j) = r[i][j];
-  }
-  const btVector3& p = transform.getOrigin();
-  pose.translation() = Vec3(p.x(), p.y(), p.z());
-  return pose;
-}
-
 bool IsIdentity(const Eigen::Isometry3d& pose) {
   return pose.matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-12);
 }
 
 bool FiniteBt(const btVector3& v) {
   return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
-}
-
-// the MJCF name, or "#<id>" for an unnamed element
-std::string ElementName(const mjModel& model, mjtObj type, int id) {
-  const char* name = mj_id2name(&model, type, id);
-  if (name != nullptr) return name;
-  std::string unnamed = "#";
-  unnamed.append(std::to_string(id));
-  return unnamed;
-}
-
-// the Bullet shape with the geom's MJCF size, in the geom's own frame
-std::unique_ptr<btCollisionShape> MakeShape(const mjModel& model, int geom,
-                                            const std::string& path) {
-  const mjtNum* size = model.geom_size + 3 * geom;
-  switch (model.geom_type[geom]) {
-    case mjGEOM_PLANE:
-      return std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
-    case mjGEOM_SPHERE:
-      return std::make_unique<btSphereShape>(size[0]);
-    case mjGEOM_BOX:
-      return std::make_unique<btBoxShape>(btVector3(size[0], size[1], size[2]));
-    case mjGEOM_CAPSULE:
-      return std::make_unique<btCapsuleShapeZ>(size[0], 2 * size[1]);
-    case mjGEOM_CYLINDER:
-      return std::make_unique<btCylinderShapeZ>(btVector3(size[0], size[0], size[1]));
-    default:
-      throw Error("scene " + path + ": geom '" + ElementName(model, mjOBJ_GEOM, geom) +
-                  "' has type " + std::to_string(model.geom_type[geom]) +
-                  "; the Bullet peer supports plane, sphere, box, capsule and cylinder");
-  }
 }
 
 }  // namespace
@@ -88,6 +30,7 @@ BulletEngine::~BulletEngine() {
 }
 
 void BulletEngine::Clear() {
+  trees_.Clear();
   if (world_ != nullptr) {
     for (auto& body : bodies_) world_->removeRigidBody(body.get());
   }
@@ -97,6 +40,7 @@ void BulletEngine::Clear() {
   records_.clear();
   snapshot_.clear();
   world_.reset();
+  multibody_world_ = nullptr;
   solver_.reset();
   broadphase_.reset();
   dispatcher_.reset();
@@ -109,7 +53,7 @@ btRigidBody* BulletEngine::AddBody(double mass_kg, const btVector3& inertia_kgm2
                                    const Eigen::Isometry3d& T_world_inertial, double friction) {
   btRigidBody::btRigidBodyConstructionInfo info(mass_kg, nullptr, shape, inertia_kgm2);
   info.m_startWorldTransform = ToBullet(T_world_inertial);
-  info.m_friction = friction;
+  info.m_friction = BulletFriction(friction);
   info.m_restitution = 0;
   auto body = std::make_unique<btRigidBody>(info);
   // no sleeping: MuJoCo keeps integrating resting bodies, so Bullet must too
@@ -132,6 +76,9 @@ void BulletEngine::Load(const Scene& scene) {
   }
   const mjModel& model = *model_ptr;
   std::unique_ptr<mjData, void (*)(mjData*)> data(mj_makeData(&model), &mj_deleteData);
+  // free bodies start where the keyframe 'initial' puts them, as in MuJoCo and rigidtouch
+  const int key = mj_name2id(&model, mjOBJ_KEY, "initial");
+  if (key >= 0) mj_resetDataKeyframe(&model, data.get(), key);
   mj_forward(&model, data.get());
 
   Clear();
@@ -139,9 +86,21 @@ void BulletEngine::Load(const Scene& scene) {
   configuration_ = std::make_unique<btDefaultCollisionConfiguration>();
   dispatcher_ = std::make_unique<btCollisionDispatcher>(configuration_.get());
   broadphase_ = std::make_unique<btDbvtBroadphase>();
-  solver_ = std::make_unique<btSequentialImpulseConstraintSolver>();
-  world_ = std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(),
-                                                     solver_.get(), configuration_.get());
+  bool has_trees = false;
+  for (int b = 1; b < model.nbody; ++b) has_trees |= IsTreeBody(model, b);
+  if (has_trees) {
+    // kinematic trees: Featherstone's btMultiBody in the world PyBullet uses
+    auto solver = std::make_unique<btMultiBodyConstraintSolver>();
+    auto world = std::make_unique<btMultiBodyDynamicsWorld>(dispatcher_.get(), broadphase_.get(),
+                                                            solver.get(), configuration_.get());
+    multibody_world_ = world.get();
+    solver_ = std::move(solver);
+    world_ = std::move(world);
+  } else {
+    solver_ = std::make_unique<btSequentialImpulseConstraintSolver>();
+    world_ = std::make_unique<btDiscreteDynamicsWorld>(dispatcher_.get(), broadphase_.get(),
+                                                       solver_.get(), configuration_.get());
+  }
   settings_ = scene.peer_settings;
   if (settings_ == PeerSettings::kStacking) {
     const BulletStackingSettings stacking;
@@ -154,6 +113,7 @@ void BulletEngine::Load(const Scene& scene) {
   timestep_s_ = model.opt.timestep;
 
   for (int b = 0; b < model.nbody; ++b) {
+    if (IsTreeBody(model, b)) continue;  // built below, as btMultiBody links
     const std::string body_name = ElementName(model, mjOBJ_BODY, b);
     const bool is_static = b == 0 || model.body_jntnum[b] == 0;
     if (b != 0) {
@@ -174,7 +134,7 @@ void BulletEngine::Load(const Scene& scene) {
       // every static geom is its own fixed collision object at its world pose
       record.T_world_body = T_world_body;
       for (int g = first_geom; g < first_geom + geom_count; ++g) {
-        shapes_.push_back(MakeShape(model, g, path_));
+        shapes_.push_back(MakeBulletShape(model, g, path_));
         AddBody(0.0, btVector3(0, 0, 0), shapes_.back().get(),
                 MjPose(data->geom_xpos + 3 * g, data->geom_xmat + 9 * g),
                 model.geom_friction[3 * g]);
@@ -191,13 +151,13 @@ void BulletEngine::Load(const Scene& scene) {
         T_world_inertial.inverse() *
         MjPose(data->geom_xpos + 3 * first_geom, data->geom_xmat + 9 * first_geom);
     if (geom_count == 1 && IsIdentity(T_inertial_geom0)) {
-      shapes_.push_back(MakeShape(model, first_geom, path_));
+      shapes_.push_back(MakeBulletShape(model, first_geom, path_));
       shape = shapes_.back().get();
     } else {
       // several geoms or an offset geom: a compound in the centre-of-mass frame
       auto compound = std::make_unique<btCompoundShape>();
       for (int g = first_geom; g < first_geom + geom_count; ++g) {
-        shapes_.push_back(MakeShape(model, g, path_));
+        shapes_.push_back(MakeBulletShape(model, g, path_));
         const Eigen::Isometry3d T_inertial_geom =
             T_world_inertial.inverse() * MjPose(data->geom_xpos + 3 * g, data->geom_xmat + 9 * g);
         compound->addChildShape(ToBullet(T_inertial_geom), shapes_.back().get());
@@ -214,14 +174,28 @@ void BulletEngine::Load(const Scene& scene) {
     records_[body_name] = record;
   }
 
+  if (has_trees) BuildTrees(model);
+
   tool_ = Record(scene.tool_body).body;
   if (tool_ == nullptr) throw Error("scene " + path_ + ": the tool body is not free");
   tool_force_N_ = btVector3(scene.tool_force_N.x(), scene.tool_force_N.y(), scene.tool_force_N.z());
 }
 
+void BulletEngine::BuildTrees(const mjModel& model) {
+  // the links' frames at the reference configuration qpos0, the state from the keyframe
+  // 'initial' (MuJoCo's and rigidtouch's start), or qpos0 and rest without one
+  std::unique_ptr<mjData, void (*)(mjData*)> reference(mj_makeData(&model), &mj_deleteData);
+  mj_forward(&model, reference.get());
+  std::unique_ptr<mjData, void (*)(mjData*)> start(mj_makeData(&model), &mj_deleteData);
+  const int key = mj_name2id(&model, mjOBJ_KEY, "initial");
+  if (key >= 0) mj_resetDataKeyframe(&model, start.get(), key);
+  trees_.Build(model, *reference, start->qpos, start->qvel, start->ctrl, *multibody_world_, path_);
+}
+
 void BulletEngine::Step() {
   // stepSimulation clears forces after the step, so the push is applied every step
   tool_->applyCentralForce(tool_force_N_);
+  trees_.ApplyJointForces();
   // maxSubSteps = 0: exactly one step of length h, no interpolation
   world_->stepSimulation(timestep_s_, 0);
 }
@@ -235,8 +209,34 @@ int BulletEngine::ContactCount() const {
   return count;
 }
 
+const btCollisionObject* BulletEngine::CollisionObject(std::string_view body) const {
+  if (trees_.HasBody(body)) return trees_.Collider(body);
+  return Record(body).body;
+}
+
+double BulletEngine::BodyPenetration_m(std::string_view body) const {
+  const btCollisionObject* target = CollisionObject(body);
+  double deepest_m = 0.0;
+  if (target == nullptr) return deepest_m;
+  const int manifolds = dispatcher_->getNumManifolds();
+  for (int i = 0; i < manifolds; ++i) {
+    const btPersistentManifold* manifold = dispatcher_->getManifoldByIndexInternal(i);
+    if (manifold->getBody0() != target && manifold->getBody1() != target) continue;
+    for (int k = 0; k < manifold->getNumContacts(); ++k) {
+      deepest_m =
+          std::max(deepest_m, -static_cast<double>(manifold->getContactPoint(k).getDistance()));
+    }
+  }
+  return deepest_m;
+}
+
+double BulletEngine::JointPosition(std::string_view joint) const {
+  return trees_.JointPosition(joint);
+}
+
 int BulletEngine::BodyContactCount(std::string_view body) const {
-  const btRigidBody* target = Record(body).body;
+  const btCollisionObject* target = CollisionObject(body);
+  if (target == nullptr) return 0;
   int count = 0;
   const int manifolds = dispatcher_->getNumManifolds();
   for (int i = 0; i < manifolds; ++i) {
@@ -274,12 +274,14 @@ const btRigidBody* BulletEngine::RigidBody(std::string_view body) const {
 }
 
 Vec3 BulletEngine::BodyPosition(std::string_view body) const {
+  if (trees_.HasBody(body)) return trees_.BodyPose(body).translation();
   const BodyRecord& record = Record(body);
   if (record.body == nullptr) return record.T_world_body.translation();
   return (FromBullet(record.body->getWorldTransform()) * record.T_inertial_body).translation();
 }
 
 Quat BulletEngine::BodyOrientation(std::string_view body) const {
+  if (trees_.HasBody(body)) return Quat(trees_.BodyPose(body).linear()).normalized();
   const BodyRecord& record = Record(body);
   if (record.body == nullptr) return Quat(record.T_world_body.linear());
   const Eigen::Isometry3d T_world_body =
@@ -308,6 +310,7 @@ void BulletEngine::SetBodyMotion(std::string_view body, const Vec3& position_m,
 }
 
 void BulletEngine::SaveSnapshot() {
+  trees_.Save();
   snapshot_.clear();
   for (const btRigidBody* body : dynamic_bodies_) {
     snapshot_.push_back(SavedMotion{body->getWorldTransform(), body->getLinearVelocity(),
@@ -316,8 +319,9 @@ void BulletEngine::SaveSnapshot() {
 }
 
 void BulletEngine::RestoreSnapshot() {
-  // bodies only: contact manifolds (and their warm-start impulses) stay as the last step left
-  // them; Bullet refreshes them from the restored poses at the next step
+  // bodies and joints only: contact manifolds (and their warm-start impulses) stay as the last
+  // step left them; Bullet refreshes them from the restored poses at the next step
+  trees_.Restore();
   for (std::size_t i = 0; i < dynamic_bodies_.size(); ++i) {
     btRigidBody* body = dynamic_bodies_[i];
     const SavedMotion& saved = snapshot_[i];
@@ -333,10 +337,11 @@ void BulletEngine::RestoreSnapshot() {
 }
 
 bool BulletEngine::StateIsFinite() const {
-  return std::all_of(dynamic_bodies_.begin(), dynamic_bodies_.end(), [](const btRigidBody* body) {
-    return FiniteBt(body->getWorldTransform().getOrigin()) && FiniteBt(body->getLinearVelocity()) &&
-           FiniteBt(body->getAngularVelocity());
-  });
+  return trees_.Finite() &&
+         std::all_of(dynamic_bodies_.begin(), dynamic_bodies_.end(), [](const btRigidBody* body) {
+           return FiniteBt(body->getWorldTransform().getOrigin()) &&
+                  FiniteBt(body->getLinearVelocity()) && FiniteBt(body->getAngularVelocity());
+         });
 }
 
 std::string BulletEngine::Configuration() const {
@@ -353,7 +358,13 @@ std::string BulletEngine::Configuration() const {
   }
   return "Bullet " + std::to_string(btGetVersion()) +
          (btIsDoublePrecision() ? " double" : " single") + " precision, settings " +
-         PeerSettingsName(settings_) + ": " + "btSequentialImpulseConstraintSolver" +
+         PeerSettingsName(settings_) + ": " +
+         (multibody_world_ != nullptr
+              ? "btMultiBodyDynamicsWorld, btMultiBodyConstraintSolver (" +
+                    std::to_string(trees_.multibodies().size()) + " btMultiBody, " +
+                    std::to_string(trees_.limit_count()) +
+                    " joint limits; springs, dampers and actuators as explicit joint torques)"
+              : std::string("btSequentialImpulseConstraintSolver")) +
          ", iterations " + std::to_string(info.m_numIterations) + ", erp2 " + number(info.m_erp2) +
          ", split impulse " + (info.m_splitImpulse ? "on" : "off") + ", warm starting " +
          mode(SOLVER_USE_WARMSTARTING) + " (factor " + number(info.m_warmstartingFactor) +

@@ -1,7 +1,8 @@
 // Bullet peer: a btDiscreteDynamicsWorld built from the compiled mjModel of the same MJCF file
-// (geom types, sizes and poses, body masses and inertias), stepped with one fixed step of the
-// MJCF timestep per Step(), with Bullet's default solver settings or the ones Bullet's own
-// documentation and examples give for stable stacks (PeerSettings::kStacking).
+// (geom types, sizes and poses, body masses and inertias; a btMultiBodyDynamicsWorld with the
+// kinematic trees as btMultiBody when the scene has any: bench/bullet_tree.h), stepped with one
+// fixed step of the MJCF timestep per Step(), with Bullet's default solver settings or the ones
+// Bullet's own documentation and examples give for stable stacks (PeerSettings::kStacking).
 #pragma once
 
 #include <btBulletDynamicsCommon.h>
@@ -13,6 +14,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "bench/bullet_tree.h"
 #include "bench/engine.h"
 
 namespace rigidtouch::bench {
@@ -48,6 +50,9 @@ class BulletEngine final : public Engine {
   /// Returns the dynamics world (null before Load()).
   const btDiscreteDynamicsWorld* world() const { return world_.get(); }
 
+  /// Returns the scene's kinematic trees as btMultiBody (empty for a scene without trees).
+  const BulletTrees& trees() const { return trees_; }
+
   /// Returns the time step, in seconds, taken from the MJCF `<option timestep>`.
   double timestep_s() const { return timestep_s_; }
 
@@ -65,7 +70,9 @@ class BulletEngine final : public Engine {
   };
 
   void Clear();
+  void BuildTrees(const mjModel& model);
   const BodyRecord& Record(std::string_view body) const;
+  const btCollisionObject* CollisionObject(std::string_view body) const;
   btRigidBody* AddBody(double mass_kg, const btVector3& inertia_kgm2, btCollisionShape* shape,
                        const Eigen::Isometry3d& T_world_inertial, double friction);
 
@@ -76,6 +83,8 @@ class BulletEngine final : public Engine {
   std::unique_ptr<btBroadphaseInterface> broadphase_;
   std::unique_ptr<btSequentialImpulseConstraintSolver> solver_;
   std::unique_ptr<btDiscreteDynamicsWorld> world_;
+  btMultiBodyDynamicsWorld* multibody_world_ = nullptr;  // world_, when the scene has trees
+  BulletTrees trees_;  // cleared (out of the world) before the world goes
   std::vector<std::unique_ptr<btCollisionShape>> shapes_;
   std::vector<std::unique_ptr<btRigidBody>> bodies_;  // dynamic and static
   std::vector<btRigidBody*> dynamic_bodies_;

@@ -5,6 +5,16 @@
 
 namespace rigidtouch::bench {
 
+double Engine::BodyPenetration_m(std::string_view body) const {
+  throw Error("engine " + std::string(Name()) + " cannot report the penetration of body '" +
+              std::string(body) + "'");
+}
+
+double Engine::JointPosition(std::string_view joint) const {
+  throw Error("engine " + std::string(Name()) + " cannot report the position of joint '" +
+              std::string(joint) + "'");
+}
+
 std::vector<EngineEntry>& Engines() {
   static std::vector<EngineEntry> engines;
   return engines;

@@ -39,6 +39,15 @@ class Engine {
   /// no point penetrates).
   virtual double DeepestPenetration_m() const = 0;
 
+  /// Returns the deepest penetration among the last Step()'s contact points that involve the named
+  /// body, in metres (0 when none penetrates). The default throws `rigidtouch::Error`: an engine
+  /// without it cannot run a scene with a tool-contact gate.
+  virtual double BodyPenetration_m(std::string_view body) const;
+
+  /// Returns the position of the named hinge [rad] or slide [m] joint, in MuJoCo's coordinates.
+  /// The default throws `rigidtouch::Error`: an engine without it cannot run a joint-limit gate.
+  virtual double JointPosition(std::string_view joint) const;
+
   /// Returns the position of the named body's frame origin in the world frame.
   virtual Vec3 BodyPosition(std::string_view body) const = 0;
 
@@ -84,6 +93,8 @@ class Engine {
   void SaveSnapshot() override;                                                               \
   void RestoreSnapshot() override;                                                            \
   bool StateIsFinite() const override;                                                        \
+  double BodyPenetration_m(std::string_view body) const override;                             \
+  double JointPosition(std::string_view joint) const override;                                \
   std::string Configuration() const override;
 
 /// Makes a new, unloaded engine.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "loop/reference_job.h"
@@ -57,16 +58,43 @@ double StrikeStartHeight(const Vec3& position_m, const Quat& orientation, double
 
 SceneRun::SceneRun(Engine& engine, const Scene& scene) : engine_(engine), scene_(scene) {}
 
+double LimitOvershoot(double q, double lo, double hi) {
+  if (!std::isfinite(q)) return std::numeric_limits<double>::infinity();
+  return std::max({0.0, lo - q, q - hi});
+}
+
 void SceneRun::Track() {
   if (!engine_.StateIsFinite()) gates_.finite = false;
   const double penetration_m = engine_.DeepestPenetration_m();
   gates_.deepest_penetration_m = std::max(gates_.deepest_penetration_m, penetration_m);
   ++gates_.steps;
   if (!(penetration_m < scene_.max_penetration_m)) ++gates_.steps_over_penetration;
+  if (past_warmup_) TrackArticulated();
+}
+
+void SceneRun::TrackArticulated() {
+  const bool tool_gate = std::isfinite(scene_.max_tool_penetration_m);
+  const bool limit_gate = !scene_.limit_joint.empty();
+  if (!tool_gate && !limit_gate) return;
+  ++gates_.gated_steps;
+  if (tool_gate) {
+    const double depth_m = engine_.BodyPenetration_m(scene_.tool_body);
+    gates_.deepest_tool_penetration_m =
+        std::max(gates_.deepest_tool_penetration_m, std::isfinite(depth_m) ? depth_m : 1e300);
+    if (!(depth_m < scene_.max_tool_penetration_m)) ++gates_.steps_over_tool_penetration;
+  }
+  if (limit_gate) {
+    const double over =
+        LimitOvershoot(engine_.JointPosition(scene_.limit_joint), scene_.limit_lo, scene_.limit_hi);
+    gates_.largest_limit_overshoot =
+        std::max(gates_.largest_limit_overshoot, std::isfinite(over) ? over : 1e300);
+    if (!(over < scene_.max_limit_overshoot)) ++gates_.steps_over_limit;
+  }
 }
 
 void SceneRun::Prepare() {
   engine_.Load(scene_);
+  past_warmup_ = false;
   durations_ns_.clear();
   durations_ns_.reserve(static_cast<std::size_t>(scene_.measured_steps));
   for (int i = 0; i < scene_.warmup_steps; ++i) {
@@ -74,6 +102,7 @@ void SceneRun::Prepare() {
     Track();
   }
   engine_.SaveSnapshot();
+  past_warmup_ = true;
   if (!scene_.watch_body.empty()) {
     const Vec3 start_m = engine_.BodyPosition(scene_.watch_body);
     double largest_m = 0.0;
@@ -169,6 +198,22 @@ RunResult SceneRun::Finish() {
                               " (limit " + Millimetres(scene_.max_penetration_m) + "), over the " +
                               "limit in " + std::to_string(gates_.steps_over_penetration) + " of " +
                               std::to_string(gates_.steps) + " steps");
+  }
+  if (gates_.steps_over_tool_penetration > 0) {
+    gates_.failures.push_back("deepest tool penetration " +
+                              Millimetres(gates_.deepest_tool_penetration_m) + " (limit " +
+                              Millimetres(scene_.max_tool_penetration_m) + "), over the limit in " +
+                              std::to_string(gates_.steps_over_tool_penetration) + " of " +
+                              std::to_string(gates_.gated_steps) + " steps after the warm-up");
+  }
+  if (gates_.steps_over_limit > 0) {
+    std::ostringstream text;
+    text.precision(3);
+    text << "joint " << scene_.limit_joint << " passed its range [" << scene_.limit_lo << ", "
+         << scene_.limit_hi << "] by up to " << gates_.largest_limit_overshoot << " (limit "
+         << scene_.max_limit_overshoot << "), in " << gates_.steps_over_limit << " of "
+         << gates_.gated_steps << " steps after the warm-up";
+    gates_.failures.push_back(text.str());
   }
   if (gates_.strikes_missed > 0) {
     gates_.failures.push_back(std::to_string(gates_.strikes_missed) +

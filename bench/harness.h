@@ -15,14 +15,19 @@ namespace rigidtouch::bench {
 
 /// What the quality gates saw; a run whose gates fail is reported, loudly, as not comparable.
 struct GateReport {
-  bool finite = true;                 ///< no NaN or infinity in any position or velocity
-  long warnings = 0;                  ///< engine warnings (e.g. MuJoCo's full contact buffer)
-  double deepest_penetration_m = 0;   ///< over every step run
-  long steps = 0;                     ///< every step run (warm-up, gates, measurement)
-  long steps_over_penetration = 0;    ///< steps whose deepest penetration broke the limit
-  double watch_displacement_m = -1;   ///< the watched body's largest displacement; -1: no gate
-  long strikes_missed = 0;            ///< strikes without tool contact in `strike_max_steps`
-  std::vector<std::string> failures;  ///< one sentence per failed gate, with the measured value
+  bool finite = true;                     ///< no NaN or infinity in any position or velocity
+  long warnings = 0;                      ///< engine warnings (e.g. MuJoCo's full contact buffer)
+  double deepest_penetration_m = 0;       ///< over every step run
+  long steps = 0;                         ///< every step run (warm-up, gates, measurement)
+  long steps_over_penetration = 0;        ///< steps whose deepest penetration broke the limit
+  double watch_displacement_m = -1;       ///< the watched body's largest displacement; -1: no gate
+  long strikes_missed = 0;                ///< strikes without tool contact in `strike_max_steps`
+  double deepest_tool_penetration_m = 0;  ///< over the steps after the warm-up
+  long steps_over_tool_penetration = 0;   ///< of them, steps over Scene::max_tool_penetration_m
+  double largest_limit_overshoot = 0;     ///< Scene::limit_joint beyond its range, after warm-up
+  long steps_over_limit = 0;              ///< of them, steps over Scene::max_limit_overshoot
+  long gated_steps = 0;                   ///< steps after the warm-up (the two gates above)
+  std::vector<std::string> failures;      ///< one sentence per failed gate, with the measured value
 
   /// Returns true when every gate passed.
   bool ok() const { return failures.empty(); }
@@ -65,7 +70,8 @@ class SceneRun {
   int last_strike_steps() const { return last_strike_steps_; }
 
  private:
-  void Track();  // gate bookkeeping after every step, outside the timed region
+  void Track();             // gate bookkeeping after every step, outside the timed region
+  void TrackArticulated();  // the tool-contact and joint-limit gates, after the warm-up
   std::int64_t TimedStep();
   std::int64_t MeasureSteady();
   std::int64_t MeasureStrike();
@@ -77,7 +83,11 @@ class SceneRun {
   double contact_sum_ = 0.0;
   int step_in_batch_ = 0;
   int last_strike_steps_ = 0;
+  bool past_warmup_ = false;
 };
+
+/// Returns how far `q` lies outside [lo, hi] (0 inside).
+double LimitOvershoot(double q, double lo, double hi);
 
 /// Measures several prepared runs of one scene in interleaved blocks: `block` measurements of the
 /// first run, then of the next, and so on, the runs' order rotating by one from block to block,

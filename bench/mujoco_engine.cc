@@ -80,6 +80,10 @@ void MujocoEngine::Load(const Scene& scene) {
   path_ = scene.mjcf_path;
   model_ = model.release();
   data_ = mj_makeData(model_);
+  // the keyframe 'initial', as rigidtouch starts from it (a drawer half out, a lever at its stop,
+  // the arm's servo targets)
+  const int key = mj_name2id(model_, mjOBJ_KEY, "initial");
+  if (key >= 0) mj_resetDataKeyframe(model_, data_, key);
   tool_force_N_ = scene.tool_force_N;
   // kinematics and contacts of the initial state, so that queries before the first step answer
   mj_forward(model_, data_);
@@ -114,6 +118,27 @@ double MujocoEngine::DeepestPenetration_m() const {
   double deepest_m = 0.0;
   for (int i = 0; i < data_->ncon; ++i) deepest_m = std::max(deepest_m, -data_->contact[i].dist);
   return deepest_m;
+}
+
+double MujocoEngine::BodyPenetration_m(std::string_view body) const {
+  const int id = BodyId(body);
+  double deepest_m = 0.0;
+  for (int i = 0; i < data_->ncon; ++i) {
+    const mjContact& contact = data_->contact[i];
+    if (model_->geom_bodyid[contact.geom1] == id || model_->geom_bodyid[contact.geom2] == id) {
+      deepest_m = std::max(deepest_m, -contact.dist);
+    }
+  }
+  return deepest_m;
+}
+
+double MujocoEngine::JointPosition(std::string_view joint) const {
+  const int id = mj_name2id(model_, mjOBJ_JOINT, std::string(joint).c_str());
+  if (id < 0 || (model_->jnt_type[id] != mjJNT_HINGE && model_->jnt_type[id] != mjJNT_SLIDE)) {
+    throw Error("scene " + path_ + " has no hinge or slide joint named '" + std::string(joint) +
+                "'");
+  }
+  return data_->qpos[model_->jnt_qposadr[id]];
 }
 
 int MujocoEngine::FreeQposAddress(int body_id) const {

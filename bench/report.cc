@@ -52,6 +52,12 @@ std::string GateValues(const RunResult& r) {
   if (r.gates.watch_displacement_m >= 0) {
     values += "moved " + FixedDecimals(r.gates.watch_displacement_m * 1e3, 3) + " mm, ";
   }
+  if (r.gates.gated_steps > 0) {
+    // articulated scenes: the tool's deepest penetration and the joint's largest overshoot after
+    // the warm-up (rad or m, as the joint)
+    values += "tool " + FixedDecimals(r.gates.deepest_tool_penetration_m * 1e3, 3) + " mm, limit " +
+              FixedDecimals(r.gates.largest_limit_overshoot * 1e3, 3) + "e-3, ";
+  }
   return values + "deepest " + FixedDecimals(r.gates.deepest_penetration_m * 1e3, 3) + " mm)";
 }
 
@@ -78,6 +84,10 @@ std::vector<RunResult> MergeRepetitions(const std::vector<RunResult>& results,
         m.gates.deepest_penetration_m =
             std::max(m.gates.deepest_penetration_m, r.gates.deepest_penetration_m);
         m.gates.finite = m.gates.finite && r.gates.finite;
+        m.gates.deepest_tool_penetration_m =
+            std::max(m.gates.deepest_tool_penetration_m, r.gates.deepest_tool_penetration_m);
+        m.gates.largest_limit_overshoot =
+            std::max(m.gates.largest_limit_overshoot, r.gates.largest_limit_overshoot);
         m.gates.watch_displacement_m =
             std::max(m.gates.watch_displacement_m, r.gates.watch_displacement_m);
         for (const std::string& failure : r.gates.failures) {

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "bench/engine.h"
+#include "dynamics/tree.h"
 #include "engine/workspace.h"
 #include "io/config.h"
 #include "rigidtouch/rigidtouch.h"
@@ -58,6 +59,27 @@ class RigidtouchEngine final : public Engine {
     return d;
   }
 
+  double BodyPenetration_m(std::string_view body) const override {
+    const int b = Index(body);
+    double d = 0.0;
+    for (int c = 0; c < data_->ncontact; ++c) {
+      const Contact& contact = data_->contacts[c];
+      if (contact.body_a == b || contact.body_b == b) d = std::max(d, contact.depth_m);
+    }
+    return d;
+  }
+
+  double JointPosition(std::string_view joint) const override {
+    for (std::size_t t = 0; t < model_->trees.size(); ++t) {
+      for (const JointModel& j : model_->trees[t].joints) {
+        if (j.name == joint && (j.type == JointKind::kHinge || j.type == JointKind::kSlide)) {
+          return data_->trees[t]->qpos[j.qpos_adr];
+        }
+      }
+    }
+    throw Error("no hinge or slide joint named '" + std::string(joint) + "' in " + model_->source);
+  }
+
   Vec3 BodyPosition(std::string_view body) const override { return data_->bodies[Index(body)].x_W; }
 
   Quat BodyOrientation(std::string_view body) const override {
@@ -82,6 +104,15 @@ class RigidtouchEngine final : public Engine {
     snapshot_.window = data_->window;
     snapshot_.step = data_->step;
     snapshot_.next_contact_id = data_->workspace->collision.matching.next_contact_id;
+    // the trees' joint state with their kinematics and scratch, limits and windows
+    snapshot_.trees.clear();
+    for (const auto& tree : data_->trees) snapshot_.trees.push_back(*tree);
+    snapshot_.joint_at_limit = data_->joint_at_limit;
+    snapshot_.tree_window = data_->tree_window;
+    // the link geoms' poses, which the trees stage writes after integrating and collision reads
+    // at the next tick
+    snapshot_.geom_poses = data_->workspace->collision.poses;
+    snapshot_.geom_check = data_->workspace->collision.geom_check;
   }
 
   void RestoreSnapshot() override {
@@ -92,11 +123,20 @@ class RigidtouchEngine final : public Engine {
     data_->step = snapshot_.step;
     data_->time_s = static_cast<double>(snapshot_.step) * model_->timestep_s;
     data_->workspace->collision.matching.next_contact_id = snapshot_.next_contact_id;
+    for (std::size_t t = 0; t < data_->trees.size(); ++t) *data_->trees[t] = snapshot_.trees[t];
+    data_->joint_at_limit = snapshot_.joint_at_limit;
+    std::copy(snapshot_.tree_window.begin(), snapshot_.tree_window.end(),
+              data_->tree_window.begin());
+    data_->workspace->collision.poses = snapshot_.geom_poses;
+    data_->workspace->collision.geom_check = snapshot_.geom_check;
   }
 
   bool StateIsFinite() const override {
     for (const BodyState& s : data_->bodies) {
       if (!s.x_W.allFinite() || !s.v_W.allFinite() || !s.w_W.allFinite()) return false;
+    }
+    for (const auto& tree : data_->trees) {
+      if (!tree->qpos.allFinite() || !tree->qvel.allFinite()) return false;
     }
     return true;
   }
@@ -134,6 +174,11 @@ class RigidtouchEngine final : public Engine {
     std::vector<WindowState> window;
     std::int64_t step = 0;
     int next_contact_id = 0;
+    std::vector<dynamics::TreeData> trees;
+    std::vector<std::vector<unsigned char>> joint_at_limit;
+    std::vector<WindowState> tree_window;
+    std::vector<geometry::GeomPose> geom_poses;
+    std::vector<geometry::GeomCheck> geom_check;
   };
 
   int threads_ = 1;

@@ -52,6 +52,19 @@ struct Scene {
   /// Gate: the deepest penetration over every step run (warm-up, gates, measurement).
   double max_penetration_m = std::numeric_limits<double>::infinity();
 
+  /// Gate (articulated scenes): the deepest penetration among the contacts of the tool over every
+  /// step after the warm-up (the gate run and the measurement: the push held steadily, after the
+  /// tool's first arrival), under this limit.
+  double max_tool_penetration_m = std::numeric_limits<double>::infinity();
+
+  /// Gate (articulated scenes): the joint `limit_joint` stays within [limit_lo, limit_hi] (its
+  /// MJCF range: rad for a hinge, m for a slide) to within `max_limit_overshoot` over every step
+  /// after the warm-up. Empty: no such gate.
+  std::string limit_joint;
+  double limit_lo = 0.0;
+  double limit_hi = 0.0;
+  double max_limit_overshoot = 0.0;
+
   /// Strike: the tool is placed straight above the centre of `strike_target`, `strike_gap_m` from
   /// its upward face (between the tool's surface and the face, along the face normal), moving
   /// down at `strike_speed_mps`.
@@ -69,6 +82,22 @@ std::string DefaultScenesDir();
 /// `scenes_dir`. `scale` in (0, 1] shortens the measurement (for smoke runs); gates and warm-up
 /// stay as specified. Throws `rigidtouch::Error` when `scale` is out of range.
 std::vector<Scene> BenchmarkScenes(const std::string& scenes_dir, double scale = 1.0);
+
+/// The articulated scenes (door, drawer, lever, arm: scenes/door.xml and so on), steady, the tool
+/// pushed onto the part a user touches with a constant force, with the tool-contact and
+/// joint-limit gates (docs/performance.md, "Articulated scenes").
+std::vector<Scene> ArticulatedBenchmarkScenes(const std::string& scenes_dir, double scale = 1.0);
+
+/// The humanoid scene: `wrapper_path` is the MJCF file WriteHumanoidWrapper() wrote. Steady, the
+/// tool pushed onto the torso with 2 N, the tool-contact gate only.
+Scene HumanoidBenchmarkScene(const std::string& wrapper_path, double scale = 1.0);
+
+/// Writes, into the folder `out_dir`, `humanoid_tool.xml`: an MJCF file that <include>s MuJoCo's
+/// model/humanoid/humanoid.xml from `humanoid_path`, sets the step to 1 ms, and adds the tool on
+/// the chest of the humanoid lying on its back (keyframe 'initial'). Returns its path. Throws
+/// `rigidtouch::Error` naming `flag` when `humanoid_path` is not a readable file.
+std::string WriteHumanoidWrapper(const std::string& humanoid_path, const std::string& out_dir,
+                                 const std::string& flag);
 
 /// The large scenes, run only when asked for (`--rigidtouch_large`): pile400, pile1000 and
 /// pile2000 (the pile's boxes on 10 x 10 x 4, x 10 and x 20 grids), steady, with the pile's gates.

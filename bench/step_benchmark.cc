@@ -2,7 +2,8 @@
 // MuJoCo, Bullet) on every benchmark scene, then tables of the results and of the ratios.
 //
 // Extra flags (after Google Benchmark's own):
-//   --rigidtouch_scenes=DIR   folder with tap.xml, stack.xml, pile.xml (default: the source tree)
+//   --rigidtouch_scenes=DIR   folder with tap.xml, stack.xml, pile.xml and the articulated
+//                             door.xml, drawer.xml, lever.xml, arm.xml (default: the source tree)
 //   --rigidtouch_scale=X      measure X (0 < X <= 1) of the specified steps, for smoke runs
 //   --rigidtouch_interleave=N instead of Google Benchmark's runs, measure every engine of a scene
 //                             in turns of N steps (strikes), the engines' order rotating: each
@@ -12,6 +13,8 @@
 //   --rigidtouch_only=A,B     only the scenes named (both modes; e.g. pile400,pile1000)
 //   --rigidtouch_engines=A,B  interleaved mode: only these engines (e.g. rigidtouch,bullet: MuJoCo
 //                             2.2 cannot hold pile1000's or pile2000's contacts)
+//   --rigidtouch_humanoid=PATH also the humanoid scene: MuJoCo's model/humanoid/humanoid.xml at
+//                             PATH, lying on its back with the tool pushed onto its chest
 //   --rigidtouch_peer_settings=stacking|defaults
 //                             the peers' solver settings: those their documentation recommends
 //                             for stacks (the default), or every setting at its default
@@ -21,8 +24,11 @@
 // whole runs only.
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -147,6 +153,18 @@ int main(int argc, char** argv) {
   const std::string only = FlagValue(argc, argv, "rigidtouch_only");
   const std::string only_engines = FlagValue(argc, argv, "rigidtouch_engines");
   const std::string peer_settings_text = FlagValue(argc, argv, "rigidtouch_peer_settings");
+  std::string humanoid_path;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--rigidtouch_humanoid" || arg.rfind("--rigidtouch_humanoid=", 0) == 0) {
+      humanoid_path = FlagValue(argc, argv, "rigidtouch_humanoid");
+      if (humanoid_path.empty()) {
+        std::cerr << "error: --rigidtouch_humanoid needs the path of MuJoCo's "
+                     "model/humanoid/humanoid.xml: --rigidtouch_humanoid=PATH\n";
+        return 2;
+      }
+    }
+  }
   DropFlags(argc, argv);
   int interleave = 0;
   if (!interleave_text.empty()) {
@@ -165,6 +183,14 @@ int main(int argc, char** argv) {
                                            ? PeerSettings::kStacking
                                            : ParsePeerSettings(peer_settings_text);
     scenes = BenchmarkScenes(scenes_dir, scale);
+    for (Scene& scene : ArticulatedBenchmarkScenes(scenes_dir, scale)) scenes.push_back(scene);
+    if (!humanoid_path.empty()) {
+      const std::string dir = (std::filesystem::temp_directory_path() /
+                               ("rigidtouch_bench_humanoid_" + std::to_string(getpid())))
+                                  .string();
+      scenes.push_back(HumanoidBenchmarkScene(
+          WriteHumanoidWrapper(humanoid_path, dir, "rigidtouch_humanoid"), scale));
+    }
     if (large || !only.empty()) {
       for (Scene& scene : LargeBenchmarkScenes(scenes_dir, scale)) scenes.push_back(scene);
     }

@@ -1,0 +1,429 @@
+#include "bench/bullet_tree.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+namespace rigidtouch::bench {
+namespace {
+
+bool FiniteScalar(btScalar value) {
+  return std::isfinite(static_cast<double>(value));
+}
+
+Vec3 MjVec(const mjtNum* v) {
+  return Vec3(v[0], v[1], v[2]);
+}
+
+btVector3 ToBt(const Vec3& v) {
+  return btVector3(v.x(), v.y(), v.z());
+}
+
+// a link's frame: its centre of mass, axes along the principal axes of its inertia plus the
+// joint's armature (a rotor inertia about the joint axis, which Bullet does not have)
+struct LinkFrame {
+  Eigen::Isometry3d T_world_link = Eigen::Isometry3d::Identity();
+  Vec3 moments = Vec3::Zero();
+};
+
+// `dummy`: a massless link for a body's joint other than its last one (a btMultiBody link has
+// one joint; MuJoCo composes a body's joints in order), at the joint's anchor in the body's
+// orientation, with only the joint's armature as inertia
+LinkFrame MakeLinkFrame(const mjModel& model, const mjData& reference, int body, int joint,
+                        bool dummy) {
+  LinkFrame frame;
+  if (dummy) {
+    frame.T_world_link = MjPose(reference.xanchor + 3 * joint, reference.xmat + 9 * body);
+  } else {
+    frame.T_world_link = MjPose(reference.xipos + 3 * body, reference.ximat + 9 * body);
+    frame.moments = MjVec(model.body_inertia + 3 * body);
+  }
+  const double armature = model.dof_armature[model.jnt_dofadr[joint]];
+  if (armature > 0.0 && model.jnt_type[joint] == mjJNT_HINGE) {
+    const Mat3 R_world_inertial = frame.T_world_link.linear();
+    const Vec3 axis = R_world_inertial.transpose() * MjVec(reference.xaxis + 3 * joint);
+    const Mat3 inertia = Mat3(frame.moments.asDiagonal()) + armature * axis * axis.transpose();
+    const Eigen::SelfAdjointEigenSolver<Mat3> solver(inertia);
+    Mat3 axes = solver.eigenvectors();
+    if (axes.determinant() < 0) axes.col(2) *= -1.0;
+    frame.T_world_link.linear() = R_world_inertial * axes;
+    frame.moments = solver.eigenvalues().cwiseMax(0.0);
+  }
+  return frame;
+}
+
+// sets up link i of `multibody` for MuJoCo joint j (hinge or slide) between the parent's frame
+// and the link's, both at the reference configuration
+void SetupLink(btMultiBody& multibody, int i, int parent, const Eigen::Isometry3d& T_world_parent,
+               const LinkFrame& frame, double mass, const mjModel& model, const mjData& reference,
+               int j) {
+  const Mat3 R_link_world = frame.T_world_link.linear().transpose();
+  const Eigen::Quaterniond rotation(R_link_world * T_world_parent.linear());
+  const Vec3 axis = R_link_world * MjVec(reference.xaxis + 3 * j);
+  const Vec3 anchor_W = MjVec(reference.xanchor + 3 * j);
+  const Vec3 parent_to_pivot =
+      T_world_parent.linear().transpose() * (anchor_W - T_world_parent.translation());
+  const Vec3 pivot_to_com = R_link_world * (frame.T_world_link.translation() - anchor_W);
+  const btQuaternion bt_rotation(rotation.x(), rotation.y(), rotation.z(), rotation.w());
+  if (model.jnt_type[j] == mjJNT_HINGE) {
+    multibody.setupRevolute(i, mass, ToBt(frame.moments), parent, bt_rotation, ToBt(axis),
+                            ToBt(parent_to_pivot), ToBt(pivot_to_com), true);
+  } else {
+    multibody.setupPrismatic(i, mass, ToBt(frame.moments), parent, bt_rotation, ToBt(axis),
+                             ToBt(parent_to_pivot), ToBt(pivot_to_com), true);
+  }
+}
+
+}  // namespace
+
+Eigen::Isometry3d MjPose(const mjtNum* position, const mjtNum* rotation) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Vec3(position[0], position[1], position[2]);
+  pose.linear() = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rotation);
+  return pose;
+}
+
+btTransform ToBullet(const Eigen::Isometry3d& pose) {
+  const Mat3& r = pose.linear();
+  const Vec3& p = pose.translation();
+  return btTransform(
+      btMatrix3x3(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)),
+      btVector3(p.x(), p.y(), p.z()));
+}
+
+Eigen::Isometry3d FromBullet(const btTransform& transform) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  const btMatrix3x3& r = transform.getBasis();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) pose.linear()(i, j) = r[i][j];
+  }
+  const btVector3& p = transform.getOrigin();
+  pose.translation() = Vec3(p.x(), p.y(), p.z());
+  return pose;
+}
+
+std::string ElementName(const mjModel& model, mjtObj type, int id) {
+  const char* name = mj_id2name(&model, type, id);
+  if (name != nullptr) return name;
+  std::string unnamed = "#";
+  unnamed.append(std::to_string(id));
+  return unnamed;
+}
+
+std::unique_ptr<btCollisionShape> MakeBulletShape(const mjModel& model, int geom,
+                                                  const std::string& path) {
+  const mjtNum* size = model.geom_size + 3 * geom;
+  switch (model.geom_type[geom]) {
+    case mjGEOM_PLANE:
+      return std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
+    case mjGEOM_SPHERE:
+      return std::make_unique<btSphereShape>(size[0]);
+    case mjGEOM_BOX:
+      return std::make_unique<btBoxShape>(btVector3(size[0], size[1], size[2]));
+    case mjGEOM_CAPSULE:
+      return std::make_unique<btCapsuleShapeZ>(size[0], 2 * size[1]);
+    case mjGEOM_CYLINDER:
+      return std::make_unique<btCylinderShapeZ>(btVector3(size[0], size[0], size[1]));
+    default:
+      throw Error("scene " + path + ": geom '" + ElementName(model, mjOBJ_GEOM, geom) +
+                  "' has type " + std::to_string(model.geom_type[geom]) +
+                  "; the Bullet peer supports plane, sphere, box, capsule and cylinder");
+  }
+}
+
+double BulletFriction(double mu) {
+  return std::sqrt(std::max(mu, 0.0));
+}
+
+bool IsTreeBody(const mjModel& model, int body) {
+  for (int b = body; b > 0; b = model.body_parentid[b]) {
+    const int n = model.body_jntnum[b];
+    if (n == 0) continue;
+    const bool lone_free =
+        n == 1 && model.jnt_type[model.body_jntadr[b]] == mjJNT_FREE && model.body_parentid[b] == 0;
+    if (!lone_free) return true;
+  }
+  return false;
+}
+
+BulletTrees::~BulletTrees() {
+  Clear();
+}
+
+void BulletTrees::Clear() {
+  if (world_ != nullptr) {
+    for (auto& limit : limits_) world_->removeMultiBodyConstraint(limit.get());
+    for (auto& collider : colliders_) world_->removeCollisionObject(collider.get());
+    for (auto& multibody : multibodies_) world_->removeMultiBody(multibody.get());
+  }
+  limits_.clear();
+  colliders_.clear();
+  multibodies_.clear();
+  shapes_.clear();
+  joints_.clear();
+  joint_index_.clear();
+  links_.clear();
+  saved_.clear();
+  world_ = nullptr;
+}
+
+void BulletTrees::Build(const mjModel& model, const mjData& reference, const mjtNum* qpos,
+                        const mjtNum* qvel, const mjtNum* ctrl, btMultiBodyDynamicsWorld& world,
+                        const std::string& path) {
+  Clear();
+  world_ = &world;
+  for (int a = 0; a < model.nu; ++a) {
+    const int target = model.actuator_trnid[2 * a];
+    const bool on_tree_joint =
+        model.actuator_trntype[a] == mjTRN_JOINT && IsTreeBody(model, model.jnt_bodyid[target]);
+    const bool supported =
+        model.actuator_dyntype[a] == mjDYN_NONE && model.actuator_gaintype[a] == mjGAIN_FIXED &&
+        (model.actuator_biastype[a] == mjBIAS_NONE || model.actuator_biastype[a] == mjBIAS_AFFINE);
+    if (!on_tree_joint || !supported) {
+      throw Error("scene " + path + ": actuator '" + ElementName(model, mjOBJ_ACTUATOR, a) +
+                  "' is not a joint actuator with a fixed gain and an affine bias (motor, "
+                  "position, velocity); the Bullet peer supports only those");
+    }
+  }
+  for (int b = 1; b < model.nbody; ++b) {
+    if (IsTreeBody(model, b) && !IsTreeBody(model, model.body_rootid[b])) {
+      throw Error("scene " + path + ": body '" + ElementName(model, mjOBJ_BODY, b) +
+                  "' hangs from the free body '" +
+                  ElementName(model, mjOBJ_BODY, model.body_rootid[b]) +
+                  "'; the Bullet peer builds only trees with a fixed base");
+    }
+  }
+  for (int b = 1; b < model.nbody; ++b) {
+    if (model.body_parentid[b] == 0 && IsTreeBody(model, b)) {
+      BuildTree(model, reference, b, ctrl, path);
+    }
+  }
+  for (int j = 0; j < model.njnt; ++j) {
+    const auto it = joint_index_.find(ElementName(model, mjOBJ_JOINT, j));
+    if (it == joint_index_.end()) continue;
+    const Joint& joint = joints_[static_cast<std::size_t>(it->second)];
+    btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(joint.tree)];
+    multibody.setJointPos(joint.link, qpos[model.jnt_qposadr[j]] - joint.qpos0);
+    multibody.setJointVel(joint.link, qvel[model.jnt_dofadr[j]]);
+  }
+  for (auto& multibody : multibodies_) UpdatePoses(*multibody);
+}
+
+int BulletTrees::BuildTree(const mjModel& model, const mjData& reference, int root,
+                           const mjtNum* ctrl, const std::string& path) {
+  // one link per joint, a body's joints in MuJoCo's order
+  std::vector<std::pair<int, int>> specs;  // (body, joint)
+  for (int b = root; b < model.nbody; ++b) {
+    if (model.body_rootid[b] != root) continue;
+    if (model.body_jntnum[b] == 0) {
+      throw Error("scene " + path + ": body '" + ElementName(model, mjOBJ_BODY, b) +
+                  "' of a tree has no joint; the Bullet peer does not merge welded bodies");
+    }
+    for (int j = model.body_jntadr[b]; j < model.body_jntadr[b] + model.body_jntnum[b]; ++j) {
+      if (model.jnt_type[j] != mjJNT_HINGE && model.jnt_type[j] != mjJNT_SLIDE) {
+        throw Error("scene " + path + ": joint '" + ElementName(model, mjOBJ_JOINT, j) +
+                    "' of body '" + ElementName(model, mjOBJ_BODY, b) +
+                    "' is not a hinge or slide; the Bullet peer's btMultiBody takes only those");
+      }
+      specs.emplace_back(b, j);
+    }
+  }
+  const int tree = static_cast<int>(multibodies_.size());
+  auto multibody = std::make_unique<btMultiBody>(static_cast<int>(specs.size()), 1.0,
+                                                 btVector3(1, 1, 1), true, false);
+  multibody->setBasePos(btVector3(0, 0, 0));
+  multibody->setWorldToBaseRot(btQuaternion::getIdentity());
+  std::unordered_map<int, int> last_link_of;  // MuJoCo body -> its last joint's link
+  std::vector<LinkFrame> frames;
+  std::vector<std::pair<int, int>> limited;  // (link, joint)
+  for (int i = 0; i < static_cast<int>(specs.size()); ++i) {
+    const auto [b, j] = specs[static_cast<std::size_t>(i)];
+    const bool first = j == model.body_jntadr[b];
+    const bool last = j == model.body_jntadr[b] + model.body_jntnum[b] - 1;
+    // the root's parent is the fixed base, at the world frame
+    const int parent = !first                        ? i - 1
+                       : model.body_parentid[b] == 0 ? -1
+                                                     : last_link_of.at(model.body_parentid[b]);
+    const Eigen::Isometry3d T_world_parent =
+        parent < 0 ? Eigen::Isometry3d::Identity()
+                   : frames[static_cast<std::size_t>(parent)].T_world_link;
+    const LinkFrame frame = MakeLinkFrame(model, reference, b, j, !last);
+    SetupLink(*multibody, i, parent, T_world_parent, frame, last ? model.body_mass[b] : 0.0, model,
+              reference, j);
+    frames.push_back(frame);
+    AddJoint(model, j, tree, i, ctrl);
+    if (model.jnt_limited[j]) limited.emplace_back(i, j);
+    if (last) {
+      last_link_of[b] = i;
+      AddCollider(model, reference, b, *multibody, tree, i, frame.T_world_link, path);
+    }
+  }
+  // MuJoCo has no damping of link velocities; Bullet's default is 0.04
+  multibody->setLinearDamping(0);
+  multibody->setAngularDamping(0);
+  // no contacts between links of one tree: MuJoCo excludes a body and its parent, and a body with
+  // several joints is a chain of links here, whose ends Bullet would not exclude; the shipped
+  // scenes have no contact between other links of a tree
+  multibody->setHasSelfCollision(false);
+  multibody->finalizeMultiDof();
+  world_->addMultiBody(multibody.get());
+  for (const auto& [link, j] : limited) {
+    const double qpos0 = model.qpos0[model.jnt_qposadr[j]];
+    limits_.push_back(std::make_unique<btMultiBodyJointLimitConstraint>(
+        multibody.get(), link, model.jnt_range[2 * j] - qpos0, model.jnt_range[2 * j + 1] - qpos0));
+    world_->addMultiBodyConstraint(limits_.back().get());
+  }
+  multibodies_.push_back(std::move(multibody));
+  return tree;
+}
+
+void BulletTrees::AddJoint(const mjModel& model, int j, int tree, int link, const mjtNum* ctrl) {
+  Joint joint;
+  joint.tree = tree;
+  joint.link = link;
+  joint.qpos0 = model.qpos0[model.jnt_qposadr[j]];
+  joint.stiffness = model.jnt_stiffness[j];
+  joint.springref = model.qpos_spring[model.jnt_qposadr[j]];
+  joint.damping = model.dof_damping[model.jnt_dofadr[j]];
+  for (int a = 0; a < model.nu; ++a) {
+    if (model.actuator_trnid[2 * a] != j) continue;
+    Actuator actuator;
+    actuator.gear = model.actuator_gear[6 * a];
+    actuator.gain = model.actuator_gainprm[mjNGAIN * a];
+    if (model.actuator_biastype[a] == mjBIAS_AFFINE) {
+      actuator.bias0 = model.actuator_biasprm[mjNBIAS * a];
+      actuator.bias1 = model.actuator_biasprm[mjNBIAS * a + 1];
+      actuator.bias2 = model.actuator_biasprm[mjNBIAS * a + 2];
+    }
+    actuator.ctrl = ctrl[a];
+    if (model.actuator_ctrllimited[a]) {
+      actuator.ctrl = std::clamp(actuator.ctrl, model.actuator_ctrlrange[2 * a],
+                                 model.actuator_ctrlrange[2 * a + 1]);
+    }
+    actuator.force_limited = model.actuator_forcelimited[a] != 0;
+    actuator.force_lo = model.actuator_forcerange[2 * a];
+    actuator.force_hi = model.actuator_forcerange[2 * a + 1];
+    joint.actuators.push_back(actuator);
+  }
+  joint_index_[ElementName(model, mjOBJ_JOINT, j)] = static_cast<int>(joints_.size());
+  joints_.push_back(joint);
+}
+
+void BulletTrees::AddCollider(const mjModel& model, const mjData& reference, int b,
+                              btMultiBody& multibody, int tree, int i,
+                              const Eigen::Isometry3d& T_world_link, const std::string& path) {
+  Link link;
+  link.tree = tree;
+  link.link = i;
+  link.T_link_body =
+      T_world_link.inverse() * MjPose(reference.xpos + 3 * b, reference.xmat + 9 * b);
+  const int first_geom = model.body_geomadr[b];
+  const int geom_count = model.body_geomnum[b];
+  if (geom_count > 0) {
+    auto compound = std::make_unique<btCompoundShape>();
+    for (int g = first_geom; g < first_geom + geom_count; ++g) {
+      shapes_.push_back(MakeBulletShape(model, g, path));
+      const Eigen::Isometry3d T_link_geom =
+          T_world_link.inverse() * MjPose(reference.geom_xpos + 3 * g, reference.geom_xmat + 9 * g);
+      compound->addChildShape(ToBullet(T_link_geom), shapes_.back().get());
+    }
+    shapes_.push_back(std::move(compound));
+    auto collider = std::make_unique<btMultiBodyLinkCollider>(&multibody, i);
+    collider->setCollisionShape(shapes_.back().get());
+    collider->setWorldTransform(ToBullet(T_world_link));
+    // Bullet keeps one friction per object: the first geom's
+    collider->setFriction(BulletFriction(model.geom_friction[3 * first_geom]));
+    collider->setRestitution(0);
+    world_->addCollisionObject(collider.get(), btBroadphaseProxy::DefaultFilter,
+                               btBroadphaseProxy::AllFilter);
+    multibody.getLink(i).m_collider = collider.get();
+    link.collider = collider.get();
+    colliders_.push_back(std::move(collider));
+  }
+  links_[ElementName(model, mjOBJ_BODY, b)] = link;
+}
+
+void BulletTrees::UpdatePoses(btMultiBody& multibody) {
+  btAlignedObjectArray<btQuaternion> world_to_local;
+  btAlignedObjectArray<btVector3> local_origin;
+  multibody.forwardKinematics(world_to_local, local_origin);
+  multibody.updateCollisionObjectWorldTransforms(world_to_local, local_origin);
+}
+
+void BulletTrees::ApplyJointForces() {
+  for (const Joint& joint : joints_) {
+    btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(joint.tree)];
+    const double q = multibody.getJointPos(joint.link) + joint.qpos0;
+    const double qdot = multibody.getJointVel(joint.link);
+    double torque = -joint.damping * qdot - joint.stiffness * (q - joint.springref);
+    for (const Actuator& a : joint.actuators) {
+      double force = a.gain * a.ctrl + a.bias0 + a.bias1 * a.gear * q + a.bias2 * a.gear * qdot;
+      if (a.force_limited) force = std::clamp(force, a.force_lo, a.force_hi);
+      torque += a.gear * force;
+    }
+    multibody.addJointTorque(joint.link, torque);
+  }
+}
+
+double BulletTrees::JointPosition(std::string_view joint) const {
+  const auto it = joint_index_.find(std::string(joint));
+  if (it == joint_index_.end()) {
+    throw Error("the Bullet peer's trees have no hinge or slide joint named '" +
+                std::string(joint) + "'");
+  }
+  const Joint& j = joints_[static_cast<std::size_t>(it->second)];
+  return multibodies_[static_cast<std::size_t>(j.tree)]->getJointPos(j.link) + j.qpos0;
+}
+
+const btCollisionObject* BulletTrees::Collider(std::string_view body) const {
+  const auto it = links_.find(std::string(body));
+  return it == links_.end() ? nullptr : it->second.collider;
+}
+
+bool BulletTrees::HasBody(std::string_view body) const {
+  return links_.count(std::string(body)) > 0;
+}
+
+Eigen::Isometry3d BulletTrees::BodyPose(std::string_view body) const {
+  const auto it = links_.find(std::string(body));
+  if (it == links_.end()) {
+    throw Error("the Bullet peer's trees have no body named '" + std::string(body) + "'");
+  }
+  const Link& link = it->second;
+  const btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(link.tree)];
+  // the collider's pose is the link's after the last step's integration; the cached one is from
+  // the kinematics at the step's start
+  const btTransform T_world_link = link.collider != nullptr
+                                       ? link.collider->getWorldTransform()
+                                       : multibody.getLink(link.link).m_cachedWorldTransform;
+  return FromBullet(T_world_link) * link.T_link_body;
+}
+
+void BulletTrees::Save() {
+  saved_.clear();
+  for (const Joint& joint : joints_) {
+    const btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(joint.tree)];
+    saved_.push_back(multibody.getJointPos(joint.link));
+    saved_.push_back(multibody.getJointVel(joint.link));
+  }
+}
+
+void BulletTrees::Restore() {
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(joints_[k].tree)];
+    multibody.setJointPos(joints_[k].link, saved_[2 * k]);
+    multibody.setJointVel(joints_[k].link, saved_[2 * k + 1]);
+    multibody.clearForcesAndTorques();
+  }
+  for (auto& multibody : multibodies_) UpdatePoses(*multibody);
+}
+
+bool BulletTrees::Finite() const {
+  return std::all_of(joints_.begin(), joints_.end(), [this](const Joint& joint) {
+    const btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(joint.tree)];
+    return FiniteScalar(multibody.getJointPos(joint.link)) &&
+           FiniteScalar(multibody.getJointVel(joint.link));
+  });
+}
+
+}  // namespace rigidtouch::bench

@@ -1,0 +1,132 @@
+// Bullet peer, articulated scenes: every kinematic tree of a compiled mjModel as a btMultiBody
+// (Featherstone) with a fixed base, one link per MJCF body, joint limits as
+// btMultiBodyJointLimitConstraint, and the joints' springs, dampers and actuators as explicit joint
+// torques before every step (as PyBullet applies a URDF's joint damping). The approximations are
+// listed in docs/performance.md ("Articulated scenes").
+#pragma once
+
+#include <BulletDynamics/Featherstone/btMultiBody.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+#include <BulletDynamics/Featherstone/btMultiBodyJointLimitConstraint.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
+#include <btBulletDynamicsCommon.h>
+#include <mujoco/mujoco.h>
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "rigidtouch/types.h"
+
+namespace rigidtouch::bench {
+
+/// Pose from MuJoCo's world position (3) and row-major rotation matrix (9).
+Eigen::Isometry3d MjPose(const mjtNum* position, const mjtNum* rotation);
+/// The Bullet transform of a pose.
+btTransform ToBullet(const Eigen::Isometry3d& pose);
+/// The pose of a Bullet transform.
+Eigen::Isometry3d FromBullet(const btTransform& transform);
+/// The MJCF name of an element, or "#<id>" when it has none.
+std::string ElementName(const mjModel& model, mjtObj type, int id);
+/// The Bullet shape of a geom with its MJCF size, in the geom's own frame (plane, sphere, box,
+/// capsule, cylinder). Throws `rigidtouch::Error` naming `path` and the geom for other types.
+std::unique_ptr<btCollisionShape> MakeBulletShape(const mjModel& model, int geom,
+                                                  const std::string& path);
+/// The friction given to each Bullet object for an MJCF sliding friction `mu`: Bullet multiplies
+/// the two objects' frictions, MuJoCo takes the larger; sqrt(mu) makes equal frictions agree.
+double BulletFriction(double mu);
+
+/// Returns true when `body` belongs to a kinematic tree: it or an ancestor below the world has a
+/// joint, other than a lone free joint of a body whose parent is the world.
+bool IsTreeBody(const mjModel& model, int body);
+
+/// The trees of one scene, built into a btMultiBodyDynamicsWorld and owned here.
+class BulletTrees {
+ public:
+  BulletTrees() = default;
+  BulletTrees(const BulletTrees&) = delete;
+  BulletTrees& operator=(const BulletTrees&) = delete;
+  ~BulletTrees();
+
+  /// Builds every tree of `model` into `world`. `reference` must hold the kinematics at the
+  /// reference configuration (qpos0, after mj_forward); `qpos`, `qvel` and `ctrl` are the initial
+  /// state and controls (the keyframe). One link per joint: a body with several joints becomes a
+  /// chain of massless links ending in the body's. Throws `rigidtouch::Error` naming `path` for
+  /// what is not built here: a tree below a free body (a floating base), a tree body without a
+  /// joint, a joint other than a hinge or slide, an actuator other than a joint's fixed-gain,
+  /// affine-bias one.
+  void Build(const mjModel& model, const mjData& reference, const mjtNum* qpos, const mjtNum* qvel,
+             const mjtNum* ctrl, btMultiBodyDynamicsWorld& world, const std::string& path);
+
+  /// Removes everything Build() added from the world and frees it.
+  void Clear();
+
+  /// Adds this step's joint torques: -damping qdot - stiffness (q - springref) plus each
+  /// actuator's gear (gain ctrl + bias0 + bias1 l + bias2 ldot), clamped to its force range.
+  void ApplyJointForces();
+
+  /// Returns the named hinge's or slide's position in MuJoCo's coordinates (Bullet's plus
+  /// qpos0). Throws `rigidtouch::Error` when no tree has that joint.
+  double JointPosition(std::string_view joint) const;
+
+  /// Returns the named tree body's collision object (null when it has no geom), or null when no
+  /// tree has that body.
+  const btCollisionObject* Collider(std::string_view body) const;
+
+  /// Returns true when `body` is a body of a tree.
+  bool HasBody(std::string_view body) const;
+
+  /// Returns the named tree body's MJCF frame in the world. Throws when no tree has that body.
+  Eigen::Isometry3d BodyPose(std::string_view body) const;
+
+  /// Stores every joint's position and velocity.
+  void Save();
+  /// Brings back the last Save() and updates the links' poses and colliders.
+  void Restore();
+  /// Returns true when every joint position and velocity is finite.
+  bool Finite() const;
+
+  /// Returns the multibodies (one per tree).
+  const std::vector<std::unique_ptr<btMultiBody>>& multibodies() const { return multibodies_; }
+  /// Returns the number of joint-limit constraints.
+  int limit_count() const { return static_cast<int>(limits_.size()); }
+
+ private:
+  struct Actuator {
+    double gear = 1, gain = 0, bias0 = 0, bias1 = 0, bias2 = 0, ctrl = 0;
+    bool force_limited = false;
+    double force_lo = 0, force_hi = 0;
+  };
+  struct Joint {
+    int tree = -1, link = -1;
+    double qpos0 = 0, stiffness = 0, springref = 0, damping = 0;
+    std::vector<Actuator> actuators;
+  };
+  struct Link {
+    int tree = -1, link = -1;
+    btMultiBodyLinkCollider* collider = nullptr;
+    Eigen::Isometry3d T_link_body = Eigen::Isometry3d::Identity();  // MJCF frame in the link's
+  };
+
+  int BuildTree(const mjModel& model, const mjData& reference, int root, const mjtNum* ctrl,
+                const std::string& path);
+  void AddJoint(const mjModel& model, int j, int tree, int link, const mjtNum* ctrl);
+  void AddCollider(const mjModel& model, const mjData& reference, int b, btMultiBody& multibody,
+                   int tree, int i, const Eigen::Isometry3d& T_world_link, const std::string& path);
+  void UpdatePoses(btMultiBody& multibody);
+
+  btMultiBodyDynamicsWorld* world_ = nullptr;
+  std::vector<std::unique_ptr<btMultiBody>> multibodies_;
+  std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders_;
+  std::vector<std::unique_ptr<btMultiBodyJointLimitConstraint>> limits_;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes_;
+  std::vector<Joint> joints_;
+  std::unordered_map<std::string, int> joint_index_;
+  std::unordered_map<std::string, Link> links_;
+  std::vector<double> saved_;
+};
+
+}  // namespace rigidtouch::bench
