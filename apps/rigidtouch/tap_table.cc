@@ -173,7 +173,7 @@ std::string TapTableNote(TapTable table, const analysis::TapRun& run) {
 
 std::string JointTableHeader() {
   return "| renderer | joint | inertia about it | damping | swing per tap (end - start), mean | "
-         "largest excursion from the start, mean | peak joint speed, mean | impulse the tool gave "
+         "furthest past its limit, mean | peak joint speed, mean | impulse the tool gave "
          "the joint, mean | impulse / damping (a damped swing's closed form), mean "
          "|\n|---|---|---|---|---|---|---|---|---|";
 }
@@ -184,11 +184,15 @@ std::string JointTableRow(const std::string& name, const analysis::TapRun& run) 
   // a hinge in degrees, a slide in millimetres
   const double scale = hinge ? 180.0 / std::numbers::pi : 1e3;
   const std::string unit = hinge ? " deg" : " mm";
-  double swing = 0.0, excursion = 0.0, speed = 0.0, impulse = 0.0;
+  const JointModel& joint = run.model.trees[run.wall.tree].joints[run.wall.joint];
+  double swing = 0.0, past = 0.0, speed = 0.0, impulse = 0.0;
+  bool limit = false;  // the joint went past a limit (its row pushed back)
   for (const analysis::JointMotion& j : run.joint_taps) {
     swing += j.position_at_end - j.position_at_start;
-    excursion +=
-        std::max(j.max_position - j.position_at_start, j.position_at_start - j.min_position);
+    const double beyond = std::max(
+        {j.max_position - joint.range_hi_rad_or_m, joint.range_lo_rad_or_m - j.min_position, 0.0});
+    past += beyond;
+    limit = limit || (joint.limited && beyond > 1e-9);
     speed += j.peak_speed;
     impulse += j.impulse;
   }
@@ -198,19 +202,12 @@ std::string JointTableRow(const std::string& name, const analysis::TapRun& run) 
     << text::Significant(run.joint_inertia, 4) << (hinge ? " kg m^2" : " kg") << " | "
     << text::Significant(run.joint_damping, 4) << (hinge ? " N m s/rad" : " N s/m") << " | "
     << text::Significant(scale * swing / n, 3) << unit << " | "
-    << text::Significant(scale * excursion / n, 3) << unit << " | "
-    << text::Significant(scale * speed / n, 3) << unit << "/s | "
+    << (joint.limited ? text::Significant(scale * past / n, 3) + unit : std::string("- (no limit)"))
+    << " | " << text::Significant(scale * speed / n, 3) << unit << "/s | "
     << text::Significant(impulse / n, 3) << (hinge ? " N m s" : " N s") << " | ";
-  // the closed form holds for a damper alone: not with a spring, nor when the joint went past a
-  // limit (its row pushed back)
-  const JointModel& joint = run.model.trees[run.wall.tree].joints[run.wall.joint];
-  bool limit = false;
-  for (const analysis::JointMotion& j : run.joint_taps) {
-    limit = limit || (joint.limited && (j.max_position > joint.range_hi_rad_or_m + 1e-9 ||
-                                        j.min_position < joint.range_lo_rad_or_m - 1e-9));
-  }
+  // the closed form holds for a damper alone: not with a spring, nor past a limit
   if (limit) {
-    s << "- (at its limit)";
+    s << "- (past its limit)";
   } else if (run.joint_damping > 0.0 && run.joint_stiffness == 0.0) {
     s << text::Significant(scale * impulse / n / run.joint_damping, 3) << unit;
   } else {

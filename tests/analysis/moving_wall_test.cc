@@ -77,13 +77,16 @@ TEST(MovingWallTest, TheDoorStopIsPassiveAtThePortWhateverItsRenderer) {
 // comes to rest again having turned by L / c: integrating I dw/dt = tau - c w from rest to rest,
 // c (theta_end - theta_start) = integral of tau dt = L, whatever the tap's time course (for an
 // instantaneous tap, I w0 = L and the swing is I w0 / c). Measured on the test door tapped on its
-// +y face (it opens away from the stop), L from the tool's contact impulses at their points
-// (J^T P). Tolerance 2 % of the swing (the contact point under the tool moves with the door; the
-// last millisecond of the tap's impulse lands in the trace after the tap's window). With the
-// damping ignored the door would not stop: the swing would grow with the run's length.
-// The onset impulse of the single-impulse renderer checks the inertia: the door's velocity
-// after the onset tick is its joint impulse over I = 3.2584 kg m^2 (the panel about the hinge
-// plus the armature, the scene's comment), within 1 %.
+// +y face (it opens away from its stop), L summed from the tool's contact impulses at their
+// points (J^T P), with the door's inertia I = 3.2584 kg m^2 (the panel about the hinge plus the
+// armature, the scene's comment). At the run's end the door still turns a little: what is left
+// of its swing, I w_end / c, is asserted under 1 % of it, and the swing so far is within 1 % of
+// L / c; with that remainder, the momentum balance c (theta_end - theta_start) + I w_end = L
+// holds to 1e-6 (the step's damper is backward Euler: the sum of c w h over the ticks is exactly
+// c times the turned angle). Were the damping ignored, the door would keep turning at L / I and
+// both would fail. The onset tick checks the inertia: the single impulse changes the door's
+// velocity by its joint impulse over I + h c (the damper is implicit in the solve: 1.2 % here;
+// without the armature I would be 18 % smaller), within 0.1 %.
 TEST(MovingWallTest, ATappedDoorSwingsByItsAngularImpulseOverTheDamping) {
   TapExperimentConfig c;
   c.scene_path = Scene("tests/scenes/articulated/door_swing.xml");
@@ -92,30 +95,32 @@ TEST(MovingWallTest, ATappedDoorSwingsByItsAngularImpulseOverTheDamping) {
   c.load.render.renderer = RendererKind::kImpulse;
   c.script.approach_speed_mps = 0.2;
   c.script.taps = 1;
-  c.script.pause_s = 0.6;  // ten of the door's I / c after the tool has left
   const TapRun run = RunTapExperiment(c);
   ASSERT_TRUE(run.wall.moving());
   EXPECT_NEAR((run.wall.normal - Vec3(0.0, 1.0, 0.0)).norm(), 0.0, 1e-12);
-  EXPECT_NEAR(run.joint_damping, 40.0, 1e-12);
+  const double damping = 40.0, h = 1e-3;
+  EXPECT_NEAR(run.joint_damping, damping, 1e-12);
   const double inertia = 12.0 * (0.8 * 0.8 + 0.04 * 0.04) / 12.0 + 12.0 * 0.42 * 0.42 + 0.5;
   EXPECT_NEAR(run.joint_inertia, inertia, 1e-9 * inertia);
   ASSERT_EQ(run.joint_taps.size(), 1u);
   const JointMotion& j = run.joint_taps[0];
-  // the door has come to rest: what is left of its swing, I w / c, is under 0.1 % of it
   const double swing = j.position_at_end - j.position_at_start;
   ASSERT_LT(swing, -1e-3);  // it opened (negative angles), by more than a milliradian
-  EXPECT_LT(std::abs(inertia * j.velocity_at_end / 40.0), 1e-3 * std::abs(swing));
-  EXPECT_NEAR(swing, j.impulse / 40.0, 0.02 * std::abs(swing))
-      << "swing " << swing << " rad, L / c " << j.impulse / 40.0 << " rad";
+  const double remainder = inertia * j.velocity_at_end / damping;
+  EXPECT_LT(std::abs(remainder), 0.01 * std::abs(swing));
+  EXPECT_NEAR(swing, j.impulse / damping, 0.01 * std::abs(swing))
+      << "swing " << swing << " rad, L / c " << j.impulse / damping << " rad";
+  EXPECT_NEAR(damping * swing + inertia * j.velocity_at_end, j.impulse, 1e-6 * std::abs(j.impulse));
   // the onset tick: the single impulse (and the tick's penalty) sets the door moving
   std::size_t onset = 0;
   while (onset < run.trace.size() && run.trace[onset].impulses == 0) ++onset;
   ASSERT_LT(onset, run.trace.size());
+  ASSERT_GT(onset, 0u);
   const WallSample& w = run.wall_trace[onset];
   ASSERT_LT(w.joint_impulse, 0.0);
-  const double w_before = run.wall_trace[onset - 1].joint_velocity;
-  EXPECT_NEAR(w.joint_velocity - w_before, w.joint_impulse / inertia,
-              0.01 * std::abs(w.joint_impulse / inertia));
+  const double dw = w.joint_velocity - run.wall_trace[onset - 1].joint_velocity;
+  const double expected = w.joint_impulse / (inertia + h * damping);
+  EXPECT_NEAR(dw, expected, 1e-3 * std::abs(expected));
 }
 
 }  // namespace
