@@ -49,8 +49,9 @@ TEST(MovingWallTest, ALinkGeomIsAMovingWallFacingTheTool) {
 // the door pushed into its stop: whichever way the stop renders (penalty, one impulse, a train),
 // the device gives the hand no energy over the tap (energy to user = sum F_k . (x_{k+1} - x_k)
 // <= 0), every displayed force is finite and within the device's limit, the stop holds (the door
-// turns less than 1 degree past it) and the approach speed at onset is the tool's relative to the
-// resting door (the requested speed within 10 %: the hand's spring and the encoder)
+// turns less than 1 degree past it), every impulse of the tool's group (door included) takes
+// kinetic energy out, and the approach speed at onset is the tool's relative to the resting door
+// (the requested speed within 10 %: the hand's spring and the encoder)
 TEST(MovingWallTest, TheDoorStopIsPassiveAtThePortWhateverItsRenderer) {
   for (RendererKind limit :
        {RendererKind::kPenalty, RendererKind::kImpulse, RendererKind::kTrain}) {
@@ -65,10 +66,19 @@ TEST(MovingWallTest, TheDoorStopIsPassiveAtThePortWhateverItsRenderer) {
       EXPECT_LE(m.energy_to_user_J, 0.0) << what;
       EXPECT_NEAR(m.approach_speed_mps, 0.2, 0.02) << what;
       EXPECT_LT(run.joint_taps[0].max_position, 1.0 * M_PI / 180.0) << what;
+      int impulse_ticks = 0;
       for (const TraceSample& s : run.trace) {
         ASSERT_TRUE(s.device_force_N.allFinite()) << what;
         ASSERT_LE(s.device_force_N.norm(), run.device.max_force_N + 1e-9) << what;
+        // every impulse of the tool's group (the contact's and the stop's, with the door in the
+        // group) leaves it no more kinetic energy than it had
+        if (s.impulses > 0) {
+          ++impulse_ticks;
+          EXPECT_LE(s.kinetic_energy_after_J, s.kinetic_energy_before_J * (1.0 + 1e-12))
+              << what << " at " << s.time_s << " s";
+        }
       }
+      EXPECT_GT(impulse_ticks, 0) << what;
     }
   }
 }
