@@ -338,10 +338,6 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   device::SimulatedDevice& dev = *setup.simulated;
 
   if (model.device.coupling == Coupling::kDirect) UseDeviceAndHandMass(model, dm, config.hand);
-  // the simulated device works where the wall is: its state is plausible within 0.5 m of the
-  // wall (a door's panel lies 1.2 m from the origin; a wall at the origin keeps the default 1 m)
-  model.device.plausible_radius_m =
-      std::max(model.device.plausible_radius_m, setup.wall.point_m.norm() + 0.5);
   const DeviceState start = dev.Read();
   model.initial[model.tool].x_W = start.position_m;
   model.initial[model.tool].v_W.setZero();
@@ -435,6 +431,12 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   run.device = setup.device;
   Model& model = setup.model;
   device::SimulatedDevice& dev = *setup.simulated;
+  // the experiment's simulated device works where the wall is: its state is plausible within
+  // 0.5 m of the wall (a door's panel lies 1.2 m from the origin; a wall at the origin keeps the
+  // default 1 m). Only here: a loop driven from elsewhere (PrepareTap) keeps the limits it was
+  // given
+  model.device.plausible_radius_m =
+      std::max(model.device.plausible_radius_m, setup.wall.point_m.norm() + 0.5);
   Data data = MakeData(model);
   const Wall& wall = setup.wall;
   const double reach = ToolReach(model, wall.normal);
