@@ -5,7 +5,10 @@ impulse instants, penetration and velocity, and the spectrum of the displayed fo
 transient part over the collision window.
 
 Usage: plot_tap.py TRACE.csv --out FIG.png [--tap K] [--limit N] [--title T] [--before-ms 5]
-                   [--after-ms 150] [--full] [--dump PLOTTED.json]
+                   [--after-ms 150] [--full] [--dump PLOTTED.json] [--joint JOINT.csv]
+
+With --joint (a moving wall's joint trace, written by rigidtouch tap beside the trace), a bottom
+panel shows the joint's angle (or position) and velocity over the whole tap.
 Exit codes: 0 figure written, 2 bad arguments or trace, 3 matplotlib missing.
 """
 
@@ -40,6 +43,8 @@ def main():
     parser.add_argument("--resolution-hz", default=None, help="its resolution")
     parser.add_argument("--repetition", default=None,
                         help="the tap metrics' repetition rate of the transient, as stated")
+    parser.add_argument("--joint", default=None,
+                        help="a moving wall's joint trace (rigidtouch tap writes it)")
     args = parser.parse_args()
 
     plt = trace_io.import_pyplot()
@@ -49,12 +54,14 @@ def main():
         after = float("inf") if args.full else args.after_ms
         before = float("inf") if args.full else args.before_ms
         s = tap_panels.tap_series(columns, args.tap, before, after)
+        joint = (tap_panels.joint_series(args.joint, args.tap, s["onset_s"])
+                 if args.joint else None)
     except SystemExit as error:
         print(error, file=sys.stderr)
         return 2
 
     plt.rcParams.update({"font.size": 8, "axes.titlesize": 9})
-    fig, axes = plt.subplots(2, 2, figsize=(10, 7))
+    fig, axes = plt.subplots(3 if joint else 2, 2, figsize=(10, 9.5 if joint else 7))
     tap_panels.draw_force(axes[0][0], s, args.limit, parts=True, parts_label=args.parts_label)
     axes[0][0].set_title(f"displayed peak {s['displayed_peak_N']:.2f} N, requested peak "
                          f"{s['requested_peak_N']:.2f} N")
@@ -67,6 +74,14 @@ def main():
     tap_panels.draw_motion(axes[1][0], s)
     tap_panels.draw_spectrum(axes[1][1], s, repetition=args.repetition)
     axes[1][1].set_title(tap_panels.spectrum_title(args.window_ms, args.resolution_hz))
+    if joint:
+        grid = axes[2][0].get_gridspec()
+        axes[2][0].remove()
+        axes[2][1].remove()
+        ax = fig.add_subplot(grid[2, :])
+        tap_panels.draw_joint(ax, joint)
+        ax.set_title("the wall's joint over the whole tap")
+        s["joint"] = joint
     name = os.path.splitext(os.path.basename(args.trace))[0]
     fig.suptitle(args.title or f"{name}, tap {args.tap}", fontsize=10)
     fig.tight_layout()

@@ -5,7 +5,10 @@ the spectrum of the displayed force and of its transient part over the collision
 panel has its own force axis, so a train's small impulses are not flattened by a clipped one.
 
 Usage: plot_walls.py TRACE.csv... --out FIG.png [--labels A B ...] [--limit N] [--tap K]
-                     [--dump PLOTTED.json]
+                     [--dump PLOTTED.json] [--joints JOINT.csv...]
+
+With --joints (a moving wall's joint trace per renderer, written by rigidtouch tap), a bottom row
+shows each renderer's joint angle (or position) and velocity over the whole tap.
 Exit codes: 0 figure written, 2 bad arguments or trace, 3 matplotlib missing.
 """
 
@@ -39,6 +42,8 @@ def main():
     parser.add_argument("--window-ms", default=None,
                         help="the tap metrics' spectral window (rigidtouch tap passes it)")
     parser.add_argument("--resolution-hz", default=None, help="its resolution")
+    parser.add_argument("--joints", nargs="+", default=None,
+                        help="a moving wall's joint trace per trace (rigidtouch tap writes them)")
     args = parser.parse_args()
     labels = args.labels
     if labels is None:
@@ -46,6 +51,10 @@ def main():
                   else [os.path.splitext(os.path.basename(p))[0] for p in args.traces])
     if len(labels) != len(args.traces):
         print(f"error: {len(args.traces)} traces but {len(labels)} labels", file=sys.stderr)
+        return 2
+    if args.joints is not None and len(args.joints) != len(args.traces):
+        print(f"error: {len(args.traces)} traces but {len(args.joints)} joint traces",
+              file=sys.stderr)
         return 2
     repetitions = args.repetitions or [None] * len(args.traces)
     if len(repetitions) != len(args.traces):
@@ -60,13 +69,16 @@ def main():
         for path in args.traces:
             columns = trace_io.read_trace(path)
             panels.append(tap_panels.tap_series(columns, args.tap, args.before_ms, args.after_ms))
+        joints = [tap_panels.joint_series(path, args.tap, s["onset_s"])
+                  for path, s in zip(args.joints, panels)] if args.joints else None
     except SystemExit as error:
         print(error, file=sys.stderr)
         return 2
 
     n = len(panels)
     plt.rcParams.update({"font.size": 8, "axes.titlesize": 9})
-    fig, axes = plt.subplots(4, n, figsize=(3.4 * n + 0.6, 10.5), squeeze=False)
+    rows = 5 if joints else 4
+    fig, axes = plt.subplots(rows, n, figsize=(3.4 * n + 0.6, 2.6 * rows + 0.1), squeeze=False)
     legend = {}  # one legend for the whole figure: label -> handle
     for c, (label, s) in enumerate(zip(labels, panels)):
         s["label"] = label
@@ -87,6 +99,13 @@ def main():
                 legend.setdefault(text, handle)
         tap_panels.draw_spectrum(axes[3][c], s, legend=True, repetition=repetitions[c])
         axes[3][c].set_title(tap_panels.spectrum_title(args.window_ms, args.resolution_hz))
+        if joints:
+            right = tap_panels.draw_joint(axes[4][c], joints[c], legend=False)
+            axes[4][c].set_title("the wall's joint over the whole tap")
+            for a in (axes[4][c], right):
+                for handle, text in zip(*a.get_legend_handles_labels()):
+                    legend.setdefault(text, handle)
+            s["joint"] = joints[c]
     fig.suptitle(f"tap {args.tap}: the force the device displays against its limit, per renderer",
                  fontsize=10)
     fig.legend(list(legend.values()), list(legend.keys()), loc="upper center",

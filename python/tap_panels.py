@@ -38,6 +38,7 @@ def tap_series(columns, tap, before_ms, after_ms):
         "impulse_ms": [(time_s[i] - t0) * 1e3 for i in shown if columns["impulses"][i] > 0],
         "requested_peak_N": max(penalty[i] + impulsive[i] for i in rows),
         "displayed_peak_N": max(displayed[i] for i in rows),
+        "onset_s": t0,
     }
     # as the metrics: 100 ms from onset, with a tolerance for the rounding of trace times
     window = [i for i in rows if i >= onset and time_s[i] - t0 < 0.1 - 1e-9]
@@ -176,6 +177,50 @@ def draw_spectrum(ax, s, legend=True, repetition=None):
     ax.grid(True, alpha=0.3)
     if legend:
         ax.legend(loc="lower left", fontsize=7)
+
+
+def joint_series(path, tap, onset_s):
+    """A moving wall's joint over one tap from rigidtouch's joint CSV (time_s, tap, position,
+    velocity, impulse; a hinge in rad, a slide in m): time from contact onset [ms], position and
+    velocity in degrees (hinge) or millimetres (slide)."""
+    import csv
+    try:
+        with open(path, newline="") as handle:
+            reader = csv.reader(handle)
+            header = next(reader)
+            rows = [[float(x) for x in row] for row in reader if row]
+    except (OSError, StopIteration, ValueError) as error:
+        raise SystemExit(f"error: cannot read joint trace '{path}': {error}")
+    hinge = header[2] == "position_rad"
+    scale = 180.0 / math.pi if hinge else 1e3
+    unit = "deg" if hinge else "mm"
+    mine = [r for r in rows if int(r[1]) == tap]
+    return {
+        "t_ms": [(r[0] - onset_s) * 1e3 for r in mine],
+        "position": [r[2] * scale for r in mine],
+        "velocity": [r[3] * scale for r in mine],
+        "position_unit": unit,
+        "velocity_unit": unit + "/s",
+        "hinge": hinge,
+    }
+
+
+def draw_joint(ax, j, legend=True):
+    """A moving wall's joint: its position (left axis) and velocity (right axis) over the tap."""
+    what = "angle" if j["hinge"] else "position"
+    ax.plot(j["t_ms"], j["position"], color="tab:brown", linewidth=1.2, label=f"joint {what}")
+    ax.set_ylabel(f"joint {what} [{j['position_unit']}]", color="tab:brown")
+    ax.set_xlabel("time from contact onset [ms]")
+    ax.grid(True, alpha=0.3)
+    right = ax.twinx()
+    right.plot(j["t_ms"], j["velocity"], color="tab:olive", linewidth=1.0,
+               label="joint velocity")
+    right.axhline(0.0, color="0.7", linewidth=0.6)
+    right.set_ylabel(f"joint velocity [{j['velocity_unit']}]", color="tab:olive")
+    if legend:
+        lines = ax.get_lines()[:1] + right.get_lines()[:1]
+        ax.legend(lines, [line.get_label() for line in lines], loc="best", fontsize=7)
+    return right
 
 
 def spectrum_title(window_ms, resolution_hz):

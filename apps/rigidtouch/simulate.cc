@@ -132,7 +132,10 @@ void RunSimulate(const SimulateFlags& f) {
   const auto numbers = [](const auto& values, int decimals) {
     std::string out;
     for (const auto& v : values) {
-      out += (out.empty() ? "" : " ") + text::Fixed(static_cast<double>(v), decimals);
+      // two appends, not a temporary from " " + string: GCC 12 (-Wrestrict, PR 105329) warns
+      // falsely on that one when it inlines it
+      if (!out.empty()) out += ' ';
+      out += text::Fixed(static_cast<double>(v), decimals);
     }
     return out;
   };

@@ -45,6 +45,7 @@ struct TapFlags {
   std::string plot;
   bool compare_walls = false;
   std::string compare;
+  std::string compare_joint_limit;  // the joint limits' renderers, side by side
   std::string out_dir = "out";
   bool json = false;
   bool quiet = false;          // `tap` only: no progress on stderr
@@ -58,7 +59,8 @@ constexpr const char* kWallFixedWhy =
     "the method's walls (--wall, wall0/1/2 in --compare, --compare-walls) fix e, t_c and f";
 
 analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> wall,
-                                         const analysis::RendererSpec* spec = nullptr) {
+                                         const analysis::RendererSpec* spec = nullptr,
+                                         bool joint_limit = false) {
   std::optional<RenderParams> wall_params;
   if (wall) wall_params = analysis::WallRenderParams(*wall);
   if (!(f.speed_mps > 0.0 && f.speed_mps <= 2.0)) {
@@ -76,7 +78,10 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
     c.wall_point_m = Vec3(f.wall_point[0], f.wall_point[1], f.wall_point[2]);
     c.wall_normal = Vec3(f.wall_normal[0], f.wall_normal[1], f.wall_normal[2]);
   }
-  if (spec) {
+  if (spec && joint_limit) {
+    // --compare-joint-limit: the spec is how the joint limits render; the contact keeps its own
+    c.load.render.joint_limit_renderer = spec->renderer;
+  } else if (spec) {
     c.load.render.renderer = spec->renderer;
     if (spec->render) wall_params = spec->render;
     if (spec->material) {
@@ -130,6 +135,60 @@ NonFiniteReport NonFinite(const analysis::TapRun& run) {
   return r;
 }
 
+// a moving wall's joint: what it is, its motion per tick (WallSample) and per tap; null for a
+// static wall or a link without a hinge or slide
+nlohmann::json JointJson(const analysis::TapRun& run) {
+  if (!run.wall.moving() || run.wall.joint < 0) return nullptr;
+  const bool hinge = run.joint_kind == JointKind::kHinge;
+  nlohmann::json time = nlohmann::json::array(), position = nlohmann::json::array(),
+                 velocity = nlohmann::json::array();
+  for (std::size_t k = 0; k < run.wall_trace.size(); ++k) {
+    time.push_back(run.trace[k].time_s);
+    position.push_back(run.wall_trace[k].joint_position);
+    velocity.push_back(run.wall_trace[k].joint_velocity);
+  }
+  return {{"name", run.joint_name},
+          {"kind", hinge ? "hinge" : "slide"},
+          {"position_unit", hinge ? "rad" : "m"},
+          {"velocity_unit", hinge ? "rad/s" : "m/s"},
+          {"impulse_unit", hinge ? "N m s" : "N s"},
+          {"inertia", run.joint_inertia},
+          {"inertia_unit", hinge ? "kg m^2" : "kg"},
+          {"damping", run.joint_damping},
+          {"stiffness", run.joint_stiffness},
+          {"time_s", time},
+          {"position", position},
+          {"velocity", velocity}};
+}
+
+// one tap's joint motion (JointMotion) with the swing a damper alone allows: impulse / damping
+nlohmann::json JointTapJson(const analysis::TapRun& run, std::size_t tap) {
+  if (tap >= run.joint_taps.size()) return nullptr;
+  const analysis::JointMotion& j = run.joint_taps[tap];
+  const JointModel& joint = run.model.trees[run.wall.tree].joints[run.wall.joint];
+  const bool at_limit = joint.limited && (j.max_position > joint.range_hi_rad_or_m + 1e-9 ||
+                                          j.min_position < joint.range_lo_rad_or_m - 1e-9);
+  const bool closed_form = run.joint_damping > 0.0 && run.joint_stiffness == 0.0 && !at_limit;
+  return {{"position_at_start", j.position_at_start},
+          {"position_at_end", j.position_at_end},
+          {"velocity_at_end", j.velocity_at_end},
+          {"min_position", j.min_position},
+          {"max_position", j.max_position},
+          {"peak_speed", j.peak_speed},
+          {"impulse", j.impulse},
+          {"past_limit", at_limit},
+          {"damped_swing",
+           closed_form ? nlohmann::json(j.impulse / run.joint_damping) : nlohmann::json(nullptr)}};
+}
+
+nlohmann::json WallJson(const analysis::TapRun& run) {
+  const analysis::Wall& w = run.wall;
+  return {{"geom", w.geom.empty() ? nlohmann::json(nullptr) : nlohmann::json(w.geom)},
+          {"moving", w.moving()},
+          {"point_m", {w.point_m.x(), w.point_m.y(), w.point_m.z()}},
+          {"normal", {w.normal.x(), w.normal.y(), w.normal.z()}}};
+}
+
 nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
   const Model& m = run.model;
   nlohmann::json taps = nlohmann::json::array();
@@ -163,6 +222,7 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
                     {"transient_power_ratio", t.transient_power_ratio},
                     {"force_clipped", t.force_clipped},
                     {"passivity_dissipated_J", t.passivity_dissipated_J}});
+    if (run.wall.moving()) taps.back()["joint"] = JointTapJson(run, taps.size() - 1);
   }
   const bool train = m.render.renderer == RendererKind::kTrain;
   // what the device displays (the contact law under direct coupling, the coupling under virtual)
@@ -197,7 +257,37 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"clipped_impulse_ticks", run.clipped_impulse_ticks},
       {"taps", taps},
       {"warnings", WarningsJson(run.warnings)},
-      {"non_finite_state", NonFiniteJson(NonFinite(run))}};
+      {"non_finite_state", NonFiniteJson(NonFinite(run))},
+      {"joint_limit_renderer",
+       run.wall.moving() ? nlohmann::json(text::RendererName(m.render.joint_limit_renderer))
+                         : nlohmann::json(nullptr)},
+      {"wall", WallJson(run)},
+      {"joint", JointJson(run)}};
+}
+
+// a moving wall's joint per tick, for the figures: time, tap, position, velocity and the
+// impulse the tool gave the joint (units in the header); nothing for a static wall
+bool WriteJointCsv(const std::string& path, const analysis::TapRun& run) {
+  if (!run.wall.moving() || run.wall.joint < 0) return false;
+  const bool hinge = run.joint_kind == JointKind::kHinge;
+  std::ostringstream out;
+  out << std::setprecision(10) << "time_s,tap,"
+      << (hinge ? "position_rad,velocity_rad_per_s,impulse_Nms"
+                : "position_m,velocity_mps,impulse_Ns")
+      << "\n";
+  for (std::size_t k = 0; k < run.wall_trace.size(); ++k) {
+    const analysis::WallSample& w = run.wall_trace[k];
+    out << run.trace[k].time_s << "," << run.trace[k].tap << "," << w.joint_position << ","
+        << w.joint_velocity << "," << w.joint_impulse << "\n";
+  }
+  io::WriteFileAtomically(path, out.str(), "joint trace");
+  return true;
+}
+
+// a trace's joint file: beside it, "_joint" before the extension
+std::string JointPath(const std::string& trace) {
+  std::filesystem::path p(trace);
+  return (p.parent_path() / (p.stem().string() + "_joint.csv")).string();
 }
 
 // matplotlib takes the figure's format from the extension: one it cannot write is refused before
@@ -271,15 +361,30 @@ void CheckCompareOutputs(const TapFlags& f, const std::vector<analysis::Renderer
   if (!std::filesystem::exists(f.out_dir, ec)) return;
   for (const analysis::RendererSpec& spec : specs) {
     io::CheckOutputPath(OutPath(f, FileStem(spec) + ".csv"), "trace file");
+    io::CheckOutputPath(OutPath(f, FileStem(spec) + "_joint.csv"), "joint trace");
     io::CheckOutputPath(OutPath(f, FileStem(spec) + "_tap.png"), "figure");
   }
   io::CheckOutputPath(OutPath(f, set + ".md"), "table");
   io::CheckOutputPath(OutPath(f, set + ".png"), "figure");
 }
 
+// --compare-joint-limit on a scene whose wall moves on a limited joint, else it compares nothing
+void CheckJointLimits(const analysis::TapRun& run, const std::string& scene) {
+  const bool limited = run.wall.moving() && run.wall.joint >= 0 &&
+                       run.model.trees[run.wall.tree].joints[run.wall.joint].limited;
+  if (!limited) {
+    throw Error(
+        "--compare-joint-limit: the wall " +
+        (run.wall.geom.empty() ? std::string("(a point and normal)") : "'" + run.wall.geom + "'") +
+        " of scene file '" + scene +
+        "' is not a link moved by a hinge or slide with a range; choose one with "
+        "--wall-geom NAME (e.g. panel in scenes/door.xml)");
+  }
+}
+
 // runs every renderer of `specs` on the same taps; `set` names the table and the figure
 void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs,
-             const std::string& set) {
+             const std::string& set, bool joint_limit = false) {
   CheckCompareOutputs(f, specs, set);
   std::error_code created;
   std::filesystem::create_directories(f.out_dir, created);
@@ -287,12 +392,12 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     throw Error("cannot create the output folder (--out-dir) '" + f.out_dir +
                 "': " + created.message());
   }
-  std::vector<std::string> traces, labels;
+  std::vector<std::string> traces, labels, joints;
   nlohmann::json renderers = nlohmann::json::array();
   std::ostringstream table, compact;
   table << TapTableHeader(TapTable::kFull) << "\n";
   compact << TapTableHeader(TapTable::kCompact) << "\n";
-  std::string note, compact_note;
+  std::string note, compact_note, joint_rows;
   std::vector<std::vector<std::string>> figure_args;
   std::string coupling = "direct";
   double max_force_N = 0.0;
@@ -301,7 +406,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   const std::unique_ptr<Progress> progress = StartProgress("tap --" + set, f.quiet);
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const analysis::RendererSpec& spec = specs[i];
-    analysis::TapExperimentConfig config = MakeConfig(f, std::nullopt, &spec);
+    analysis::TapExperimentConfig config = MakeConfig(f, std::nullopt, &spec, joint_limit);
     const double n = static_cast<double>(specs.size());
     config.progress = progress.get();
     config.progress_from = static_cast<double>(i) / n;
@@ -313,8 +418,10 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
                                         " renderer(s) before it are in " + f.out_dir;
     const analysis::TapRun run = analysis::RunTapExperiment(config);
     if (i == 0) PrintLoadWarnings(run.model);  // the same scene for every renderer: once
+    if (joint_limit) CheckJointLimits(run, f.scene.scene);
     const std::string trace = OutPath(f, FileStem(spec) + ".csv");
     io::WriteTraceCsv(trace, run.trace);
+    if (WriteJointCsv(JointPath(trace), run)) joints.push_back(JointPath(trace));
     traces.push_back(trace);
     labels.push_back(spec.label);
     max_force_N = run.device.max_force_N;
@@ -327,6 +434,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     compact << TapTableRow(TapTable::kCompact, spec.label, run) << "\n";
     if (i == 0) note = TapTableNote(TapTable::kFull, run);
     if (i == 0) compact_note = TapTableNote(TapTable::kCompact, run);
+    joint_rows += JointTableRow(spec.label, run);
     figure_args.push_back(TapFigureArgs(run, spec.label));
     if (non_finite.count == 0 && NonFinite(run).count > 0) {
       non_finite = NonFinite(run);
@@ -342,6 +450,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
         << " Hz); each column names its statistic over the taps\n\n"
         << table.str() << "\n"
         << note << "\n";
+    if (!joint_rows.empty()) out << "\n" << JointTableHeader() << "\n" << joint_rows;
     io::WriteFileAtomically(table_path, out.str(), "table");
   }
   const std::string fig = OutPath(f, set + ".png");
@@ -364,12 +473,17 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     args.push_back("--repetitions");
     args.insert(args.end(), repetitions.begin(), repetitions.end());
   }
+  if (joints.size() == traces.size()) {
+    args.push_back("--joints");
+    args.insert(args.end(), joints.begin(), joints.end());
+  }
   RunPlotScript("python/plot_walls.py", args, f.json);
   std::vector<std::string> figures = {fig};
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const std::string tap_fig = OutPath(f, FileStem(specs[i]) + "_tap.png");
     std::vector<std::string> tap_args = {traces[i], "--out", tap_fig};
     tap_args.insert(tap_args.end(), figure_args[i].begin(), figure_args[i].end());
+    if (joints.size() == traces.size()) tap_args.insert(tap_args.end(), {"--joint", joints[i]});
     RunPlotScript("python/plot_tap.py", tap_args, f.json);
     figures.push_back(tap_fig);
   }
@@ -383,13 +497,56 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
     check();
     return;
   }
-  std::cout << compact.str() << "\n"
-            << compact_note << "\n\nfull table: " << table_path << "\nfigures: " << fig << " and "
-            << f.out_dir << "/<renderer>_tap.png\ntraces: " << f.out_dir << "/<renderer>.csv\n";
+  std::cout << compact.str() << "\n" << compact_note << "\n";
+  if (!joint_rows.empty()) std::cout << "\n" << JointTableHeader() << "\n" << joint_rows;
+  std::cout << "\nfull table: " << table_path << "\nfigures: " << fig << " and " << f.out_dir
+            << "/<renderer>_tap.png\ntraces: " << f.out_dir << "/<renderer>.csv\n";
   check();
 }
 
+// --compare-joint-limit LIST: each entry a joint-limit renderer (penalty, impulse, train), the
+// contact's renderer the flags' (--renderer, the config, the default)
+std::vector<analysis::RendererSpec> JointLimitSpecs(const TapFlags& f) {
+  if (f.compare_walls || !f.compare.empty() || f.wall) {
+    throw Error("give either --compare-joint-limit or --compare/--compare-walls/--wall, not both");
+  }
+  if (f.scene.joint_limit_renderer) {
+    throw Error("give either --joint-limit-renderer or --compare-joint-limit, not both");
+  }
+  if (!f.trace.empty() || !f.plot.empty()) {
+    throw Error(
+        "--trace and --plot are for one renderer; a comparison writes its traces and "
+        "figures to --out-dir");
+  }
+  std::vector<analysis::RendererSpec> specs;
+  try {
+    specs = analysis::ParseRendererList(f.compare_joint_limit);
+  } catch (const Error& e) {
+    throw Error(std::string("--compare-joint-limit: ") + e.what());
+  }
+  for (analysis::RendererSpec& spec : specs) {
+    const RendererKind k = spec.renderer;
+    if (spec.render || spec.material || k == RendererKind::kEvent) {
+      throw Error("--compare-joint-limit: '" + spec.name +
+                  "' is not a joint-limit renderer; valid: penalty, impulse, train");
+    }
+    spec.label = "limit: " + spec.label;
+    spec.name = "limit_" + spec.name;
+  }
+  return specs;
+}
+
 void RunTap(const TapFlags& f) {
+  if (!f.compare_joint_limit.empty()) {
+    const std::vector<analysis::RendererSpec> specs = JointLimitSpecs(f);
+    // a parameter is used when the contact's renderer or one of the limit's takes it
+    const Settings settings = ResolveSettings(f.scene);
+    std::vector<RendererKind> renderers = {settings.load.render.renderer};
+    for (const analysis::RendererSpec& spec : specs) renderers.push_back(spec.renderer);
+    RefuseUnusedRender(settings, renderers);
+    Compare(f, specs, "joint_limit", /*joint_limit=*/true);
+    return;
+  }
   if (f.compare_walls || !f.compare.empty()) {
     if (f.wall) throw Error("give either --wall or --compare/--compare-walls, not both");
     if (f.scene.renderer) {
@@ -445,6 +602,7 @@ void RunTap(const TapFlags& f) {
   progress->Finish();
   PrintLoadWarnings(run.model);
   if (!trace.empty()) io::WriteTraceCsv(trace, run.trace);
+  const bool joint = !trace.empty() && WriteJointCsv(JointPath(trace), run);
   if (!f.plot.empty()) {
     // the temporary trace goes whether or not the figure could be drawn
     std::error_code ignored;
@@ -454,12 +612,15 @@ void RunTap(const TapFlags& f) {
       std::vector<std::string> tap_args = {trace, "--out", f.plot};
       const std::vector<std::string> more = TapFigureArgs(run, what);
       tap_args.insert(tap_args.end(), more.begin(), more.end());
+      if (joint) tap_args.insert(tap_args.end(), {"--joint", JointPath(trace)});
       RunPlotScript("python/plot_tap.py", tap_args, f.json);
     } catch (...) {
       if (temporary) std::filesystem::remove(trace, ignored);
+      if (temporary && joint) std::filesystem::remove(JointPath(trace), ignored);
       throw;
     }
     if (temporary) std::filesystem::remove(trace, ignored);
+    if (temporary && joint) std::filesystem::remove(JointPath(trace), ignored);
   }
   nlohmann::json result = RunJson(run, text::CouplingName(run.model.device.coupling));
   if (!f.trace.empty()) result["trace"] = f.trace;
@@ -470,7 +631,12 @@ void RunTap(const TapFlags& f) {
   }
   std::cout << TapTableHeader(TapTable::kCompact) << "\n"
             << TapTableRow(TapTable::kCompact, result["renderer"].get<std::string>(), run) << "\n\n"
-            << TapTableNote(TapTable::kCompact, run) << "\nEvery figure per tap: --json.\n";
+            << TapTableNote(TapTable::kCompact, run) << "\n";
+  if (const std::string rows = JointTableRow(result["renderer"].get<std::string>(), run);
+      !rows.empty()) {
+    std::cout << "\n" << JointTableHeader() << "\n" << rows << "\n";
+  }
+  std::cout << "Every figure per tap: --json.\n";
   PrintWarnings(result["warnings"], std::cerr);
   if (!result["displayable"].get<bool>()) {
     std::cout << "note: the rendered stiffness or damping is above what the " << run.device.name
@@ -527,7 +693,13 @@ std::shared_ptr<TapFlags> AddTapOptions(CLI::App* app) {
                   "(with the flags' parameters), wall0, wall1, wall2 (the method's walls), "
                   "event:MATERIAL and train:MATERIAL (e.g. penalty,train,event:wood,train:wood); "
                   "writes traces, compare.md and figures to --out-dir");
-  app->add_option("--out-dir", f->out_dir, "output folder of --compare and --compare-walls")
+  app->add_option("--compare-joint-limit", f->compare_joint_limit,
+                  "render the joint limits (a door's stop) each of these ways side by side, "
+                  "comma-separated: penalty, impulse, train (e, t_c and f from the flags); the "
+                  "contact keeps --renderer; writes traces, joint_limit.md and figures to "
+                  "--out-dir");
+  app->add_option("--out-dir", f->out_dir,
+                  "output folder of --compare, --compare-walls and --compare-joint-limit")
       ->capture_default_str();
   app->add_flag("--json", f->json, "print one JSON object");
   return f;
@@ -562,11 +734,11 @@ std::shared_ptr<TapFlags> ParseTapFlags(const std::vector<std::string>& args) {
     throw Error(std::string("tap: ") + e.what());
   }
   f->out_dir_given = app.get_option("--out-dir")->count() > 0;
-  if (f->compare_walls || !f->compare.empty() || f->out_dir_given || !f->trace.empty() ||
-      !f->plot.empty() || f->json) {
+  if (f->compare_walls || !f->compare.empty() || !f->compare_joint_limit.empty() ||
+      f->out_dir_given || !f->trace.empty() || !f->plot.empty() || f->json) {
     throw Error(
-        "tap: --compare, --compare-walls, --out-dir, --trace, --plot and --json write files or "
-        "print; here the run is returned instead");
+        "tap: --compare, --compare-walls, --compare-joint-limit, --out-dir, --trace, --plot and "
+        "--json write files or print; here the run is returned instead");
   }
   if (f->wall && f->scene.renderer) throw Error("give either --wall or --renderer, not both");
   return f;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <vector>
 
@@ -168,6 +169,52 @@ std::string TapTableNote(TapTable table, const analysis::TapRun& run) {
     s << "the collision window from contact onset (no tap touched).";
   }
   return Wrap(s.str());
+}
+
+std::string JointTableHeader() {
+  return "| renderer | joint | inertia about it | damping | swing per tap (end - start), mean | "
+         "furthest past its limit, mean | peak joint speed, mean | impulse the tool gave "
+         "the joint, mean | impulse / damping (a damped swing's closed form), mean "
+         "|\n|---|---|---|---|---|---|---|---|---|";
+}
+
+std::string JointTableRow(const std::string& name, const analysis::TapRun& run) {
+  if (run.joint_taps.empty()) return "";
+  const bool hinge = run.joint_kind == JointKind::kHinge;
+  // a hinge in degrees, a slide in millimetres
+  const double scale = hinge ? 180.0 / std::numbers::pi : 1e3;
+  const std::string unit = hinge ? " deg" : " mm";
+  const JointModel& joint = run.model.trees[run.wall.tree].joints[run.wall.joint];
+  double swing = 0.0, past = 0.0, speed = 0.0, impulse = 0.0;
+  bool limit = false;  // the joint went past a limit (its row pushed back)
+  for (const analysis::JointMotion& j : run.joint_taps) {
+    swing += j.position_at_end - j.position_at_start;
+    const double beyond = std::max(
+        {j.max_position - joint.range_hi_rad_or_m, joint.range_lo_rad_or_m - j.min_position, 0.0});
+    past += beyond;
+    limit = limit || (joint.limited && beyond > 1e-9);
+    speed += j.peak_speed;
+    impulse += j.impulse;
+  }
+  const double n = static_cast<double>(run.joint_taps.size());
+  std::ostringstream s;
+  s << "| " << name << " | " << run.joint_name << " (" << (hinge ? "hinge" : "slide") << ") | "
+    << text::Significant(run.joint_inertia, 4) << (hinge ? " kg m^2" : " kg") << " | "
+    << text::Significant(run.joint_damping, 4) << (hinge ? " N m s/rad" : " N s/m") << " | "
+    << text::Significant(scale * swing / n, 3) << unit << " | "
+    << (joint.limited ? text::Significant(scale * past / n, 3) + unit : std::string("- (no limit)"))
+    << " | " << text::Significant(scale * speed / n, 3) << unit << "/s | "
+    << text::Significant(impulse / n, 3) << (hinge ? " N m s" : " N s") << " | ";
+  // the closed form holds for a damper alone: not with a spring, nor past a limit
+  if (limit) {
+    s << "- (past its limit)";
+  } else if (run.joint_damping > 0.0 && run.joint_stiffness == 0.0) {
+    s << text::Significant(scale * impulse / n / run.joint_damping, 3) << unit;
+  } else {
+    s << "- (a spring or no damping)";
+  }
+  s << " |\n";
+  return s.str();
 }
 
 }  // namespace rigidtouch::cli

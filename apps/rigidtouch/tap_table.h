@@ -24,4 +24,12 @@ std::string TapTableRow(TapTable table, const std::string& name, const analysis:
 /// whose header names no statistic, the statistics over the taps.
 std::string TapTableNote(TapTable table, const analysis::TapRun& run);
 
+/// A moving wall's joint over the taps (docs/articulated.md): the header row of its table (a
+/// Markdown header and separator, no newline at the end).
+std::string JointTableHeader();
+
+/// One renderer's row of the joint table, with its newline; empty for a static wall or a link
+/// without a hinge or slide.
+std::string JointTableRow(const std::string& name, const analysis::TapRun& run);
+
 }  // namespace rigidtouch::cli

@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "dynamics/tree.h"
 #include "geometry/broadphase.h"
 
 namespace rigidtouch::analysis {
@@ -38,6 +39,7 @@ std::string StaticSurfaces(const Model& model) {
 // the tool's distance to the wall plane when it first touched something in each tap: a tap that
 // met another body first (or never touched) measured that body, not the wall
 void CheckTheWallWasTapped(const TapRun& run, const std::string& scene_path) {
+  const bool moving = run.wall.moving() && run.wall_trace.size() == run.trace.size();
   const Vec3& n = run.wall.normal;
   const double reach = ToolReach(run.model, n);
   const std::string wall = run.wall.geom.empty() ? "the wall" : "the wall '" + run.wall.geom + "'";
@@ -51,6 +53,15 @@ void CheckTheWallWasTapped(const TapRun& run, const std::string& scene_path) {
     }
     if (touched || s.tool_contacts == 0) continue;
     touched = true;
+    // a moving wall has no fixed plane: its first contact must be with the wall's geom
+    if (moving) {
+      if (!run.wall_trace[static_cast<std::size_t>(&s - run.trace.data())].touching_wall) {
+        throw Error("scene file '" + scene_path + "': tap " + std::to_string(tap) +
+                    " touched something other than " + wall +
+                    " first (another body is in the way); choose the wall with --wall-geom NAME");
+      }
+      continue;
+    }
     const double gap_m = (s.tool_position_m - run.wall.point_m).dot(n) - reach;
     if (gap_m > 1e-3) {
       std::ostringstream msg;
@@ -65,6 +76,60 @@ void CheckTheWallWasTapped(const TapRun& run, const std::string& scene_path) {
     throw Error("scene file '" + scene_path + "': tap " + std::to_string(tap) + " never touched " +
                 wall + "; is it within reach of the tool's start?");
   }
+}
+
+// the point of link geom g (at the scene's initial pose) nearest the tool, with the outward
+// normal there: a moving wall (a box's face nearest the tool; a sphere's or capsule's radial)
+Wall MovingWall(const Model& model, const GeomModel& g, const std::string& where,
+                const std::string& choose) {
+  const Mat3 R = g.quat_B.toRotationMatrix();
+  const Vec3 tool = model.initial[model.tool].x_W;
+  const Vec3 q = R.transpose() * (tool - g.pos_B);  // the tool in the geom's frame
+  Vec3 point = Vec3::Zero(), normal = Vec3::UnitZ();
+  if (g.type == GeomType::kPlane) {
+    point = Vec3(q.x(), q.y(), 0.0);
+  } else if (g.type == GeomType::kBox) {
+    // the face the tool is farthest outside of (or, inside, nearest to)
+    int axis = 0;
+    for (int a = 1; a < 3; ++a) {
+      if (std::abs(q[a]) - g.size[a] > std::abs(q[axis]) - g.size[axis]) axis = a;
+    }
+    const double side = q[axis] >= 0.0 ? 1.0 : -1.0;
+    point = q.cwiseMax(-g.size).cwiseMin(g.size);
+    point[axis] = side * g.size[axis];
+    normal = side * Vec3::Unit(axis);
+  } else if (g.type == GeomType::kSphere || g.type == GeomType::kCapsule) {
+    const double half = g.type == GeomType::kCapsule ? g.size.y() : 0.0;
+    const Vec3 centre(0.0, 0.0, std::clamp(q.z(), -half, half));
+    if ((q - centre).norm() < 1e-9) {
+      throw Error(where + ": the tool sits on the axis of geom '" + g.name +
+                  "'; which side is its surface?" + choose);
+    }
+    normal = (q - centre).normalized();
+    point = centre + g.size.x() * normal;
+  } else {
+    throw Error(where + ": geom '" + g.name + "' is not a plane, box, sphere or capsule" + choose);
+  }
+  Wall wall;
+  wall.geom = g.name;
+  wall.point_m = g.pos_B + R * point;
+  wall.normal = R * normal;
+  wall.tree = g.tree;
+  wall.link = g.link;
+  wall.geom_index = static_cast<int>(&g - model.geoms.data());
+  // the hinge or slide nearest above the link: the one that moves it
+  const ArticulatedTree& tree = model.trees[g.tree];
+  for (int link = g.link; link >= 0 && wall.joint < 0; link = tree.link_parent[link]) {
+    for (std::size_t j = 0; j < tree.joints.size(); ++j) {
+      const JointModel& joint = tree.joints[j];
+      if (joint.link == link &&
+          (joint.type == JointKind::kHinge || joint.type == JointKind::kSlide)) {
+        wall.joint = static_cast<int>(j);
+        break;
+      }
+    }
+  }
+  return wall;
 }
 
 }  // namespace
@@ -97,8 +162,9 @@ Wall FindWall(const Model& model, const std::string& scene_path, const std::stri
   }
   if (found->body >= 0) {
     throw Error(where + ": geom '" + found->name + "' belongs to a moving body; the wall must be " +
-                "static (a worldbody geom)" + choose);
+                "static (a worldbody geom) or a link of a jointed body" + choose);
   }
+  if (found->tree >= 0) return MovingWall(model, *found, where, choose);
   const Mat3 R = found->quat_B.toRotationMatrix();
   Wall wall;
   wall.geom = found->name;
@@ -283,6 +349,79 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
   return setup;
 }
 
+namespace {
+
+// one tick of a moving wall: its joint, the velocity of its point under the tool, and the
+// impulse the tool's contacts with it gave the joint (J^T P at each contact point)
+WallSample SampleMovingWall(const Model& model, const Data& data, const Wall& wall, double reach,
+                            Eigen::MatrixXd& jac_trans, Eigen::MatrixXd& jac_rot) {
+  WallSample w;
+  const dynamics::TreeModel& tm = *model.trees[wall.tree].dynamics;
+  const dynamics::TreeData& d = *data.trees[wall.tree];
+  const int dof = wall.joint >= 0 ? model.trees[wall.tree].joints[wall.joint].dof_adr : -1;
+  if (dof >= 0) {
+    w.joint_position = d.qpos[model.trees[wall.tree].joints[wall.joint].qpos_adr];
+    w.joint_velocity = d.qvel[dof];
+  }
+  const Vec3 under_tool = data.bodies[model.tool].x_W - reach * wall.normal;
+  dynamics::TreePointJacobian(tm, d, wall.link, under_tool, jac_trans, jac_rot);
+  w.surface_velocity_mps = jac_trans * d.qvel;
+  const double h = model.timestep_s;
+  for (int i = 0; i < data.ncontact; ++i) {
+    const Contact& c = data.contacts[i];
+    const bool a_is_wall = c.geom_a == wall.geom_index, b_is_wall = c.geom_b == wall.geom_index;
+    const int other = a_is_wall ? c.body_b : c.body_a;
+    if (!(a_is_wall || b_is_wall) || other != model.tool) continue;
+    w.touching_wall = true;
+    // the impulse on side a this tick (normal penalty and impulse along n, friction); the wall
+    // takes its opposite when it is side b
+    const Vec3 on_a = (c.normal_force_N * h + c.impulse_Ns) * c.n_W + h * c.friction_force_N_W;
+    const Vec3 on_wall = a_is_wall ? on_a : Vec3(-on_a);
+    if (dof >= 0) {
+      dynamics::TreePointJacobian(tm, d, wall.link, c.p_W, jac_trans, jac_rot);
+      w.joint_impulse += jac_trans.col(dof).dot(on_wall);
+    }
+  }
+  return w;
+}
+
+// the moving wall's joint as compiled: its name, kind, damping, spring, and the tree's inertia
+// about it at the initial state (the mass matrix's diagonal, armature included)
+void DescribeJoint(const Model& model, const Wall& wall, TapRun& run) {
+  if (!wall.moving() || wall.joint < 0) return;
+  const ArticulatedTree& tree = model.trees[wall.tree];
+  const JointModel& joint = tree.joints[wall.joint];
+  const dynamics::TreeModel& tm = *tree.dynamics;
+  run.joint_name = joint.name;
+  run.joint_kind = joint.type;
+  run.joint_damping = tm.joint(wall.joint).damping;
+  run.joint_stiffness = tm.joint(wall.joint).stiffness;
+  dynamics::TreeData d = dynamics::MakeTreeData(tm);
+  for (int i = 0; i < tree.nq; ++i) d.qpos[i] = tree.initial_qpos[i];
+  dynamics::TreeKinematics(tm, d);
+  dynamics::TreeMassMatrix(tm, d);
+  run.joint_inertia = d.M(joint.dof_adr, joint.dof_adr);
+}
+
+// per tap, the moving wall's joint (TapRun::joint_taps)
+JointMotion MotionOverTap(const TapRun& run, std::size_t begin, std::size_t end) {
+  JointMotion m;
+  const std::vector<WallSample>& w = run.wall_trace;
+  m.position_at_start = w[begin].joint_position;
+  m.position_at_end = w[end - 1].joint_position;
+  m.velocity_at_end = w[end - 1].joint_velocity;
+  m.min_position = m.max_position = m.position_at_start;
+  for (std::size_t k = begin; k < end; ++k) {
+    m.min_position = std::min(m.min_position, w[k].joint_position);
+    m.max_position = std::max(m.max_position, w[k].joint_position);
+    m.peak_speed = std::max(m.peak_speed, std::abs(w[k].joint_velocity));
+    m.impulse += w[k].joint_impulse;
+  }
+  return m;
+}
+
+}  // namespace
+
 // ticks between two looks at the progress (a clock read costs about as much as a tick)
 constexpr std::int64_t kProgressTicks = 256;
 
@@ -292,7 +431,21 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   run.device = setup.device;
   Model& model = setup.model;
   device::SimulatedDevice& dev = *setup.simulated;
+  // the experiment's simulated device works where the wall is: its state is plausible within
+  // 0.5 m of the wall (a door's panel lies 1.2 m from the origin; a wall at the origin keeps the
+  // default 1 m). Only here: a loop driven from elsewhere (PrepareTap) keeps the limits it was
+  // given
+  model.device.plausible_radius_m =
+      std::max(model.device.plausible_radius_m, setup.wall.point_m.norm() + 0.5);
   Data data = MakeData(model);
+  const Wall& wall = setup.wall;
+  const double reach = ToolReach(model, wall.normal);
+  Eigen::MatrixXd jac_trans, jac_rot;
+  if (wall.moving()) {
+    const int nv = model.trees[wall.tree].nv;
+    jac_trans.resize(3, nv);
+    jac_rot.resize(3, nv);
+  }
   const std::int64_t max_ticks = std::llround((dev.duration_s() + 1.0) * config.rate_hz);
   run.trace.reserve(static_cast<std::size_t>(max_ticks));
   TickInput input;
@@ -326,6 +479,9 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
       if (command.impulsive_force_N.squaredNorm() > 0.0) ++run.clipped_impulse_ticks;
     }
     run.trace.push_back(s);
+    if (wall.moving()) {
+      run.wall_trace.push_back(SampleMovingWall(model, data, wall, reach, jac_trans, jac_rot));
+    }
     // the same per-period hook as loop::RunHapticLoop, so both paths advance the plant alike
     dev.EndPeriod(1.0 / config.rate_hz);
   }
@@ -334,7 +490,21 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
 
   // every renderer's taps over the same window (TapMetricsOptions: 100 ms, the longest collision
   // window), so that their spectral figures compare at one resolution
-  for (const auto& samples : SplitTaps(run.trace)) run.taps.push_back(ComputeTapMetrics(samples));
+  // a moving wall's taps: the approach speed relative to its point under the tool
+  std::vector<Vec3> surface_velocity_mps;
+  for (const WallSample& w : run.wall_trace) surface_velocity_mps.push_back(w.surface_velocity_mps);
+  DescribeJoint(model, wall, run);
+  for (const auto& samples : SplitTaps(run.trace)) {
+    TapMetricsOptions options;
+    const auto begin = static_cast<std::size_t>(samples.data() - run.trace.data());
+    if (wall.moving()) {
+      options.surface_velocity_mps =
+          std::span<const Vec3>(surface_velocity_mps).subspan(begin, samples.size());
+      if (wall.joint >= 0)
+        run.joint_taps.push_back(MotionOverTap(run, begin, begin + samples.size()));
+    }
+    run.taps.push_back(ComputeTapMetrics(samples, options));
+  }
   run.model = std::move(model);
   run.wall = setup.wall;
   CheckTheWallWasTapped(run, config.scene_path);

@@ -25,6 +25,38 @@ struct Wall {
   Vec3 point_m = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ();
   std::string geom;  // the geom it belongs to; empty when given as a point and normal
+  /// A moving wall: a link geom of an articulated tree (docs/articulated.md, "Tapping a link: a
+  /// moving wall"): the tree, its link, the geom's index in Model::geoms and the joint whose
+  /// motion is reported (the hinge or slide nearest above the link, -1 if none). All -1 for a
+  /// static wall.
+  int tree = -1;
+  int link = -1;
+  int geom_index = -1;
+  int joint = -1;
+  bool moving() const { return tree >= 0; }
+};
+
+/// One tick of a moving wall (TapRun::wall_trace, aligned with TapRun::trace).
+struct WallSample {
+  double joint_position = 0.0;  // the reported joint's coordinate: rad (hinge) or m (slide)
+  double joint_velocity = 0.0;  // rad/s or m/s
+  /// Velocity of the wall's point under the tool (the tool's centre minus its reach along the
+  /// wall's normal), moving with the link [m/s].
+  Vec3 surface_velocity_mps = Vec3::Zero();
+  /// Generalised impulse the tool's contacts with the wall gave the joint this tick, J^T P over
+  /// the contact points: about a hinge's axis [N m s] (r x P . axis) or along a slide [N s].
+  double joint_impulse = 0.0;
+  bool touching_wall = false;  // some tool contact this tick is with the wall's geom
+};
+
+/// A moving wall's joint over one tap (TapRun::joint_taps, aligned with TapRun::taps).
+struct JointMotion {
+  double position_at_start = 0.0;  // at the tap's first sample [rad or m]
+  double position_at_end = 0.0;    // at its last sample
+  double velocity_at_end = 0.0;    // [rad/s or m/s]
+  double min_position = 0.0, max_position = 0.0;
+  double peak_speed = 0.0;  // largest |velocity| [rad/s or m/s]
+  double impulse = 0.0;     // sum of WallSample::joint_impulse over the tap [N m s or N s]
 };
 
 /// Everything a tap run needs.
@@ -74,13 +106,25 @@ struct TapRun {
   std::int64_t clipped_ticks = 0;          // ticks whose force the device limit clipped
   std::int64_t clipped_impulse_ticks = 0;  // ... while an impulsive force was in the command
   std::array<WarningStat, static_cast<int>(Warning::kCount)> warnings{};
+  // a moving wall only (wall.moving()); empty or zero otherwise
+  std::vector<WallSample> wall_trace;   // one per tick, as trace
+  std::vector<JointMotion> joint_taps;  // one per tap, as taps (when the wall has a joint)
+  std::string joint_name;               // the reported joint (wall.joint)
+  JointKind joint_kind = JointKind::kHinge;
+  double joint_inertia = 0.0;    // M_dd at the start: the tree's inertia about the joint with
+                                 // armature, as compiled [kg m^2 or kg]
+  double joint_damping = 0.0;    // the joint's damping [N m s/rad or N s/m]
+  double joint_stiffness = 0.0;  // its spring [N m/rad or N/m]
 };
 
 /// The wall of `model` (loaded from `scene_path`, for messages): the static geom named `geom`, or
 /// when `geom` is empty the static geom named "wall", else the scene's only static plane. A
 /// plane's surface passes through its centre with the normal its frame's z axis; a box's is the
-/// face whose outward normal is its frame's z axis. Throws Error naming the scene and listing its
-/// static planes and boxes when there is no such geom, it is not static, or it is another type.
+/// face whose outward normal is its frame's z axis. A link geom of an articulated tree is a
+/// moving wall: its surface is the point of the geom (a plane, box, sphere or capsule, at the
+/// scene's initial pose) nearest the scene's tool, with the outward normal there (a box's: the
+/// face nearest the tool). Throws Error naming the scene and listing its static planes and boxes
+/// when there is no such geom, it is a free body's, or it is another type.
 Wall FindWall(const Model& model, const std::string& scene_path, const std::string& geom);
 
 /// The first surface that a ray from the tool's position in the scene (`model.initial`) along

@@ -22,6 +22,12 @@ double NormalForceN(const TraceSample& s, const Vec3& n) {
 double ApproachSpeedMps(const TraceSample& s, const Vec3& n) {
   return -s.tool_velocity_mps.dot(n);
 }
+// relative to a moving wall's point when the options give its velocities (sample k of the tap)
+double ApproachSpeedMps(std::span<const TraceSample> s, std::size_t k, const Vec3& n,
+                        const TapMetricsOptions& options) {
+  if (options.surface_velocity_mps.size() != s.size()) return ApproachSpeedMps(s[k], n);
+  return -(s[k].tool_velocity_mps - options.surface_velocity_mps[k]).dot(n);
+}
 
 void SetSpectraNaN(TapMetrics& m) {
   m.band_energy_fraction = {kNaN, kNaN, kNaN, kNaN};
@@ -181,7 +187,7 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
   const Vec3 n = s[onset].wall_normal;
 
   const std::size_t before = onset > 0 ? onset - 1 : onset;
-  m.approach_speed_mps = ApproachSpeedMps(s[before], n);
+  m.approach_speed_mps = ApproachSpeedMps(s, before, n, options);
 
   for (std::size_t k = 0; k < s.size(); ++k) {
     m.peak_force_N = std::max(m.peak_force_N, NormalForceN(s[k], n));
@@ -196,7 +202,7 @@ TapMetrics ComputeTapMetrics(std::span<const TraceSample> s, const TapMetricsOpt
 
   m.time_to_stop_s = kNaN;
   for (std::size_t k = onset; k < s.size(); ++k) {
-    if (ApproachSpeedMps(s[k], n) <= options.stop_speed_mps) {
+    if (ApproachSpeedMps(s, k, n, options) <= options.stop_speed_mps) {
       m.time_to_stop_s = s[k].time_s - s[onset].time_s;
       break;
     }

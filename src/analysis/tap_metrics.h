@@ -33,6 +33,11 @@ struct TapMetricsOptions {
   std::array<double, 3> band_edges_hz = kDefaultBandEdgesHz;
   /// Spectrum settings.
   SpectrumOptions spectrum;
+  /// A moving wall (a link of an articulated tree): per sample of the tap, the velocity of the
+  /// wall's point under the tool [m/s]. When given (one per sample), the approach speed at onset
+  /// and the time to stop are of the tool relative to that point, -n . (v_tool - v_wall); empty
+  /// for a static wall (the tool's own velocity).
+  std::span<const Vec3> surface_velocity_mps;
 };
 
 /// One collision impulse seen in the trace (a sample with impulses > 0).
@@ -50,7 +55,8 @@ struct TapMetrics {
   int tap = -1;                       // TraceSample::tap of the samples
   bool contact = false;               // some sample had tool_contacts > 0
   double contact_onset_time_s = 0.0;  // time of the first contact sample (NaN without contact)
-  /// Approach speed at onset: -n . tool_velocity at the last sample before onset [m/s].
+  /// Approach speed at onset: -n . tool_velocity at the last sample before onset [m/s]; relative
+  /// to the wall's point under the tool for a moving wall (TapMetricsOptions).
   double approach_speed_mps = 0.0;
   /// Largest normal force the device displayed over the tap (after its limit) [N].
   double peak_force_N = 0.0;
