@@ -155,6 +155,8 @@ analysis::TapSetup PrepareServeTap(const ServeRun& s) {
   // without a wall named, the hand taps what lies below the scene's tool (a pile's top box, not
   // the floor under it)
   c.aim_below_tool = s.f.wall_geom.empty();
+  c.widen_plausible_radius =
+      !s.f.max_device_radius_m && !ResolveSettings(s.f.scene).Given("device.plausible_radius_m");
   analysis::TapSetup setup = analysis::PrepareTap(c);
   PrintLoadWarnings(setup.model);
   return setup;

@@ -103,6 +103,7 @@ analysis::TapExperimentConfig MakeConfig(const TapFlags& f, std::optional<int> w
   }
   const Settings settings = ResolveSettings(f.scene);
   RefuseUnused(settings, {"device.connect"}, "tap runs its own simulated device in process");
+  c.widen_plausible_radius = !settings.Given("device.plausible_radius_m");
   if (f.coupling) {
     c.load.device.coupling = io::ParseCoupling(*f.coupling);
   } else if (!settings.Given("device.coupling")) {

@@ -339,10 +339,15 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
 
   if (model.device.coupling == Coupling::kDirect) UseDeviceAndHandMass(model, dm, config.hand);
   const DeviceState start = dev.Read();
+  const double scene_tool_m = model.initial[model.tool].x_W.norm();
   model.initial[model.tool].x_W = start.position_m;
   model.initial[model.tool].v_W.setZero();
   model.initial[model.tool].w_W.setZero();
   model.initial[model.tool].q_WB = Quat::Identity();
+  if (config.widen_plausible_radius) {
+    model.device.plausible_radius_m = std::max(
+        model.device.plausible_radius_m, std::max(setup.wall.point_m.norm(), scene_tool_m) + 0.5);
+  }
   Configure(model);
 
   setup.model = std::move(model);
@@ -431,12 +436,6 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   run.device = setup.device;
   Model& model = setup.model;
   device::SimulatedDevice& dev = *setup.simulated;
-  // the experiment's simulated device works where the wall is: its state is plausible within
-  // 0.5 m of the wall (a door's panel lies 1.2 m from the origin; a wall at the origin keeps the
-  // default 1 m). Only here: a loop driven from elsewhere (PrepareTap) keeps the limits it was
-  // given
-  model.device.plausible_radius_m =
-      std::max(model.device.plausible_radius_m, setup.wall.point_m.norm() + 0.5);
   Data data = MakeData(model);
   const Wall& wall = setup.wall;
   const double reach = ToolReach(model, wall.normal);

@@ -81,6 +81,10 @@ struct TapExperimentConfig {
   // (serve, view), where the surface under the tool need not be the wall. The tap experiment's
   // metrics describe the static wall and keep false.
   bool aim_below_tool = false;
+  // true: the simulated hand, which works in the scene's coordinates, counts as plausible within
+  // 0.5 m of the wall and of the scene's tool (a door's panel lies 1.2 m from the origin, beyond
+  // the default radius of 1 m). False where the user wrote a radius: load.device's, as written.
+  bool widen_plausible_radius = true;
   device::HandParams hand;
   // default: the device spec's inertia and sensing; tick_rate_hz is set from rate_hz
   std::optional<device::DeviceModelParams> device_model;

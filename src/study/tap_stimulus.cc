@@ -38,10 +38,6 @@ analysis::TapExperimentConfig TapConfig(const Condition& c, const std::string& s
   if (c.wall_point_m) {
     config.wall_point_m = *c.wall_point_m;
     config.wall_normal = *c.wall_normal;
-    // the simulated hand works in the scene's coordinates: a wall far from the origin (a door's
-    // panel 1 m up) must not read as an implausible device state
-    DeviceParams& d = config.load.device;
-    d.plausible_radius_m = std::max(d.plausible_radius_m, c.wall_point_m->norm() + 0.5);
   }
   return config;
 }

@@ -28,8 +28,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.display_limit_hz = 500.0;
   options.max_force_N = 10.0;
   try {
-    const rigidtouch::analysis::MaterialFit fit =
-        rigidtouch::analysis::FitMaterial(std::span<const rigidtouch::io::TapRecording>(&recording, 1), options);
+    const rigidtouch::analysis::MaterialFit fit = rigidtouch::analysis::FitMaterial(
+        std::span<const rigidtouch::io::TapRecording>(&recording, 1), options);
     const rigidtouch::Material& m = fit.material;
     if (!std::isfinite(m.amplitude_Ns_per_m) || !std::isfinite(m.decay_per_s) ||
         !std::isfinite(m.frequency_hz)) {
