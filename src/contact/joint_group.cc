@@ -75,6 +75,8 @@ JointGroupSolver::JointGroupSolver(int max_rows, int max_dofs)
   tree_dofs_.assign(max_dofs, 0);
   jac_t_.setZero(max_dofs, r);
   y_.setZero(max_dofs, r);
+  yt_.setZero(r, max_dofs);
+  solve_.assign(r, 0);
   w_.setZero(r, r);
   point_trans_.setZero(3, max_dofs);
   point_rot_.setZero(3, max_dofs);
@@ -141,7 +143,7 @@ JointGroupError JointGroupSolver::AddSide(const JointGroup& group, const RowSide
   return JointGroupError::kNone;
 }
 
-void JointGroupSolver::ApplyInverseMass(const JointGroup& group, int column) {
+void JointGroupSolver::ApplyBodyInverseMass(const JointGroup& group, int column) {
   auto y = y_.col(column);
   for (int i = 0; i < static_cast<int>(group.bodies.size()); ++i) {
     const int off = body_offset_[i];
@@ -150,8 +152,19 @@ void JointGroupSolver::ApplyInverseMass(const JointGroup& group, int column) {
     const Vec3 torque = y.segment<3>(off + 3);
     y.segment<3>(off + 3) = body.inv_inertia_W * torque;
   }
+}
+
+// the trees' blocks of the columns marked in solve_: Y <- (M + h D)^-1 Y per tree, all columns in
+// one pass over its factor (TreeSolveRows does per column what TreeSolve did, so Y is the same)
+void JointGroupSolver::ApplyTreeInverseMass(const JointGroup& group) {
   for (int t = 0; t < static_cast<int>(group.trees.size()); ++t) {
-    dynamics::TreeSolve(*group.trees[t].data, y.segment(tree_offset_[t], tree_dofs_[t]));
+    const int off = tree_offset_[t], nv = tree_dofs_[t];
+    auto yt = yt_.topLeftCorner(rows_, nv);
+    yt = y_.block(off, 0, nv, rows_).transpose();
+    dynamics::TreeSolveRows(*group.trees[t].data, yt);
+    for (int c = 0; c < rows_; ++c) {
+      if (solve_[c]) y_.col(c).segment(off, nv) = yt.row(c).transpose();
+    }
   }
 }
 
@@ -211,8 +224,10 @@ JointGroupError JointGroupSolver::Assemble(const JointGroup& group) {
   }
   for (int c = 0; c < rows_; ++c) {
     y_.col(c).head(n) = jac_t_.col(c).head(n);
-    if (!y_.col(c).head(n).isZero(0.0)) ApplyInverseMass(group, c);
+    solve_[c] = y_.col(c).head(n).isZero(0.0) ? 0 : 1;
+    if (solve_[c]) ApplyBodyInverseMass(group, c);
   }
+  ApplyTreeInverseMass(group);
   for (int i = 0; i < rows_; ++i) {
     for (int k = i; k < rows_; ++k) {
       w_(i, k) = jac_t_.col(i).head(n).dot(y_.col(k).head(n));

@@ -150,7 +150,8 @@ class JointGroupSolver {
   JointGroupError Assemble(const JointGroup& group);
   JointGroupError AddSide(const JointGroup& group, const RowSide& side, double sign,
                           const JointRow& row, int first);
-  void ApplyInverseMass(const JointGroup& group, int column);
+  void ApplyBodyInverseMass(const JointGroup& group, int column);
+  void ApplyTreeInverseMass(const JointGroup& group);
   void Gather(const JointGroup& group);
   void Scatter(const JointGroup& group) const;
   bool SolveImplicit(double h_s);
@@ -165,9 +166,11 @@ class JointGroupSolver {
   double inv_h_ = 0.0;  // 1 / h of the penalty solve: a row's force is phi + lambda / h
   std::vector<int> body_offset_, tree_offset_;
   std::vector<int> tree_dofs_;
-  Eigen::MatrixXd jac_t_;  // (max_dofs x 3 max_rows) the rows' Jacobians, one per column
-  Eigen::MatrixXd y_;      // (max_dofs x 3 max_rows) M^-1 J^T
-  Eigen::MatrixXd w_;      // (3 max_rows)^2 W = J M^-1 J^T
+  Eigen::MatrixXd jac_t_;    // (max_dofs x 3 max_rows) the rows' Jacobians, one per column
+  Eigen::MatrixXd y_;        // (max_dofs x 3 max_rows) M^-1 J^T
+  Eigen::MatrixXd yt_;       // (3 max_rows x max_dofs) a tree's block of Y^T, solved row by row
+  std::vector<char> solve_;  // per internal row: its Jacobian is not zero (Y gets M^-1 J^T)
+  Eigen::MatrixXd w_;        // (3 max_rows)^2 W = J M^-1 J^T
   Eigen::MatrixXd point_trans_, point_rot_;  // (3 x max_dofs) a point's Jacobians
   Eigen::VectorXd u_;                        // stacked velocity
   Eigen::VectorXd force_;                    // stacked J^T f of the last penalty solve

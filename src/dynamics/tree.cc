@@ -7,6 +7,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <utility>
 
@@ -227,6 +228,8 @@ TreeData MakeTreeData(const TreeModel& model) {
   d.joint_anchor_W.assign(nj, Vec3::Zero());
   d.S = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, nv);
   d.inertia_O.assign(nb, Mat6::Zero());
+  d.kin_qpos = Eigen::VectorXd::Zero(model.nq);
+  d.kin_scratch = Eigen::VectorXd::Zero(model.nq);
   d.V.assign(nb, Vec6::Zero());
   d.A.assign(nb, Vec6::Zero());
   d.F.assign(nb, Vec6::Zero());
@@ -264,6 +267,32 @@ void TreeKinematics(const TreeModel& model, TreeData& data) {
     data.inertia_O[i] =
         InertiaAboutOrigin(b.mass_kg, data.com_W[i], R * b.inertia_kgm2 * R.transpose());
   }
+  data.kin_qpos = data.qpos;  // same size: no allocation
+  data.kin_model = &model;
+}
+
+void TreeUpdateKinematics(const TreeModel& model, TreeData& data) {
+  const int nq = static_cast<int>(data.qpos.size());
+  bool same =
+      data.kin_model == &model && data.kin_qpos.size() == nq && data.kin_scratch.size() == nq;
+  if (same) {
+    // the qpos TreeKinematics would compute from: its quaternions normalised by NormalizedQuat
+    Eigen::VectorXd& q = data.kin_scratch;
+    q = data.qpos;
+    const int nj = static_cast<int>(model.joint_body.size());
+    for (int j = 0; j < nj; ++j) {
+      const JointType type = model.joint(j).type;
+      if (type == JointType::kFree) NormalizedQuat(q, model.joint_qadr[j] + 3);
+      if (type == JointType::kBall) NormalizedQuat(q, model.joint_qadr[j]);
+    }
+    // bit for bit (a signed zero or a NaN differs)
+    same = std::memcmp(q.data(), data.kin_qpos.data(), sizeof(double) * nq) == 0;
+  }
+  if (!same) {
+    TreeKinematics(model, data);
+    return;
+  }
+  data.qpos = data.kin_scratch;
 }
 
 void TreeMassMatrix(const TreeModel& model, TreeData& data) {
@@ -385,6 +414,19 @@ void TreeSolve(const TreeData& data, Eigen::Ref<Eigen::VectorXd> x) {
   for (int i = 0; i < n; ++i) x[i] /= L(i, i);
   for (int i = n - 1; i >= 0; --i) {
     for (int k = i + 1; k < n; ++k) x[i] -= L(k, i) * x[k];
+  }
+}
+
+void TreeSolveRows(const TreeData& data, Eigen::Ref<Eigen::MatrixXd> xt) {
+  // TreeSolve with x[i] the column xt.col(i): the same operations per row, in the same order
+  const Eigen::MatrixXd& L = data.factor;
+  const int n = static_cast<int>(xt.cols());
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < i; ++k) xt.col(i) -= L(i, k) * xt.col(k);
+  }
+  for (int i = 0; i < n; ++i) xt.col(i) /= L(i, i);
+  for (int i = n - 1; i >= 0; --i) {
+    for (int k = i + 1; k < n; ++k) xt.col(i) -= L(k, i) * xt.col(k);
   }
 }
 

@@ -79,6 +79,10 @@ struct TreeData {
   std::vector<Vec3> joint_anchor_W;
   Eigen::Matrix<double, 6, Eigen::Dynamic> S;  // dof motions [w; velocity of the world origin]
   std::vector<Mat6> inertia_O;  // spatial inertia of each body about the world origin
+  // the (normalised) qpos and the model the kinematics above were computed from, for
+  // TreeUpdateKinematics; kin_scratch is its nq scratch
+  Eigen::VectorXd kin_qpos, kin_scratch;
+  const TreeModel* kin_model = nullptr;
   // velocities and dynamics
   std::vector<Vec6> V, A, F;    // body velocities, bias accelerations, forces (RNEA)
   std::vector<Mat6> composite;  // composite inertias (CRBA)
@@ -101,6 +105,12 @@ TreeData MakeTreeData(const TreeModel& model);
 /// Body poses, joint axes and anchors, dof motions and spatial inertias at qpos. Normalises the
 /// quaternions of qpos in place (as MuJoCo's mj_kinematics does).
 void TreeKinematics(const TreeModel& model, TreeData& data);
+
+/// TreeKinematics, skipped when it would recompute what data already holds: when qpos with its
+/// quaternions normalised is bit for bit the qpos of the last TreeKinematics on this data with
+/// this model (kinematics depend on nothing else), only qpos is normalised in place, exactly as
+/// TreeKinematics would. Otherwise runs TreeKinematics. Never allocates.
+void TreeUpdateKinematics(const TreeModel& model, TreeData& data);
 
 /// Joint-space mass matrix into data.M (composite rigid body algorithm) plus armature. Needs
 /// TreeKinematics.
@@ -126,6 +136,11 @@ bool TreeFactor(const TreeModel& model, TreeData& data, double h_s);
 
 /// x <- (M + h D)^-1 x with the kept factor.
 void TreeSolve(const TreeData& data, Eigen::Ref<Eigen::VectorXd> x);
+
+/// TreeSolve on every row of xt (m x nv) at once: row r <- ((M + h D)^-1 row r^T)^T. Each row
+/// gets TreeSolve's operations in TreeSolve's order (bit-identical results); the rows are
+/// processed together so that one pass over the factor serves them all.
+void TreeSolveRows(const TreeData& data, Eigen::Ref<Eigen::MatrixXd> xt);
 
 /// The effective inverse mass J (M + h D)^-1 J^T (k x k) of k constraint rows J (k x nv) with the
 /// kept factor: the matrix Eq. 5 and Eq. 8 pseudo-invert in joint space. Uses data.scratch_v.

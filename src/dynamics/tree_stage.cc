@@ -101,7 +101,8 @@ bool PrepareTreeStep(const Model& model, int t, Data& data, Eigen::Ref<Eigen::Ve
   const TreeModel& tm = *model.trees[t].dynamics;
   TreeData& d = *data.trees[t];
   ActuatorForces(model, t, data, force);
-  TreeKinematics(tm, d);
+  // the poses StepTrees computed at these positions, unless qpos changed since
+  TreeUpdateKinematics(tm, d);
   TreeMassMatrix(tm, d);
   TreeBiasForces(tm, d);
   TreePassiveForces(tm, d);

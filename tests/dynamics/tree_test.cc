@@ -517,6 +517,54 @@ TEST(TreeTest, HumanoidEqualsMujoco) {
   std::printf("humanoid: M %.2g, bias %.2g, jac %.2g (bound 1e-10)\n", e.M, e.bias, e.jac);
 }
 
+// TreeSolveRows gives every right-hand side TreeSolve's bits, and TreeUpdateKinematics leaves
+// the kinematics (and qpos) bit for bit as TreeKinematics would, skipping or not
+TEST(TreeTest, BatchedSolveAndKinematicsUpdateAreBitIdentical) {
+  mjModel* m = CompileXml(Wrap(kHumanoid));
+  mjData* d = mj_makeData(m);
+  const TreeModel model = io::TreeFromMjModel(m);
+  TreeData data = MakeTreeData(model);
+  TreeData ref = MakeTreeData(model);
+  std::mt19937_64 rng(7);
+  RandomState(m, rng, d->qpos, d->qvel);
+  data.qpos = Eigen::Map<Eigen::VectorXd>(d->qpos, m->nq);
+  data.qpos.segment<4>(3) *= 1.0 + 1e-9;  // a quaternion TreeKinematics must normalise
+  ref.qpos = data.qpos;
+  TreeKinematics(model, ref);
+  TreeUpdateKinematics(model, data);  // changed qpos: the full pass
+  const auto same = [](const auto& a, const auto& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+  };
+  EXPECT_TRUE(same(data.qpos, ref.qpos));
+  EXPECT_TRUE(same(data.S, ref.S));
+  TreeKinematics(model, ref);  // normalises once more, as a later tick's pass would
+  TreeUpdateKinematics(model, data);
+  EXPECT_TRUE(same(data.qpos, ref.qpos));
+  EXPECT_TRUE(same(data.S, ref.S));
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    EXPECT_TRUE(same(data.R_WB[i], ref.R_WB[i]) && same(data.x_W[i], ref.x_W[i]) &&
+                same(data.com_W[i], ref.com_W[i]) && same(data.inertia_O[i], ref.inertia_O[i]));
+  }
+  TreeMassMatrix(model, data);
+  ASSERT_TRUE(TreeFactor(model, data, 0.002));
+  const int nv = model.nv, k = 33;
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd rows(k, nv);
+  for (int r = 0; r < k; ++r) {
+    for (int c = 0; c < nv; ++c) rows(r, c) = u(rng);
+  }
+  Eigen::MatrixXd batched = rows;
+  TreeSolveRows(data, batched);
+  for (int r = 0; r < k; ++r) {
+    Eigen::VectorXd x = rows.row(r).transpose();
+    TreeSolve(data, x);
+    const Eigen::VectorXd b = batched.row(r).transpose();
+    EXPECT_TRUE(same(x, b)) << r;
+  }
+  mj_deleteData(d);
+  mj_deleteModel(m);
+}
+
 TEST(TreeTest, RefusesANestedFreeJoint) {
   TreeBody root;
   root.mass_kg = 1.0;
