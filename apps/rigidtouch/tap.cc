@@ -500,8 +500,10 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   }
   std::cout << compact.str() << "\n" << compact_note << "\n";
   if (!joint_rows.empty()) std::cout << "\n" << JointTableHeader() << "\n" << joint_rows;
-  std::cout << "\nfull table: " << table_path << "\nfigures: " << fig << " and " << f.out_dir
-            << "/<renderer>_tap.png\ntraces: " << f.out_dir << "/<renderer>.csv\n";
+  // the files of each renderer (a door stop's comparison prefixes them with limit_)
+  const std::string each = f.out_dir + (set == "joint_limit" ? "/limit_<renderer>" : "/<renderer>");
+  std::cout << "\nfull table: " << table_path << "\nfigures: " << fig << " and " << each
+            << "_tap.png\ntraces: " << each << ".csv\n";
   check();
 }
 
