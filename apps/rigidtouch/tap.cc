@@ -384,6 +384,15 @@ void CheckJointLimits(const analysis::TapRun& run, const std::string& scene) {
 }
 
 // runs every renderer of `specs` on the same taps; `set` names the table and the figure
+// where a comparison wrote its files; each renderer's (a door stop's comparison prefixes them
+// with limit_)
+void PrintCompareFiles(const std::string& out_dir, const std::string& set,
+                       const std::string& table_path, const std::string& fig) {
+  const std::string each = out_dir + (set == "joint_limit" ? "/limit_<renderer>" : "/<renderer>");
+  std::cout << "\nfull table: " << table_path << "\nfigures: " << fig << " and " << each
+            << "_tap.png\ntraces: " << each << ".csv\n";
+}
+
 void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs,
              const std::string& set, bool joint_limit = false) {
   CheckCompareOutputs(f, specs, set);
@@ -500,10 +509,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
   }
   std::cout << compact.str() << "\n" << compact_note << "\n";
   if (!joint_rows.empty()) std::cout << "\n" << JointTableHeader() << "\n" << joint_rows;
-  // the files of each renderer (a door stop's comparison prefixes them with limit_)
-  const std::string each = f.out_dir + (set == "joint_limit" ? "/limit_<renderer>" : "/<renderer>");
-  std::cout << "\nfull table: " << table_path << "\nfigures: " << fig << " and " << each
-            << "_tap.png\ntraces: " << each << ".csv\n";
+  PrintCompareFiles(f.out_dir, set, table_path, fig);
   check();
 }
 
