@@ -45,7 +45,22 @@ def main():
                         help="the tap metrics' repetition rate of the transient, as stated")
     parser.add_argument("--joint", default=None,
                         help="a moving wall's joint trace (rigidtouch tap writes it)")
+    parser.add_argument("--material-model", nargs=5, default=None,
+                        metavar=("NAME", "A", "B", "F", "V"),
+                        help="the material the renderer used, drawn beside the rendered force: "
+                        "Q(t) = A v e^(-B t) sin(2 pi f t) from the contact onset, A [N s/m], "
+                        "B [1/s], f [Hz], v the tap's impact speed [m/s]")
     args = parser.parse_args()
+    model = None
+    if args.material_model:
+        try:
+            a, b, f, v = (float(x) for x in args.material_model[1:])
+        except ValueError:
+            print(f"error: --material-model: A, B, F and V must be numbers, got "
+                  f"{' '.join(args.material_model[1:])}", file=sys.stderr)
+            return 2
+        model = {"name": args.material_model[0], "amplitude_Ns_per_m": a, "decay_per_s": b,
+                 "frequency_hz": f, "impact_speed_mps": v}
 
     plt = trace_io.import_pyplot()
     import tap_panels
@@ -67,6 +82,8 @@ def main():
                          f"{s['requested_peak_N']:.2f} N")
     tap_panels.draw_force(axes[0][1], s, args.limit, parts=True, zoom_ms=args.zoom_ms,
                           legend=False, parts_label=args.parts_label)
+    if model:
+        s["material_model"] = tap_panels.draw_material_model(axes[0][1], model, args.zoom_ms)
     axes[0][1].set_title(f"first {args.zoom_ms:g} ms ({len(s['impulse_ms'])} impulse instants "
                          "in the tap shown)")
     for ax in (axes[0][0], axes[0][1], axes[1][0]):

@@ -126,6 +126,22 @@ def draw_force(ax, s, limit_n, parts=False, zoom_ms=None, legend=True,
         ax.legend(loc="upper right" if zoom_ms is not None else "center right", fontsize=7)
 
 
+def draw_material_model(ax, model, zoom_ms, samples=800):
+    """The material's decaying sinusoid, Q(t) = A v e^(-B t) sin(2 pi f t) from the contact onset
+    over `zoom_ms`, dashed over the rendered force, with its own legend; returns what it drew."""
+    a, b = model["amplitude_Ns_per_m"], model["decay_per_s"]
+    f, v = model["frequency_hz"], model["impact_speed_mps"]
+    t_ms = [zoom_ms * k / (samples - 1) for k in range(samples)]
+    q = [a * v * math.exp(-b * t / 1e3) * math.sin(2.0 * math.pi * f * t / 1e3) for t in t_ms]
+    label = (f"material model {model['name']}: A v e^(-Bt) sin(2\u03c0ft), "
+             f"A v = {a * v:.3g} N, B = {b:.3g} 1/s, f = {f:.3g} Hz")
+    line, = ax.plot(t_ms, q, color="tab:red", linestyle="--", linewidth=1.0, label=label)
+    low, high = ax.get_ylim()
+    ax.set_ylim(min(low, 1.1 * min(q)), max(high, 1.1 * max(q)))
+    ax.legend(handles=[line], loc="lower right", fontsize=6)
+    return dict(model, t_ms=t_ms, force_N=q)
+
+
 def draw_motion(ax, s, legend=True):
     """Penetration (left axis) and velocity along the outward normal (right axis)."""
     ax.plot(s["t_ms"], s["penetration_mm"], color="tab:purple", linewidth=1.2,

@@ -339,6 +339,15 @@ std::vector<std::string> TapFigureArgs(const analysis::TapRun& run, const std::s
                  : rate_hz == 0.0        ? "none"
                                          : text::Fixed(rate_hz, 1) + " Hz"});
   }
+  // a material's renderer: its model Q(t) = A v e^(-B t) sin(2 pi f t) beside the rendered force,
+  // at tap 0's impact speed (a fitted material's is the recordings' model)
+  if (!material.empty() && !run.taps.empty() && run.taps.front().contact) {
+    const Material& mat = m.render.material;
+    args.insert(args.end(),
+                {"--material-model", material, text::FormatNumber(mat.amplitude_Ns_per_m),
+                 text::FormatNumber(mat.decay_per_s), text::FormatNumber(mat.frequency_hz),
+                 text::FormatNumber(run.taps.front().approach_speed_mps)});
+  }
   return args;
 }
 

@@ -146,6 +146,41 @@ TEST_F(FiguresTest, TheTapFigureStatesTheRepetitionItIsGiven) {
   EXPECT_TRUE(j["panels"][0]["spectrum"]["transient_repetition"].is_null());
 }
 
+// a material's renderer: the figure draws the material's model beside the rendered force, as
+// given: Q(t) = A v e^(-B t) sin(2 pi f t) from the onset (to 1e-9 N), named; a value that is no
+// number is refused with status 2 and no figure
+TEST_F(FiguresTest, TheTapFigureDrawsTheMaterialModelItIsGiven) {
+  const std::string trace = WriteTrace("event.csv", 0, 4);
+  const std::string out = (dir_ / "m.png").string(), dump = (dir_ / "m.json").string();
+  const double a = 14.9, b = 60.2, f = 99.9, v = 0.2;
+  FigureResult r = RunPlotScript(kPython + "plot_tap.py",
+                                 {trace, "--out", out, "--dump", dump, "--material-model", "wood",
+                                  "14.9", "60.2", "99.9", "0.2"});
+  ASSERT_EQ(r.status, FigureStatus::kOk) << r.message << "\n" << r.output;
+  {
+    std::ifstream in(dump);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json& model = j["panels"][0]["material_model"];
+    ASSERT_TRUE(model.is_object()) << j.dump().substr(0, 400);
+    EXPECT_EQ(model["name"], "wood");
+    const auto& t = model["t_ms"];
+    const auto& q = model["force_N"];
+    ASSERT_EQ(t.size(), q.size());
+    ASSERT_GT(t.size(), 100u);
+    for (std::size_t k = 0; k < t.size(); k += 50) {
+      const double s = t[k].get<double>() / 1e3;
+      EXPECT_NEAR(q[k].get<double>(),
+                  a * v * std::exp(-b * s) * std::sin(2.0 * std::numbers::pi * f * s), 1e-9)
+          << "t = " << s;
+    }
+  }
+  fs::remove(out);
+  r = RunPlotScript(kPython + "plot_tap.py", {trace, "--out", out, "--material-model", "wood",
+                                              "14.9", "fast", "99.9", "0.2"});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(FiguresTest, MissingMatplotlibIsReportedDistinctly) {
   // a matplotlib package that fails to import shadows the real one
   const fs::path shim = dir_ / "shim" / "matplotlib";
