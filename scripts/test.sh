@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The test command (docs/testing.md). By default: the format and function-length checks, the
 # release build with -Wall -Wextra -Werror, every test but those labelled slow, the install check
-# and the Python tests. `--full` (the CI gate) adds the slow tests, the README's commands run in a
-# fresh clone, the unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer, the
-# threaded tests under ThreadSanitizer and each libFuzzer harness for a bounded time.
+# and the Python tests. `--full` (the CI gate) adds the slow tests, the README's commands as a
+# newcomer runs them (scripts/check-readme.sh), the unit tests again under AddressSanitizer +
+# UndefinedBehaviorSanitizer, the threaded tests under ThreadSanitizer and each libFuzzer harness
+# for a bounded time.
 # Usage: bash scripts/test.sh [--full]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -76,7 +77,7 @@ start_s=$(date +%s)
 (cd build && ctest --output-on-failure -j"$jobs" -L slow)
 took "$start_s" "slow tests"
 
-echo "== the README's commands, in a fresh clone after the main job"
+echo "== the README's commands after the main job (in this checkout when clean, else a fresh clone)"
 start_s=$(date +%s)
 bash scripts/check-readme.sh
 took "$start_s" "README check"
