@@ -108,9 +108,12 @@ def main():
             s["joint"] = joints[c]
     fig.suptitle(f"tap {args.tap}: the force the device displays against its limit, per renderer",
                  fontsize=10)
+    # as many entries per row as the figure's width holds (about 1.75 per renderer's column)
+    ncol = max(1, min(len(legend), 7, max(2, 7 * n // 4)))
+    legend_rows = -(-len(legend) // ncol)
     fig.legend(list(legend.values()), list(legend.keys()), loc="upper center",
-               bbox_to_anchor=(0.5, 0.975), ncol=min(len(legend), 7), fontsize=8, frameon=False)
-    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.955))
+               bbox_to_anchor=(0.5, 0.975), ncol=ncol, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.965 - 0.012 * legend_rows * 4 / rows))
     try:
         fig.savefig(args.out, dpi=args.dpi)
     except OSError as error:
