@@ -5,8 +5,8 @@
 
 #include "base/text.h"
 #include "command.h"
-#include "dynamics/tree.h"
 #include "io/config.h"
+#include "loop/loop_json.h"
 #include "scene_flags.h"
 #include "simulate_nonfinite.h"
 
@@ -19,45 +19,6 @@ struct SimulateFlags {
   std::vector<double> tool_force{0.0, 0.0, 0.0};
   bool json = false;
 };
-
-const char* JointKindName(JointKind k) {
-  switch (k) {
-    case JointKind::kFree:
-      return "free";
-    case JointKind::kBall:
-      return "ball";
-    case JointKind::kSlide:
-      return "slide";
-    case JointKind::kHinge:
-      break;
-  }
-  return "hinge";
-}
-
-// every joint of every tree: position (rad or m; a ball's quaternion w x y z; a free joint's
-// position and quaternion), velocity (rad/s or m/s; angular velocity of a ball), at-limit flag
-nlohmann::json JointsJson(const Model& model, const Data& data) {
-  nlohmann::json joints = nlohmann::json::array();
-  for (std::size_t t = 0; t < model.trees.size(); ++t) {
-    const ArticulatedTree& tree = model.trees[t];
-    const dynamics::TreeData& d = *data.trees[t];
-    for (std::size_t j = 0; j < tree.joints.size(); ++j) {
-      const JointModel& jm = tree.joints[j];
-      const int nq = jm.type == JointKind::kFree ? 7 : jm.type == JointKind::kBall ? 4 : 1;
-      const int nv = jm.type == JointKind::kFree ? 6 : jm.type == JointKind::kBall ? 3 : 1;
-      nlohmann::json q = nlohmann::json::array(), v = nlohmann::json::array();
-      for (int k = 0; k < nq; ++k) q.push_back(d.qpos[jm.qpos_adr + k]);
-      for (int k = 0; k < nv; ++k) v.push_back(d.qvel[jm.dof_adr + k]);
-      joints.push_back({{"name", jm.name},
-                        {"tree", tree.name},
-                        {"type", JointKindName(jm.type)},
-                        {"position", nq == 1 ? q[0] : q},
-                        {"velocity", nv == 1 ? v[0] : v},
-                        {"at_limit", data.joint_at_limit[t][j] != 0}});
-    }
-  }
-  return joints;
-}
 
 void RunSimulate(const SimulateFlags& f) {
   if (f.steps < 0) throw Error("--steps must be >= 0, got " + std::to_string(f.steps));
@@ -117,7 +78,7 @@ void RunSimulate(const SimulateFlags& f) {
                                    {"interval_steps", model.schedule.interval_steps},
                                    {"impulses", model.schedule.impulses}}},
                                  {"bodies", bodies},
-                                 {"joints", JointsJson(model, data)},
+                                 {"joints", loop::JointsJson(model, data)},
                                  {"impulses", impulses},
                                  {"max_contacts", max_contacts},
                                  {"warnings", WarningsJson(data)},
