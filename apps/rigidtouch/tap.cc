@@ -149,7 +149,7 @@ nlohmann::json JointJson(const analysis::TapRun& run) {
     velocity.push_back(run.wall_trace[k].joint_velocity);
   }
   return {{"name", run.joint_name},
-          {"kind", hinge ? "hinge" : "slide"},
+          {"kind", JointKindName(run.joint_kind)},
           {"position_unit", hinge ? "rad" : "m"},
           {"velocity_unit", hinge ? "rad/s" : "m/s"},
           {"impulse_unit", hinge ? "N m s" : "N s"},

@@ -198,7 +198,7 @@ std::string JointTableRow(const std::string& name, const analysis::TapRun& run) 
   }
   const double n = static_cast<double>(run.joint_taps.size());
   std::ostringstream s;
-  s << "| " << name << " | " << run.joint_name << " (" << (hinge ? "hinge" : "slide") << ") | "
+  s << "| " << name << " | " << run.joint_name << " (" << JointKindName(run.joint_kind) << ") | "
     << text::Significant(run.joint_inertia, 4) << (hinge ? " kg m^2" : " kg") << " | "
     << text::Significant(run.joint_damping, 4) << (hinge ? " N m s/rad" : " N s/m") << " | "
     << text::Significant(scale * swing / n, 3) << unit << " | "

@@ -99,6 +99,9 @@ enum class Warning : int {
 /// Name of a warning for reports.
 const char* WarningName(Warning w);
 
+/// Name of a joint's kind for reports: "free", "ball", "slide" or "hinge" (MJCF's joint types).
+const char* JointKindName(JointKind kind);
+
 /// Count and last step of one warning.
 struct WarningStat {
   int count = 0;                // ticks in which the warning happened

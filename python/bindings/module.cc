@@ -326,10 +326,7 @@ std::vector<std::string> JointStrings(const Model& model, bool types) {
       out.push_back(j.name);
       return;
     }
-    out.push_back(j.type == JointKind::kHinge   ? "hinge"
-                  : j.type == JointKind::kSlide ? "slide"
-                  : j.type == JointKind::kBall  ? "ball"
-                                                : "free");
+    out.push_back(JointKindName(j.type));
   });
   return out;
 }

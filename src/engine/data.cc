@@ -18,6 +18,20 @@ void TreeDataDeleter::operator()(dynamics::TreeData* d) const {
   delete d;
 }
 
+const char* JointKindName(JointKind kind) {
+  switch (kind) {
+    case JointKind::kFree:
+      return "free";
+    case JointKind::kBall:
+      return "ball";
+    case JointKind::kSlide:
+      return "slide";
+    case JointKind::kHinge:
+      break;
+  }
+  return "hinge";
+}
+
 const char* WarningName(Warning w) {
   switch (w) {
     case Warning::kContactFull:

@@ -38,24 +38,6 @@ nlohmann::json ToJson(const TraceQueueStats& stats) {
   };
 }
 
-namespace {
-
-const char* JointTypeName(JointKind k) {
-  switch (k) {
-    case JointKind::kFree:
-      return "free";
-    case JointKind::kBall:
-      return "ball";
-    case JointKind::kSlide:
-      return "slide";
-    case JointKind::kHinge:
-      break;
-  }
-  return "hinge";
-}
-
-}  // namespace
-
 nlohmann::json JointsJson(const Model& model, const Data& data) {
   nlohmann::json joints = nlohmann::json::array();
   for (std::size_t t = 0; t < model.trees.size() && t < data.trees.size(); ++t) {
@@ -70,7 +52,7 @@ nlohmann::json JointsJson(const Model& model, const Data& data) {
       for (int k = 0; k < nv; ++k) v.push_back(d.qvel[jm.dof_adr + k]);
       joints.push_back({{"name", jm.name},
                         {"tree", tree.name},
-                        {"type", JointTypeName(jm.type)},
+                        {"type", JointKindName(jm.type)},
                         {"position", nq == 1 ? q[0] : q},
                         {"velocity", nv == 1 ? v[0] : v},
                         {"at_limit", data.joint_at_limit[t][j] != 0}});
