@@ -222,11 +222,16 @@ TEST(StudySimulateCliTest, ProgressOnStderrAndCtrlCKeepsResumableLogs) {
   const std::size_t before = AnswerCount(Answers(dir / "logs"));
   EXPECT_GT(before, 0u);
   EXPECT_LT(before, participants * 40u);
-  bool reason = false;
-  for (const auto& entry : fs::directory_iterator(dir / "logs")) {
-    reason = reason || ReadAll(entry.path()).find("interrupted by a signal") != std::string::npos;
+  // the signal lands inside a session (its log says why it stopped) or, now and then on a loaded
+  // machine, between two participants (every log written is then complete: nothing to say)
+  int unfinished = 0;
+  for (const auto& [log, list] : Answers(dir / "logs")) {
+    if (list.size() == 40u) continue;
+    ++unfinished;
+    EXPECT_NE(ReadAll(dir / "logs" / log).find("interrupted by a signal"), std::string::npos)
+        << log << ": the stopped session's log says why it stopped";
   }
-  EXPECT_TRUE(reason) << "the stopped session's log says why it stopped";
+  EXPECT_LE(unfinished, 1) << "only the session the signal reached is unfinished";
 
   const CliResult resumed = RunCli(common + " --resume --quiet");
   EXPECT_EQ(resumed.exit_code, 0) << resumed.err;
