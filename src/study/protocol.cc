@@ -41,6 +41,7 @@ const std::vector<std::string> kTestKeys = {"name",           "conditions",     
 const std::vector<std::string> kRandomizationKeys = {"series_order", "test_order", "seed"};
 const std::vector<std::string> kSeriesOrders = {"balanced", "independent"};  // SeriesOrder
 const std::vector<std::string> kTestOrders = {"fixed", "shuffled"};          // TestOrder
+// every key a condition may name, in the order error messages list them
 const std::vector<std::string> kAllConditionKeys = {"renderer",
                                                     "restitution",
                                                     "t_collision_s",
@@ -56,30 +57,25 @@ const std::vector<std::string> kAllConditionKeys = {"renderer",
                                                     "wall_geom",
                                                     "wall_point_m",
                                                     "wall_normal"};
+
+// whether a condition of `renderer` takes `key`: the event renderer plays its material's
+// transient, so it has no restitution; penalty and impulse walls take no material (as the CLI
+// refuses --material with them); only a train has a collision window and a rate
+bool ConditionKeyApplies(const std::string& key, RendererKind renderer) {
+  if (key == "restitution") {
+    return renderer == RendererKind::kImpulse || renderer == RendererKind::kTrain;
+  }
+  if (key == "t_collision_s" || key == "frequency_hz") return renderer == RendererKind::kTrain;
+  if (key == "material") {
+    return renderer == RendererKind::kTrain || renderer == RendererKind::kEvent;
+  }
+  return true;
+}
+
 std::vector<std::string> ConditionKeysFor(RendererKind renderer) {
-  std::vector<std::string> keys = {"renderer",
-                                   "stiffness_N_per_m",
-                                   "damping_Ns_per_m",
-                                   "scene",
-                                   "device",
-                                   "approach_speed_mps",
-                                   "material",
-                                   "passivity_control",
-                                   "joint_limit_renderer",
-                                   "wall_geom",
-                                   "wall_point_m",
-                                   "wall_normal"};
-  // the event renderer plays its material's transient: it has no restitution, and penalty and
-  // impulse walls take no material (as the CLI refuses --material with them)
-  if (renderer == RendererKind::kImpulse || renderer == RendererKind::kTrain) {
-    keys.push_back("restitution");
-  }
-  if (renderer == RendererKind::kTrain) {
-    keys.push_back("t_collision_s");
-    keys.push_back("frequency_hz");
-  }
-  if (renderer == RendererKind::kPenalty || renderer == RendererKind::kImpulse) {
-    keys.erase(std::find(keys.begin(), keys.end(), "material"));
+  std::vector<std::string> keys;
+  for (const std::string& key : kAllConditionKeys) {
+    if (ConditionKeyApplies(key, renderer)) keys.push_back(key);
   }
   return keys;
 }
