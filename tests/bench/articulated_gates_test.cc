@@ -14,32 +14,21 @@
 #include "bench/harness.h"
 #include "bench/mujoco_engine.h"
 #include "bench_scenes.h"
+#include "null_engine.h"
 #include "rigidtouch/rigidtouch.h"
 
 namespace rigidtouch::bench {
 namespace {
 
 // an engine whose tool penetration and joint position follow scripts, one value per step
-class ScriptedGateEngine : public Engine {
+class ScriptedGateEngine : public NullEngine {
  public:
   ScriptedGateEngine(std::vector<double> depth_m, std::vector<double> q)
-      : depth_m_(std::move(depth_m)), q_(std::move(q)) {}
-  std::string_view Name() const override { return "scripted"; }
+      : NullEngine("scripted"), depth_m_(std::move(depth_m)), q_(std::move(q)) {}
   void Load(const Scene&) override { step_ = -1; }
   void Step() override { ++step_; }
-  int ContactCount() const override { return 0; }
-  int BodyContactCount(std::string_view) const override { return 0; }
-  double DeepestPenetration_m() const override { return 0.0; }
   double BodyPenetration_m(std::string_view) const override { return depth_m_.at(At()); }
   double JointPosition(std::string_view) const override { return q_.at(At()); }
-  Vec3 BodyPosition(std::string_view) const override { return Vec3::Zero(); }
-  Quat BodyOrientation(std::string_view) const override { return Quat::Identity(); }
-  void SetBodyMotion(std::string_view, const Vec3&, const Vec3&) override {}
-  void SaveSnapshot() override {}
-  void RestoreSnapshot() override {}
-  bool StateIsFinite() const override { return true; }
-  long WarningCount() const override { return 0; }
-  std::string Configuration() const override { return "scripted"; }
 
  private:
   std::size_t At() const { return static_cast<std::size_t>(step_); }

@@ -8,6 +8,7 @@
 #include "bench/harness.h"
 #include "bench/mujoco_engine.h"
 #include "bench_scenes.h"
+#include "null_engine.h"
 
 namespace rigidtouch::bench {
 namespace {
@@ -166,23 +167,10 @@ TEST(SceneRun, StrikeWithoutContactFailsTheGate) {
 }
 
 // an engine that only records, in a log shared by several, which engine stepped
-class LoggingEngine : public Engine {
+class LoggingEngine : public NullEngine {
  public:
-  LoggingEngine(int id, std::vector<int>* log) : id_(id), log_(log) {}
-  std::string_view Name() const override { return "logging"; }
-  void Load(const Scene&) override {}
+  LoggingEngine(int id, std::vector<int>* log) : NullEngine("logging"), id_(id), log_(log) {}
   void Step() override { log_->push_back(id_); }
-  int ContactCount() const override { return 0; }
-  int BodyContactCount(std::string_view) const override { return 0; }
-  double DeepestPenetration_m() const override { return 0.0; }
-  Vec3 BodyPosition(std::string_view) const override { return Vec3::Zero(); }
-  Quat BodyOrientation(std::string_view) const override { return Quat::Identity(); }
-  void SetBodyMotion(std::string_view, const Vec3&, const Vec3&) override {}
-  void SaveSnapshot() override {}
-  void RestoreSnapshot() override {}
-  bool StateIsFinite() const override { return true; }
-  long WarningCount() const override { return 0; }
-  std::string Configuration() const override { return "logging"; }
 
  private:
   int id_;
