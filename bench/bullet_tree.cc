@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace rigidtouch::bench {
 namespace {
@@ -183,16 +184,43 @@ MergedInertia MergeInertia(const mjModel& model, const mjData& data,
   return merged;
 }
 
+bool TreeContactFilter::needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const {
+  // Bullet's own test first (btHashedOverlappingPairCache's, without a filter)
+  const bool collides = (a->m_collisionFilterGroup & b->m_collisionFilterMask) != 0 &&
+                        (b->m_collisionFilterGroup & a->m_collisionFilterMask) != 0;
+  if (!collides) return false;
+  const btMultiBodyLinkCollider* link_a =
+      btMultiBodyLinkCollider::upcast(static_cast<const btCollisionObject*>(a->m_clientObject));
+  const btMultiBodyLinkCollider* link_b =
+      btMultiBodyLinkCollider::upcast(static_cast<const btCollisionObject*>(b->m_clientObject));
+  if (link_a == nullptr || link_b == nullptr || link_a->m_multiBody != link_b->m_multiBody) {
+    return true;
+  }
+  return !Excluded(link_a->m_multiBody, link_a->m_link, link_b->m_link);
+}
+
+void TreeContactFilter::Exclude(const btMultiBody* multibody, int link_a, int link_b) {
+  excluded_.emplace(reinterpret_cast<std::uintptr_t>(multibody), std::min(link_a, link_b),
+                    std::max(link_a, link_b));
+}
+
+bool TreeContactFilter::Excluded(const btMultiBody* multibody, int link_a, int link_b) const {
+  return excluded_.count(std::make_tuple(reinterpret_cast<std::uintptr_t>(multibody),
+                                         std::min(link_a, link_b), std::max(link_a, link_b))) > 0;
+}
+
 BulletTrees::~BulletTrees() {
   Clear();
 }
 
 void BulletTrees::Clear() {
   if (world_ != nullptr) {
+    world_->getPairCache()->setOverlapFilterCallback(nullptr);
     for (auto& limit : limits_) world_->removeMultiBodyConstraint(limit.get());
     for (auto& collider : colliders_) world_->removeCollisionObject(collider.get());
     for (auto& multibody : multibodies_) world_->removeMultiBody(multibody.get());
   }
+  filter_.Clear();
   limits_.clear();
   colliders_.clear();
   multibodies_.clear();
@@ -211,6 +239,8 @@ void BulletTrees::Build(const mjModel& model, const mjData& reference, const mjt
                         const std::string& path) {
   Clear();
   world_ = &world;
+  // before any link is added: the broadphase pairs a new object with the others at once
+  world_->getPairCache()->setOverlapFilterCallback(&filter_);
   for (int a = 0; a < model.nu; ++a) {
     const int target = model.actuator_trnid[2 * a];
     const bool on_tree_joint =
@@ -338,6 +368,10 @@ int BulletTrees::BuildTree(const mjModel& model, const mjData& reference, int ro
   auto multibody = std::make_unique<btMultiBody>(static_cast<int>(specs.size()), base_mass,
                                                  ToBt(base_moments), !layout.floating, false);
   multibody->setBaseWorldTransform(ToBullet(T_world_base));
+  std::unordered_map<int, int> link_of_group;  // a group's link: the last of its head's joints
+  if (root_is_base) link_of_group[root] = -1;
+  for (int i = 0; i < static_cast<int>(specs.size()); ++i) link_of_group[specs[i].first] = i;
+  ExcludeTreePairs(model, root, layout.welded_root, layout.group_of, link_of_group, *multibody);
   if (root_is_base) {
     AddCollider(model, reference, layout.welded.at(root), *multibody, tree, -1, T_world_base, path);
   }
@@ -374,10 +408,9 @@ int BulletTrees::BuildTree(const mjModel& model, const mjData& reference, int ro
   // MuJoCo has no damping of link velocities; Bullet's default is 0.04
   multibody->setLinearDamping(0);
   multibody->setAngularDamping(0);
-  // no contacts between links of one tree: MuJoCo excludes a body and its parent (bodies welded
-  // together count as one), and a body with several joints is a chain of links here, whose ends
-  // Bullet would not exclude; docs/performance.md ("Articulated scenes") says what this leaves out
-  multibody->setHasSelfCollision(false);
+  // contacts between the links of one tree as MuJoCo has them (TreeContactFilter): Bullet's own
+  // parent flags would see the massless links of a body with several joints as parents
+  multibody->setHasSelfCollision(true);
   multibody->finalizeMultiDof();
   world_->addMultiBody(multibody.get());
   for (const auto& [link, j] : limited) {
@@ -389,6 +422,50 @@ int BulletTrees::BuildTree(const mjModel& model, const mjData& reference, int ro
   multibodies_.push_back(std::move(multibody));
   trees_.push_back(info);
   return tree;
+}
+
+void BulletTrees::ExcludeTreePairs(const mjModel& model, int root, bool welded_root,
+                                   const std::unordered_map<int, int>& group_of,
+                                   const std::unordered_map<int, int>& link_of_group,
+                                   const btMultiBody& multibody) {
+  const auto compatible = [&model](int g1, int g2) {
+    return (model.geom_contype[g1] & model.geom_conaffinity[g2]) != 0 ||
+           (model.geom_contype[g2] & model.geom_conaffinity[g1]) != 0;
+  };
+  // the bodies of each group, for their geoms
+  std::unordered_map<int, std::vector<int>> bodies;
+  for (const auto& [b, group] : group_of) bodies[group].push_back(b);
+  for (const auto& [g1, link1] : link_of_group) {
+    for (const auto& [g2, link2] : link_of_group) {
+      if (link1 >= link2) continue;
+      // MuJoCo's weld-parent test: a root welded to the world is the world's, never excluded
+      const auto parent_of = [&](int g) {
+        return g == root ? -1 : group_of.at(model.body_parentid[g]);
+      };
+      const bool parent_child = (parent_of(g2) == g1 || parent_of(g1) == g2) &&
+                                !(welded_root && (g1 == root || g2 == root));
+      bool any_compatible = false;
+      for (const int b1 : bodies.at(g1)) {
+        for (const int b2 : bodies.at(g2)) {
+          for (int a = model.body_geomadr[b1]; a < model.body_geomadr[b1] + model.body_geomnum[b1];
+               ++a) {
+            for (int c = model.body_geomadr[b2];
+                 c < model.body_geomadr[b2] + model.body_geomnum[b2]; ++c) {
+              any_compatible |= compatible(a, c);
+            }
+          }
+        }
+      }
+      if (parent_child || !any_compatible) filter_.Exclude(&multibody, link1, link2);
+    }
+  }
+  // <exclude body1 body2>: MuJoCo's signature is ((body1 + 1) << 16) + body2 + 1
+  for (int e = 0; e < model.nexclude; ++e) {
+    const auto b1 = group_of.find((model.exclude_signature[e] >> 16) - 1);
+    const auto b2 = group_of.find((model.exclude_signature[e] & 0xFFFF) - 1);
+    if (b1 == group_of.end() || b2 == group_of.end()) continue;
+    filter_.Exclude(&multibody, link_of_group.at(b1->second), link_of_group.at(b2->second));
+  }
 }
 
 void BulletTrees::AddJoint(const mjModel& model, int j, int tree, int link, const mjtNum* ctrl) {

@@ -15,9 +15,12 @@
 #include <mujoco/mujoco.h>
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <memory>
+#include <set>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <unordered_map>
 #include <vector>
 
@@ -59,6 +62,24 @@ struct MergedInertia {
 /// the parallel-axis theorem.
 MergedInertia MergeInertia(const mjModel& model, const mjData& data,
                            const std::vector<int>& bodies);
+
+/// MuJoCo's contact filter between the links of one tree, for Bullet's broadphase (set as the
+/// world's overlap filter; pairs of other objects keep Bullet's group and mask test): no contact
+/// between a body and its parent, bodies welded together counting as one (MuJoCo's weld-parent
+/// test), none between bodies whose geoms' contype and conaffinity never match, none between the
+/// bodies of an MJCF <exclude>.
+class TreeContactFilter final : public btOverlapFilterCallback {
+ public:
+  bool needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const override;
+  /// No contact between links `link_a` and `link_b` (-1: the base) of `multibody`.
+  void Exclude(const btMultiBody* multibody, int link_a, int link_b);
+  /// Returns true when the links' pair is excluded.
+  bool Excluded(const btMultiBody* multibody, int link_a, int link_b) const;
+  void Clear() { excluded_.clear(); }
+
+ private:
+  std::set<std::tuple<std::uintptr_t, int, int>> excluded_;
+};
 
 /// The trees of one scene, built into a btMultiBodyDynamicsWorld and owned here.
 class BulletTrees {
@@ -112,6 +133,8 @@ class BulletTrees {
 
   /// Returns the multibodies (one per tree).
   const std::vector<std::unique_ptr<btMultiBody>>& multibodies() const { return multibodies_; }
+  /// Returns the contact filter between the links of a tree.
+  const TreeContactFilter& contact_filter() const { return filter_; }
   /// Returns the number of joint-limit constraints.
   int limit_count() const { return static_cast<int>(limits_.size()); }
 
@@ -151,8 +174,13 @@ class BulletTrees {
                    btMultiBody& multibody, int tree, int i, const Eigen::Isometry3d& T_world_link,
                    const std::string& path);
   void UpdatePoses(btMultiBody& multibody);
+  void ExcludeTreePairs(const mjModel& model, int root, bool welded_root,
+                        const std::unordered_map<int, int>& group_of,
+                        const std::unordered_map<int, int>& link_of_group,
+                        const btMultiBody& multibody);
 
   btMultiBodyDynamicsWorld* world_ = nullptr;
+  TreeContactFilter filter_;  // the world's overlap filter while Build()'s trees are in it
   std::vector<std::unique_ptr<btMultiBody>> multibodies_;
   std::vector<Tree> trees_;  // one per multibody
   std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders_;

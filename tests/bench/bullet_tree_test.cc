@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 
 #include "bench/bullet_engine.h"
@@ -331,6 +332,58 @@ TEST(BulletTree, RootWeldedToTheWorldIsAFixedBase) {
   EXPECT_LT((bullet.BodyPosition("stand") - stand).norm(), 1e-9);
   EXPECT_LT(bullet.JointPosition("pin"), 0.25);  // it swung down from 0.3 rad
   mj_deleteData(data);
+}
+
+// Contacts between the links of one tree follow MuJoCo's filter: a chain upper - lower - tip whose
+// tip folds back onto upper, with two more bodies below tip that overlap upper too: `ghost`
+// (contype and conaffinity 2 against upper's 1) and `pin` (an <exclude> with upper). Lower
+// overlaps upper at their joint (parent and child: no contact). The body pairs in contact after
+// one step are MuJoCo's: upper with tip only.
+TEST(BulletTree, ContactsInsideATreeFollowMujocosFilter) {
+  std::string mjcf = TreeMjcf(
+      "<body name=\"upper\" pos=\"0 0 1\"><joint type=\"hinge\" axis=\"0 1 0\"/><geom "
+      "type=\"capsule\" fromto=\"0 0 0 0.3 0 0\" size=\"0.03\"/><body name=\"lower\" "
+      "pos=\"0.3 0 0\"><joint type=\"hinge\" axis=\"0 1 0\"/><geom type=\"capsule\" "
+      "fromto=\"0 0 0 0 0 -0.2\" size=\"0.03\"/><body name=\"tip\" pos=\"0 0 -0.2\"><joint "
+      "type=\"hinge\" axis=\"0 1 0\"/><geom type=\"sphere\" pos=\"-0.25 0 0.2\" size=\"0.04\"/>"
+      "<body name=\"ghost\"><joint type=\"hinge\" axis=\"0 1 0\"/><geom type=\"sphere\" "
+      "pos=\"-0.15 0 0.2\" size=\"0.04\" contype=\"2\" conaffinity=\"2\"/></body><body "
+      "name=\"pin\"><joint type=\"hinge\" axis=\"0 1 0\"/><geom type=\"sphere\" pos=\"-0.1 0 "
+      "0.2\" size=\"0.04\"/></body></body></body></body>",
+      "qpos=\"0 0 0 0 0 10 0 0 1 0 0 0\"");
+  mjcf.insert(mjcf.find("<keyframe>"),
+              "<contact><exclude body1=\"upper\" body2=\"pin\"/></contact>");
+  const Scene scene = WriteTreeScene("self_contact", mjcf);
+  auto model = LoadMjcf(scene.mjcf_path);
+  mjData* data = mj_makeData(model.get());
+  mj_resetDataKeyframe(model.get(), data, 0);
+  mj_forward(model.get(), data);
+  std::set<std::string> mujoco_pairs;
+  for (int c = 0; c < data->ncon; ++c) {
+    std::string a = mj_id2name(model.get(), mjOBJ_BODY, model->geom_bodyid[data->contact[c].geom1]);
+    std::string b = mj_id2name(model.get(), mjOBJ_BODY, model->geom_bodyid[data->contact[c].geom2]);
+    mujoco_pairs.insert(std::min(a, b) + "-" + std::max(a, b));
+  }
+  mj_deleteData(data);
+  BulletEngine bullet;
+  bullet.Load(scene);
+  bullet.Step();
+  std::set<std::string> bullet_pairs;
+  const btDispatcher& dispatcher = *bullet.world()->getDispatcher();
+  const char* names[] = {"upper", "lower", "tip", "ghost", "pin"};
+  for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+    const btPersistentManifold* manifold =
+        const_cast<btDispatcher&>(dispatcher).getManifoldByIndexInternal(m);
+    if (manifold->getNumContacts() == 0) continue;
+    std::string a, b;
+    for (const char* name : names) {
+      if (bullet.trees().Collider(name) == manifold->getBody0()) a = name;
+      if (bullet.trees().Collider(name) == manifold->getBody1()) b = name;
+    }
+    bullet_pairs.insert(std::min(a, b) + "-" + std::max(a, b));
+  }
+  EXPECT_EQ(mujoco_pairs, std::set<std::string>{"tip-upper"});
+  EXPECT_EQ(bullet_pairs, mujoco_pairs);
 }
 
 // A ball joint is refused with the joint's and body's names rather than built wrong.
