@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace rigidtouch::bench {
 namespace {
@@ -28,15 +29,16 @@ struct LinkFrame {
 
 // `dummy`: a massless link for a body's joint other than its last one (a btMultiBody link has
 // one joint; MuJoCo composes a body's joints in order), at the joint's anchor in the body's
-// orientation, with only the joint's armature as inertia
+// orientation, with only the joint's armature as inertia; otherwise the link of the body and the
+// bodies welded below it, `merged`
 LinkFrame MakeLinkFrame(const mjModel& model, const mjData& reference, int body, int joint,
-                        bool dummy) {
+                        bool dummy, const MergedInertia& merged) {
   LinkFrame frame;
   if (dummy) {
     frame.T_world_link = MjPose(reference.xanchor + 3 * joint, reference.xmat + 9 * body);
   } else {
-    frame.T_world_link = MjPose(reference.xipos + 3 * body, reference.ximat + 9 * body);
-    frame.moments = MjVec(model.body_inertia + 3 * body);
+    frame.T_world_link = merged.T_world_inertial;
+    frame.moments = merged.moments;
   }
   const double armature = model.dof_armature[model.jnt_dofadr[joint]];
   if (armature > 0.0 && model.jnt_type[joint] == mjJNT_HINGE) {
@@ -136,14 +138,75 @@ double BulletFriction(double mu) {
 }
 
 bool IsTreeBody(const mjModel& model, int body) {
-  for (int b = body; b > 0; b = model.body_parentid[b]) {
+  if (body <= 0) return false;
+  const int root = model.body_rootid[body];
+  for (int b = root; b < model.nbody; ++b) {
     const int n = model.body_jntnum[b];
-    if (n == 0) continue;
+    if (model.body_rootid[b] != root || n == 0) continue;
     const bool lone_free =
-        n == 1 && model.jnt_type[model.body_jntadr[b]] == mjJNT_FREE && model.body_parentid[b] == 0;
+        b == root && n == 1 && model.jnt_type[model.body_jntadr[b]] == mjJNT_FREE;
     if (!lone_free) return true;
   }
   return false;
+}
+
+MergedInertia MergeInertia(const mjModel& model, const mjData& data,
+                           const std::vector<int>& bodies) {
+  const int first = bodies.front();
+  MergedInertia merged;
+  merged.mass = model.body_mass[first];
+  merged.T_world_inertial = MjPose(data.xipos + 3 * first, data.ximat + 9 * first);
+  merged.moments = MjVec(model.body_inertia + 3 * first);
+  double mass = 0.0;
+  Vec3 moment = Vec3::Zero();
+  for (const int b : bodies) {
+    mass += model.body_mass[b];
+    moment += model.body_mass[b] * MjVec(data.xipos + 3 * b);
+  }
+  if (!(mass > merged.mass)) return merged;  // the welded bodies add no mass
+  // the bodies' inertias about the common centre of mass, in the world (parallel axes)
+  const Vec3 com = moment / mass;
+  Mat3 inertia = Mat3::Zero();
+  for (const int b : bodies) {
+    const Mat3 R_world_inertial = MjPose(data.xipos + 3 * b, data.ximat + 9 * b).linear();
+    const Vec3 d = MjVec(data.xipos + 3 * b) - com;
+    inertia += R_world_inertial * MjVec(model.body_inertia + 3 * b).asDiagonal() *
+                   R_world_inertial.transpose() +
+               model.body_mass[b] * (d.squaredNorm() * Mat3::Identity() - d * d.transpose());
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> solver(inertia);
+  Mat3 axes = solver.eigenvectors();
+  if (axes.determinant() < 0) axes.col(2) *= -1.0;
+  merged.mass = mass;
+  merged.T_world_inertial.translation() = com;
+  merged.T_world_inertial.linear() = axes;
+  merged.moments = solver.eigenvalues().cwiseMax(0.0);
+  return merged;
+}
+
+bool TreeContactFilter::needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const {
+  // Bullet's own test first (btHashedOverlappingPairCache's, without a filter)
+  const bool collides = (a->m_collisionFilterGroup & b->m_collisionFilterMask) != 0 &&
+                        (b->m_collisionFilterGroup & a->m_collisionFilterMask) != 0;
+  if (!collides) return false;
+  const btMultiBodyLinkCollider* link_a =
+      btMultiBodyLinkCollider::upcast(static_cast<const btCollisionObject*>(a->m_clientObject));
+  const btMultiBodyLinkCollider* link_b =
+      btMultiBodyLinkCollider::upcast(static_cast<const btCollisionObject*>(b->m_clientObject));
+  if (link_a == nullptr || link_b == nullptr || link_a->m_multiBody != link_b->m_multiBody) {
+    return true;
+  }
+  return !Excluded(link_a->m_multiBody, link_a->m_link, link_b->m_link);
+}
+
+void TreeContactFilter::Exclude(const btMultiBody* multibody, int link_a, int link_b) {
+  excluded_.emplace(reinterpret_cast<std::uintptr_t>(multibody), std::min(link_a, link_b),
+                    std::max(link_a, link_b));
+}
+
+bool TreeContactFilter::Excluded(const btMultiBody* multibody, int link_a, int link_b) const {
+  return excluded_.count(std::make_tuple(reinterpret_cast<std::uintptr_t>(multibody),
+                                         std::min(link_a, link_b), std::max(link_a, link_b))) > 0;
 }
 
 BulletTrees::~BulletTrees() {
@@ -152,14 +215,18 @@ BulletTrees::~BulletTrees() {
 
 void BulletTrees::Clear() {
   if (world_ != nullptr) {
+    world_->getPairCache()->setOverlapFilterCallback(nullptr);
     for (auto& limit : limits_) world_->removeMultiBodyConstraint(limit.get());
     for (auto& collider : colliders_) world_->removeCollisionObject(collider.get());
     for (auto& multibody : multibodies_) world_->removeMultiBody(multibody.get());
   }
+  filter_.Clear();
   limits_.clear();
   colliders_.clear();
   multibodies_.clear();
   shapes_.clear();
+  trees_.clear();
+  saved_bases_.clear();
   joints_.clear();
   joint_index_.clear();
   links_.clear();
@@ -172,6 +239,8 @@ void BulletTrees::Build(const mjModel& model, const mjData& reference, const mjt
                         const std::string& path) {
   Clear();
   world_ = &world;
+  // before any link is added: the broadphase pairs a new object with the others at once
+  world_->getPairCache()->setOverlapFilterCallback(&filter_);
   for (int a = 0; a < model.nu; ++a) {
     const int target = model.actuator_trnid[2 * a];
     const bool on_tree_joint =
@@ -183,14 +252,6 @@ void BulletTrees::Build(const mjModel& model, const mjData& reference, const mjt
       throw Error("scene " + path + ": actuator '" + ElementName(model, mjOBJ_ACTUATOR, a) +
                   "' is not a joint actuator with a fixed gain and an affine bias (motor, "
                   "position, velocity); the Bullet peer supports only those");
-    }
-  }
-  for (int b = 1; b < model.nbody; ++b) {
-    if (IsTreeBody(model, b) && !IsTreeBody(model, model.body_rootid[b])) {
-      throw Error("scene " + path + ": body '" + ElementName(model, mjOBJ_BODY, b) +
-                  "' hangs from the free body '" +
-                  ElementName(model, mjOBJ_BODY, model.body_rootid[b]) +
-                  "'; the Bullet peer builds only trees with a fixed base");
     }
   }
   for (int b = 1; b < model.nbody; ++b) {
@@ -206,33 +267,114 @@ void BulletTrees::Build(const mjModel& model, const mjData& reference, const mjt
     multibody.setJointPos(joint.link, qpos[model.jnt_qposadr[j]] - joint.qpos0);
     multibody.setJointVel(joint.link, qvel[model.jnt_dofadr[j]]);
   }
-  for (auto& multibody : multibodies_) UpdatePoses(*multibody);
+  for (std::size_t t = 0; t < multibodies_.size(); ++t) {
+    if (trees_[t].floating) SetFloatingBase(model, trees_[t], *multibodies_[t], qpos, qvel);
+    UpdatePoses(*multibodies_[t]);
+  }
 }
+
+void BulletTrees::SetFloatingBase(const mjModel& model, const Tree& tree, btMultiBody& multibody,
+                                  const mjtNum* qpos, const mjtNum* qvel) {
+  // MuJoCo's free joint: qpos the body frame's origin and orientation (w, x, y, z) in the world;
+  // qvel the origin's linear velocity in the world, then the angular velocity in the body's frame
+  const mjtNum* q = qpos + model.jnt_qposadr[tree.free_joint];
+  const mjtNum* v = qvel + model.jnt_dofadr[tree.free_joint];
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  T_world_body.translation() = Vec3(q[0], q[1], q[2]);
+  T_world_body.linear() = Quat(q[3], q[4], q[5], q[6]).normalized().toRotationMatrix();
+  const Eigen::Isometry3d T_world_base = T_world_body * tree.T_body_base;
+  // Bullet's base: the centre of mass's velocity and the angular velocity, both in the world
+  const Vec3 omega_W = T_world_body.linear() * Vec3(v[3], v[4], v[5]);
+  const Vec3 velocity_W = Vec3(v[0], v[1], v[2]) +
+                          omega_W.cross(T_world_base.translation() - T_world_body.translation());
+  multibody.setBaseWorldTransform(ToBullet(T_world_base));
+  multibody.setBaseVel(ToBt(velocity_W));
+  multibody.setBaseOmega(ToBt(omega_W));
+}
+
+namespace {
+
+// a tree's bodies grouped into links: each body with a joint (and the root) with the bodies welded
+// below it, in MuJoCo's order; and one link spec (body, joint) per hinge or slide
+struct TreeLayout {
+  std::unordered_map<int, std::vector<int>> welded;  // body with a joint or root -> its group
+  std::unordered_map<int, int> group_of;             // body -> the body heading its group
+  std::vector<std::pair<int, int>> specs;            // (body, joint)
+  bool floating = false;                             // the root has a lone free joint
+  bool welded_root = false;                          // the root has no joint
+};
+
+TreeLayout LayOutTree(const mjModel& model, int root, const std::string& path) {
+  TreeLayout layout;
+  const int root_joints = model.body_jntnum[root];
+  layout.floating = root_joints == 1 && model.jnt_type[model.body_jntadr[root]] == mjJNT_FREE;
+  layout.welded_root = root_joints == 0;
+  for (int b = root; b < model.nbody; ++b) {
+    if (model.body_rootid[b] != root) continue;
+    const bool heads = b == root || model.body_jntnum[b] > 0;
+    const int group = heads ? b : layout.group_of.at(model.body_parentid[b]);
+    layout.group_of[b] = group;
+    layout.welded[group].push_back(b);
+    if (b == root && (layout.floating || layout.welded_root)) continue;  // the base
+    for (int j = model.body_jntadr[b]; j < model.body_jntadr[b] + model.body_jntnum[b]; ++j) {
+      if (model.jnt_type[j] != mjJNT_HINGE && model.jnt_type[j] != mjJNT_SLIDE) {
+        const char* kind = model.jnt_type[j] == mjJNT_BALL ? "a ball joint" : "a free joint";
+        throw Error("scene " + path + ": joint '" + ElementName(model, mjOBJ_JOINT, j) +
+                    "' of body '" + ElementName(model, mjOBJ_BODY, b) + "' is " + kind +
+                    "; the Bullet peer's btMultiBody takes hinges and slides, and a lone free "
+                    "joint of a tree's root body as its floating base");
+      }
+      layout.specs.emplace_back(b, j);
+    }
+  }
+  return layout;
+}
+
+}  // namespace
 
 int BulletTrees::BuildTree(const mjModel& model, const mjData& reference, int root,
                            const mjtNum* ctrl, const std::string& path) {
-  // one link per joint, a body's joints in MuJoCo's order
-  std::vector<std::pair<int, int>> specs;  // (body, joint)
-  for (int b = root; b < model.nbody; ++b) {
-    if (model.body_rootid[b] != root) continue;
-    if (model.body_jntnum[b] == 0) {
-      throw Error("scene " + path + ": body '" + ElementName(model, mjOBJ_BODY, b) +
-                  "' of a tree has no joint; the Bullet peer does not merge welded bodies");
-    }
-    for (int j = model.body_jntadr[b]; j < model.body_jntadr[b] + model.body_jntnum[b]; ++j) {
-      if (model.jnt_type[j] != mjJNT_HINGE && model.jnt_type[j] != mjJNT_SLIDE) {
-        throw Error("scene " + path + ": joint '" + ElementName(model, mjOBJ_JOINT, j) +
-                    "' of body '" + ElementName(model, mjOBJ_BODY, b) +
-                    "' is not a hinge or slide; the Bullet peer's btMultiBody takes only those");
-      }
-      specs.emplace_back(b, j);
-    }
-  }
+  // one link per joint, a body's joints in MuJoCo's order; bodies without a joint in their
+  // parent's link
+  const TreeLayout layout = LayOutTree(model, root, path);
+  const auto& specs = layout.specs;
   const int tree = static_cast<int>(multibodies_.size());
-  auto multibody = std::make_unique<btMultiBody>(static_cast<int>(specs.size()), 1.0,
-                                                 btVector3(1, 1, 1), true, false);
-  multibody->setBasePos(btVector3(0, 0, 0));
-  multibody->setWorldToBaseRot(btQuaternion::getIdentity());
+  // the base: a floating root body (its centre of mass and principal axes), a root welded to the
+  // world (at its pose), or else a fixed base at the world frame for the root's joints
+  Tree info;
+  info.floating = layout.floating;
+  const bool root_is_base = layout.floating || layout.welded_root;
+  Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();
+  double base_mass = 1.0;
+  Vec3 base_moments(1, 1, 1);
+  if (root_is_base) {
+    const Eigen::Isometry3d T_world_root =
+        MjPose(reference.xpos + 3 * root, reference.xmat + 9 * root);
+    T_world_base = T_world_root;
+    if (layout.floating) {
+      const MergedInertia merged = MergeInertia(model, reference, layout.welded.at(root));
+      if (!(merged.mass > 0.0)) {
+        throw Error("scene " + path + ": free body '" + ElementName(model, mjOBJ_BODY, root) +
+                    "' (with the bodies welded to it) has no mass; the Bullet peer's floating "
+                    "base needs one");
+      }
+      T_world_base = merged.T_world_inertial;
+      base_mass = merged.mass;
+      base_moments = merged.moments;
+      info.free_joint = model.body_jntadr[root];
+    }
+    info.T_body_base = T_world_root.inverse() * T_world_base;
+  }
+  auto multibody = std::make_unique<btMultiBody>(static_cast<int>(specs.size()), base_mass,
+                                                 ToBt(base_moments), !layout.floating, false);
+  multibody->setBaseWorldTransform(ToBullet(T_world_base));
+  std::unordered_map<int, int> link_of_group;  // a group's link: the last of its head's joints
+  if (root_is_base) link_of_group[root] = -1;
+  for (int i = 0; i < static_cast<int>(specs.size()); ++i) link_of_group[specs[i].first] = i;
+  ExcludeTreePairs(model, root, layout.welded_root, layout.group_of, link_of_group, *multibody);
+  if (root_is_base) {
+    AddCollider(model, reference, layout.welded.at(root), *multibody, tree, -1, T_world_base, path);
+  }
   std::unordered_map<int, int> last_link_of;  // MuJoCo body -> its last joint's link
   std::vector<LinkFrame> frames;
   std::vector<std::pair<int, int>> limited;  // (link, joint)
@@ -240,31 +382,35 @@ int BulletTrees::BuildTree(const mjModel& model, const mjData& reference, int ro
     const auto [b, j] = specs[static_cast<std::size_t>(i)];
     const bool first = j == model.body_jntadr[b];
     const bool last = j == model.body_jntadr[b] + model.body_jntnum[b] - 1;
-    // the root's parent is the fixed base, at the world frame
-    const int parent = !first                        ? i - 1
-                       : model.body_parentid[b] == 0 ? -1
-                                                     : last_link_of.at(model.body_parentid[b]);
+    // a body's first joint hangs from its parent's group: the base for the root's (or for the
+    // root's own joints), else that group's last link
+    const int parent_group = b == root ? -1 : layout.group_of.at(model.body_parentid[b]);
+    const int parent = !first ? i - 1
+                       : parent_group < 0 || (parent_group == root && root_is_base)
+                           ? -1
+                           : last_link_of.at(parent_group);
     const Eigen::Isometry3d T_world_parent =
-        parent < 0 ? Eigen::Isometry3d::Identity()
-                   : frames[static_cast<std::size_t>(parent)].T_world_link;
-    const LinkFrame frame = MakeLinkFrame(model, reference, b, j, !last);
-    SetupLink(*multibody, i, parent, T_world_parent, frame, last ? model.body_mass[b] : 0.0, model,
+        parent < 0 ? T_world_base : frames[static_cast<std::size_t>(parent)].T_world_link;
+    const MergedInertia merged =
+        last ? MergeInertia(model, reference, layout.welded.at(b)) : MergedInertia{};
+    const LinkFrame frame = MakeLinkFrame(model, reference, b, j, !last, merged);
+    SetupLink(*multibody, i, parent, T_world_parent, frame, last ? merged.mass : 0.0, model,
               reference, j);
     frames.push_back(frame);
     AddJoint(model, j, tree, i, ctrl);
     if (model.jnt_limited[j]) limited.emplace_back(i, j);
     if (last) {
       last_link_of[b] = i;
-      AddCollider(model, reference, b, *multibody, tree, i, frame.T_world_link, path);
+      AddCollider(model, reference, layout.welded.at(b), *multibody, tree, i, frame.T_world_link,
+                  path);
     }
   }
   // MuJoCo has no damping of link velocities; Bullet's default is 0.04
   multibody->setLinearDamping(0);
   multibody->setAngularDamping(0);
-  // no contacts between links of one tree: MuJoCo excludes a body and its parent, and a body with
-  // several joints is a chain of links here, whose ends Bullet would not exclude; the shipped
-  // scenes have no contact between other links of a tree
-  multibody->setHasSelfCollision(false);
+  // contacts between the links of one tree as MuJoCo has them (TreeContactFilter): Bullet's own
+  // parent flags would see the massless links of a body with several joints as parents
+  multibody->setHasSelfCollision(true);
   multibody->finalizeMultiDof();
   world_->addMultiBody(multibody.get());
   for (const auto& [link, j] : limited) {
@@ -274,7 +420,52 @@ int BulletTrees::BuildTree(const mjModel& model, const mjData& reference, int ro
     world_->addMultiBodyConstraint(limits_.back().get());
   }
   multibodies_.push_back(std::move(multibody));
+  trees_.push_back(info);
   return tree;
+}
+
+void BulletTrees::ExcludeTreePairs(const mjModel& model, int root, bool welded_root,
+                                   const std::unordered_map<int, int>& group_of,
+                                   const std::unordered_map<int, int>& link_of_group,
+                                   const btMultiBody& multibody) {
+  const auto compatible = [&model](int g1, int g2) {
+    return (model.geom_contype[g1] & model.geom_conaffinity[g2]) != 0 ||
+           (model.geom_contype[g2] & model.geom_conaffinity[g1]) != 0;
+  };
+  // the bodies of each group, for their geoms
+  std::unordered_map<int, std::vector<int>> bodies;
+  for (const auto& [b, group] : group_of) bodies[group].push_back(b);
+  for (const auto& [g1, link1] : link_of_group) {
+    for (const auto& [g2, link2] : link_of_group) {
+      if (link1 >= link2) continue;
+      // MuJoCo's weld-parent test: a root welded to the world is the world's, never excluded
+      const auto parent_of = [&](int g) {
+        return g == root ? -1 : group_of.at(model.body_parentid[g]);
+      };
+      const bool parent_child = (parent_of(g2) == g1 || parent_of(g1) == g2) &&
+                                !(welded_root && (g1 == root || g2 == root));
+      bool any_compatible = false;
+      for (const int b1 : bodies.at(g1)) {
+        for (const int b2 : bodies.at(g2)) {
+          for (int a = model.body_geomadr[b1]; a < model.body_geomadr[b1] + model.body_geomnum[b1];
+               ++a) {
+            for (int c = model.body_geomadr[b2];
+                 c < model.body_geomadr[b2] + model.body_geomnum[b2]; ++c) {
+              any_compatible |= compatible(a, c);
+            }
+          }
+        }
+      }
+      if (parent_child || !any_compatible) filter_.Exclude(&multibody, link1, link2);
+    }
+  }
+  // <exclude body1 body2>: MuJoCo's signature is ((body1 + 1) << 16) + body2 + 1
+  for (int e = 0; e < model.nexclude; ++e) {
+    const auto b1 = group_of.find((model.exclude_signature[e] >> 16) - 1);
+    const auto b2 = group_of.find((model.exclude_signature[e] & 0xFFFF) - 1);
+    if (b1 == group_of.end() || b2 == group_of.end()) continue;
+    filter_.Exclude(&multibody, link_of_group.at(b1->second), link_of_group.at(b2->second));
+  }
 }
 
 void BulletTrees::AddJoint(const mjModel& model, int j, int tree, int link, const mjtNum* ctrl) {
@@ -309,24 +500,24 @@ void BulletTrees::AddJoint(const mjModel& model, int j, int tree, int link, cons
   joints_.push_back(joint);
 }
 
-void BulletTrees::AddCollider(const mjModel& model, const mjData& reference, int b,
-                              btMultiBody& multibody, int tree, int i,
-                              const Eigen::Isometry3d& T_world_link, const std::string& path) {
-  Link link;
-  link.tree = tree;
-  link.link = i;
-  link.T_link_body =
-      T_world_link.inverse() * MjPose(reference.xpos + 3 * b, reference.xmat + 9 * b);
-  const int first_geom = model.body_geomadr[b];
-  const int geom_count = model.body_geomnum[b];
-  if (geom_count > 0) {
-    auto compound = std::make_unique<btCompoundShape>();
-    for (int g = first_geom; g < first_geom + geom_count; ++g) {
+void BulletTrees::AddCollider(const mjModel& model, const mjData& reference,
+                              const std::vector<int>& bodies, btMultiBody& multibody, int tree,
+                              int i, const Eigen::Isometry3d& T_world_link,
+                              const std::string& path) {
+  // one compound of the geoms of the link's bodies (a body and those welded below it)
+  auto compound = std::make_unique<btCompoundShape>();
+  int first_geom = -1;
+  for (const int b : bodies) {
+    for (int g = model.body_geomadr[b]; g < model.body_geomadr[b] + model.body_geomnum[b]; ++g) {
+      if (first_geom < 0) first_geom = g;
       shapes_.push_back(MakeBulletShape(model, g, path));
       const Eigen::Isometry3d T_link_geom =
           T_world_link.inverse() * MjPose(reference.geom_xpos + 3 * g, reference.geom_xmat + 9 * g);
       compound->addChildShape(ToBullet(T_link_geom), shapes_.back().get());
     }
+  }
+  btMultiBodyLinkCollider* made = nullptr;
+  if (first_geom >= 0) {
     shapes_.push_back(std::move(compound));
     auto collider = std::make_unique<btMultiBodyLinkCollider>(&multibody, i);
     collider->setCollisionShape(shapes_.back().get());
@@ -334,13 +525,34 @@ void BulletTrees::AddCollider(const mjModel& model, const mjData& reference, int
     // Bullet keeps one friction per object: the first geom's
     collider->setFriction(BulletFriction(model.geom_friction[3 * first_geom]));
     collider->setRestitution(0);
-    world_->addCollisionObject(collider.get(), btBroadphaseProxy::DefaultFilter,
-                               btBroadphaseProxy::AllFilter);
-    multibody.getLink(i).m_collider = collider.get();
-    link.collider = collider.get();
+    const bool fixed = i < 0 && multibody.hasFixedBase();
+    if (fixed) {
+      // a base welded to the world is static, as the bodies welded to the world are
+      collider->setCollisionFlags(collider->getCollisionFlags() |
+                                  btCollisionObject::CF_STATIC_OBJECT);
+      world_->addCollisionObject(collider.get(), btBroadphaseProxy::StaticFilter,
+                                 btBroadphaseProxy::AllFilter ^ btBroadphaseProxy::StaticFilter);
+    } else {
+      world_->addCollisionObject(collider.get(), btBroadphaseProxy::DefaultFilter,
+                                 btBroadphaseProxy::AllFilter);
+    }
+    if (i < 0) {
+      multibody.setBaseCollider(collider.get());
+    } else {
+      multibody.getLink(i).m_collider = collider.get();
+    }
+    made = collider.get();
     colliders_.push_back(std::move(collider));
   }
-  links_[ElementName(model, mjOBJ_BODY, b)] = link;
+  for (const int b : bodies) {
+    Link link;
+    link.tree = tree;
+    link.link = i;
+    link.collider = made;
+    link.T_link_body =
+        T_world_link.inverse() * MjPose(reference.xpos + 3 * b, reference.xmat + 9 * b);
+    links_[ElementName(model, mjOBJ_BODY, b)] = link;
+  }
 }
 
 void BulletTrees::UpdatePoses(btMultiBody& multibody) {
@@ -393,13 +605,19 @@ Eigen::Isometry3d BulletTrees::BodyPose(std::string_view body) const {
   const btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(link.tree)];
   // the collider's pose is the link's after the last step's integration; the cached one is from
   // the kinematics at the step's start
-  const btTransform T_world_link = link.collider != nullptr
-                                       ? link.collider->getWorldTransform()
+  const btTransform T_world_link = link.collider != nullptr ? link.collider->getWorldTransform()
+                                   : link.link < 0
+                                       ? multibody.getBaseWorldTransform()
                                        : multibody.getLink(link.link).m_cachedWorldTransform;
   return FromBullet(T_world_link) * link.T_link_body;
 }
 
 void BulletTrees::Save() {
+  saved_bases_.clear();
+  for (const auto& multibody : multibodies_) {
+    saved_bases_.push_back(SavedBase{multibody->getBasePos(), multibody->getBaseVel(),
+                                     multibody->getBaseOmega(), multibody->getWorldToBaseRot()});
+  }
   saved_.clear();
   for (const Joint& joint : joints_) {
     const btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(joint.tree)];
@@ -415,10 +633,28 @@ void BulletTrees::Restore() {
     multibody.setJointVel(joints_[k].link, saved_[2 * k + 1]);
     multibody.clearForcesAndTorques();
   }
+  for (std::size_t t = 0; t < multibodies_.size() && t < saved_bases_.size(); ++t) {
+    btMultiBody& multibody = *multibodies_[t];
+    const SavedBase& base = saved_bases_[t];
+    multibody.setBasePos(base.position);
+    multibody.setWorldToBaseRot(base.world_to_base);
+    multibody.setBaseVel(base.velocity);
+    multibody.setBaseOmega(base.omega);
+    multibody.clearForcesAndTorques();
+  }
   for (auto& multibody : multibodies_) UpdatePoses(*multibody);
 }
 
 bool BulletTrees::Finite() const {
+  const auto finite = [](const btVector3& v) {
+    return FiniteScalar(v.x()) && FiniteScalar(v.y()) && FiniteScalar(v.z());
+  };
+  for (const auto& multibody : multibodies_) {
+    if (!finite(multibody->getBasePos()) || !finite(multibody->getBaseVel()) ||
+        !finite(multibody->getBaseOmega())) {
+      return false;
+    }
+  }
   return std::all_of(joints_.begin(), joints_.end(), [this](const Joint& joint) {
     const btMultiBody& multibody = *multibodies_[static_cast<std::size_t>(joint.tree)];
     return FiniteScalar(multibody.getJointPos(joint.link)) &&

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <string>
 
+#include "bench/bullet_engine.h"
 #include "bench/engine.h"
 #include "bench/harness.h"
 #include "bench/mujoco_engine.h"
@@ -106,7 +107,8 @@ TEST(ArticulatedGates, ScenesGateTheirFilesJointsAtTheirRanges) {
 }
 
 // a missing humanoid file names the flag; a stand-in with the humanoid's coordinates (a free
-// torso and 21 hinges) wrapped loads in MuJoCo and rigidtouch with the tool on its chest at 1 ms
+// torso and 21 hinges) wrapped loads in MuJoCo, rigidtouch and Bullet (a floating base and 21
+// links) with the tool on its chest at 1 ms
 TEST(ArticulatedGates, HumanoidWrapperNamesTheFlagAndLoads) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() /
                                     ("rigidtouch_gates_test_" + std::to_string(::getpid()));
@@ -140,6 +142,15 @@ TEST(ArticulatedGates, HumanoidWrapperNamesTheFlagAndLoads) {
   ASSERT_EQ(m.trees.size(), 1u);
   EXPECT_NEAR(m.initial[static_cast<std::size_t>(m.tool)].x_W.z(), 0.205, 1e-12);
   EXPECT_NEAR(m.trees[0].initial_qpos[2], 0.12, 1e-12);
+  BulletEngine bullet;
+  bullet.Load(HumanoidBenchmarkScene(wrapper));
+  ASSERT_EQ(bullet.trees().multibodies().size(), 1u);
+  const btMultiBody& tree = *bullet.trees().multibodies()[0];
+  EXPECT_FALSE(tree.hasFixedBase());
+  EXPECT_EQ(tree.getNumLinks(), 21);
+  // the torso's origin as the keyframe puts it; single-precision floats
+  EXPECT_NEAR(bullet.BodyPosition("torso").z(), 0.12, 1e-6);
+  EXPECT_NEAR(bullet.BodyPosition("tool").z(), 0.205, 1e-6);
 }
 
 // every engine restored to its snapshot steps as it did from the snapshot: the trees' state and
