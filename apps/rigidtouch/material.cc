@@ -141,8 +141,7 @@ void RunMaterialSynth(const MaterialSynthFlags& f) {
     throw Error("--clip-fraction: valid 0 to 0.5");
   }
   analysis::SyntheticTapsOptions o;
-  const double mass =
-      device::PresetSpec("touch").model.apparent_mass_kg + device::HandParams{}.mass_kg;
+  const double mass = device::EffectiveMassKg(device::PresetSpec("touch").model);
   o.quantity = f.force_quantity ? io::TapQuantity::kForce : io::TapQuantity::kAcceleration;
   o.slope = f.force_quantity ? m.amplitude_Ns_per_m : m.amplitude_Ns_per_m / mass;
   o.decay_per_s = m.decay_per_s;
@@ -217,9 +216,8 @@ nlohmann::json FitMaterialFile(const std::vector<io::TapRecording>& recordings,
   analysis::MaterialFitOptions o;
   o.name = request.name;
   o.device = request.device;
-  o.effective_mass_kg = request.effective_mass_kg > 0.0
-                            ? request.effective_mass_kg
-                            : spec.model.apparent_mass_kg + device::HandParams{}.mass_kg;
+  o.effective_mass_kg = request.effective_mass_kg > 0.0 ? request.effective_mass_kg
+                                                        : device::EffectiveMassKg(spec.model);
   o.display_limit_hz = 0.5 * request.rate_hz;
   o.max_force_N = spec.limits.max_force_N;
   fit = analysis::FitMaterial(recordings, o);

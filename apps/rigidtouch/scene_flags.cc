@@ -394,6 +394,10 @@ void PrintLoadWarnings(const Model& model) {
     std::cerr << "rigidtouch: warning: " << w << "\n";
 }
 
+void PrintMaterialNote(const std::string& note) {
+  if (!note.empty()) std::cerr << "rigidtouch: note: " << note << "\n";
+}
+
 analysis::TapExperimentConfig TapConfig(const SceneFlags& f, const std::string& device_preset,
                                         double rate_hz, double speed_mps, int taps) {
   Settings s = ResolveSettings(f);

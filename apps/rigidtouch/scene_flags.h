@@ -120,6 +120,11 @@ void PrintWarnings(const nlohmann::json& warnings, std::ostream& out);
 /// Prints the model's load warnings as "rigidtouch: warning: ..." lines to stderr.
 void PrintLoadWarnings(const Model& model);
 
+/// Prints a material's conversion note (io::RenderMaterialOnDevice: an acceleration material
+/// rendered on a device with another effective mass than its fit's) as one
+/// "rigidtouch: note: ..." line to stderr; nothing for an empty note.
+void PrintMaterialNote(const std::string& note);
+
 /// The tap experiment on the scene flags' scene (the shipped wall when none is given) with the
 /// resolved settings (ApplyDevicePreset for the device `device_preset`, a preset or a JSON
 /// device spec, at `rate_hz`), approach speed and taps.

@@ -17,6 +17,7 @@
 #include "device/udp_device.h"
 #include "device/udp_json.h"
 #include "io/device_record.h"
+#include "io/materials.h"
 #include "io/output_file.h"
 #include "io/resources.h"
 #include "io/trace_csv.h"
@@ -159,6 +160,7 @@ analysis::TapSetup PrepareServeTap(const ServeRun& s) {
       !s.f.max_device_radius_m && !ResolveSettings(s.f.scene).Given("device.plausible_radius_m");
   analysis::TapSetup setup = analysis::PrepareTap(c);
   PrintLoadWarnings(setup.model);
+  PrintMaterialNote(setup.material_note);
   return setup;
 }
 
@@ -234,12 +236,16 @@ bool ServeUdp(const ServeRun& s, nlohmann::json& result, loop::HapticLoopResult&
   }
   const std::string scene =
       s.f.scene.scene.empty() ? io::ShippedFile("scenes/wall.xml") : s.f.scene.scene;
+  // an acceleration material's force: this device's effective mass times its acceleration
+  const std::string note = io::RenderMaterialOnDevice(
+      load.render, device::EffectiveMassKg(s.choice.spec.model), s.choice.spec.limits.name);
   // Configure refuses what the preset cannot display
   Model model = LoadModel(scene, load);
   // the tool is the end effector: the spec's apparent mass plus a modelled hand's
   analysis::UseDeviceAndHandMass(model, s.choice.spec.model, device::HandParams{});
   Configure(model);
   PrintLoadWarnings(model);
+  PrintMaterialNote(note);
   device::UdpDeviceOptions o;
   o.server = s.connect;
   o.watchdog_s = s.f.watchdog_s;

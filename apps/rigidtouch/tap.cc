@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -192,6 +193,7 @@ nlohmann::json WallJson(const analysis::TapRun& run) {
 
 nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
   const Model& m = run.model;
+  const bool material = !m.render.material.name.empty();
   nlohmann::json taps = nlohmann::json::array();
   for (const analysis::TapMetrics& t : run.taps) {
     nlohmann::json impulses = nlohmann::json::array();
@@ -252,8 +254,14 @@ nlohmann::json RunJson(const analysis::TapRun& run, const char* coupling) {
       {"tool_mass_kg", m.bodies[m.tool].mass_kg},
       {"energy_to_user_J", run.energy_to_user_J},
       {"passivity_control", m.render.passivity_control},
-      {"material", m.render.material.name.empty() ? nlohmann::json(nullptr)
-                                                  : nlohmann::json(m.render.material.name)},
+      {"material", material ? nlohmann::json(m.render.material.name) : nlohmann::json(nullptr)},
+      // the amplitude as rendered on this device, and the mass an acceleration material was
+      // converted with (io::MaterialOnDevice)
+      {"material_amplitude_Ns_per_m",
+       material ? nlohmann::json(m.render.material.amplitude_Ns_per_m) : nlohmann::json(nullptr)},
+      {"material_effective_mass_kg", material && m.render.material.acceleration()
+                                         ? nlohmann::json(m.render.material.effective_mass_kg)
+                                         : nlohmann::json(nullptr)},
       {"clipped_ticks", run.clipped_ticks},
       {"clipped_impulse_ticks", run.clipped_impulse_ticks},
       {"taps", taps},
@@ -412,16 +420,16 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
                 "': " + created.message());
   }
   std::vector<std::string> traces, labels, joints;
+  std::set<std::string> notes;  // a material's conversion note, once however many renderers
   nlohmann::json renderers = nlohmann::json::array();
   std::ostringstream table, compact;
   table << TapTableHeader(TapTable::kFull) << "\n";
   compact << TapTableHeader(TapTable::kCompact) << "\n";
-  std::string note, compact_note, joint_rows;
+  std::string note, compact_note, joint_rows, non_finite_name;
   std::vector<std::vector<std::string>> figure_args;
   std::string coupling = "direct";
   double max_force_N = 0.0;
   NonFiniteReport non_finite;
-  std::string non_finite_name;
   const std::unique_ptr<Progress> progress = StartProgress("tap --" + set, f.quiet);
   for (std::size_t i = 0; i < specs.size(); ++i) {
     const analysis::RendererSpec& spec = specs[i];
@@ -437,6 +445,7 @@ void Compare(const TapFlags& f, const std::vector<analysis::RendererSpec>& specs
                                         " renderer(s) before it are in " + f.out_dir;
     const analysis::TapRun run = analysis::RunTapExperiment(config);
     if (i == 0) PrintLoadWarnings(run.model);  // the same scene for every renderer: once
+    if (notes.insert(run.material_note).second) PrintMaterialNote(run.material_note);
     if (joint_limit) CheckJointLimits(run, f.scene.scene);
     const std::string trace = OutPath(f, FileStem(spec) + ".csv");
     io::WriteTraceCsv(trace, run.trace);
@@ -619,6 +628,7 @@ void RunTap(const TapFlags& f) {
   const analysis::TapRun run = analysis::RunTapExperiment(config);
   progress->Finish();
   PrintLoadWarnings(run.model);
+  PrintMaterialNote(run.material_note);
   if (!trace.empty()) io::WriteTraceCsv(trace, run.trace);
   const bool joint = !trace.empty() && WriteJointCsv(JointPath(trace), run);
   if (!f.plot.empty()) {

@@ -238,6 +238,7 @@ void RunView(const ViewFlags& f) {
   analysis::TapSetup setup = analysis::PrepareTap(c);
   Model& model = setup.model;
   PrintLoadWarnings(model);
+  PrintMaterialNote(setup.material_note);
   const ViewDevice vd = OpenViewDevice(f, setup, recorded, lo);
   device::Device* dev = vd.dev;
   device::TightenDeviceParams(model.device, setup.device);

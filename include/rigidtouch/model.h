@@ -34,11 +34,24 @@ enum class RendererKind {
 /// A material's contact transient, the decaying sinusoid A v_in e^(-B t) sin(2 pi f t) along the
 /// contact normal (Okamura, Cutkosky and Dennerlein 2001), v_in the approach speed at onset.
 /// Presets and JSON files: src/io/materials.h, docs/renderers.md.
+///
+/// A force material gives A as a force at the device. An acceleration material (fitted from a
+/// recording of the handle's acceleration, docs/materials.md) keeps that slope as recorded and
+/// the mass its force was computed with: A = amplitude_mps2_per_mps x effective_mass_kg. On a
+/// device, io::MaterialOnDevice puts the device's effective mass in; with no device the mass
+/// read from the file (the fit device's) stays.
 struct Material {
   std::string name;                 // empty: none given
-  double amplitude_Ns_per_m = 0.0;  // A: force per approach speed [N/(m/s)]
+  double amplitude_Ns_per_m = 0.0;  // A: force per approach speed, as rendered [N/(m/s)]
   double decay_per_s = 0.0;         // B [1/s]
   double frequency_hz = 0.0;        // f [Hz]
+  /// Acceleration materials only (both 0 for a force material): the handle's acceleration per
+  /// approach speed as recorded [(m/s^2)/(m/s)] and the effective mass A was converted with [kg]
+  /// (a device's apparent mass plus the hand's).
+  double amplitude_mps2_per_mps = 0.0;
+  double effective_mass_kg = 0.0;
+  /// An acceleration material: its force A follows the mass it is rendered with.
+  bool acceleration() const { return effective_mass_kg > 0.0; }
 };
 
 /// How the device drives the virtual tool (tick stage 1, docs/architecture.md).

@@ -63,3 +63,32 @@ def test_fit_material_errors_name_the_tap_and_sample():
     bad = {"time_s": t, "force_N": np.full(400, np.nan), "velocity_mps": np.zeros(400)}
     with pytest.raises(ValueError, match="not a finite number"):
         rt.fit_material([bad])
+
+
+def test_an_acceleration_material_is_converted_for_the_device_as_the_cli_does(tmp_path):
+    """A material fitted from acceleration on the Touch (0.599 kg) and rendered on a device of
+    apparent mass 0.645 kg (effective 1.199 kg): rt.tap renders the amplitude the CLI renders,
+    the recorded acceleration times the device's effective mass (docs/materials.md)."""
+    csv = tmp_path / "wood.csv"
+    subprocess.run([CLI, "material", "synth", "wood", "--out", str(csv)], check=True)
+    material = rt.fit_material(read_taps(csv), name="wood")
+    path = tmp_path / "wood.json"
+    path.write_text(json.dumps(material))
+    device = tmp_path / "heavy.json"
+    device.write_text(json.dumps({
+        "name": "heavy", "max_force_N": 0, "max_stiffness_N_per_m": 400,
+        "max_damping_Ns_per_m": 4, "apparent_mass_kg": 0.645, "encoder_resolution_m": 5.5e-5,
+        "velocity_filter_hz": 100, "delay_ticks": 0}))
+    flags = ["tap", "--renderer", "event", "--material", str(path), "--device", str(device),
+             "--taps", "1", "--json"]
+    done = subprocess.run([CLI] + flags, capture_output=True, text=True, check=True)
+    from_cli = json.loads(done.stdout)
+    assert "rigidtouch: note: material 'wood'" in done.stderr
+    from_python = rt.tap(renderer="event", material=str(path), device=str(device), taps=1)
+    rendered = material["amplitude_mps2_per_mps"] * (0.645 + 0.554)
+    assert from_cli["material_amplitude_Ns_per_m"] == pytest.approx(rendered, rel=1e-12)
+    assert from_python.metrics["material_amplitude_Ns_per_m"] == \
+        from_cli["material_amplitude_Ns_per_m"]
+    assert from_python.metrics["material_effective_mass_kg"] == pytest.approx(1.199, rel=1e-12)
+    # the same tap: the same peak force to the last bit the JSON prints
+    assert from_python.taps[0]["peak_force_N"] == from_cli["taps"][0]["peak_force_N"]

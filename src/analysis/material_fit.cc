@@ -487,6 +487,10 @@ MaterialFit FitMaterial(std::span<const io::TapRecording> recordings,
   fit.material.amplitude_Ns_per_m = scale * fit.amplitude.slope;
   fit.material.decay_per_s = fit.decay_per_s.mean;
   fit.material.frequency_hz = fit.frequency_hz.mean;
+  if (acceleration) {
+    fit.material.amplitude_mps2_per_mps = fit.amplitude.slope;
+    fit.material.effective_mass_kg = scale;
+  }
   fit.amplitude_sd_Ns_per_m = scale * fit.amplitude.slope_sd;
   AddFitWarnings(fit);
   return fit;

@@ -7,6 +7,7 @@
 
 #include "dynamics/tree.h"
 #include "geometry/broadphase.h"
+#include "io/materials.h"
 
 namespace rigidtouch::analysis {
 namespace {
@@ -273,7 +274,7 @@ RenderParams WallRenderParams(int wall) {
 void UseDeviceAndHandMass(Model& model, const device::DeviceModelParams& device,
                           const device::HandParams& hand) {
   BodyModel& tool = model.bodies[model.tool];
-  const double mass = device.apparent_mass_kg + hand.mass_kg;
+  const double mass = device::EffectiveMassKg(device, hand);
   tool.inertia_kgm2 *= mass / tool.mass_kg;
   tool.mass_kg = mass;
 }
@@ -315,10 +316,13 @@ TapSetup PrepareTap(const TapExperimentConfig& config) {
     load.device.coupling_damping_Ns_per_m = config.coupling_damping_Ns_per_m.value_or(
         limits.max_damping_Ns_per_m > 0.0 ? std::min(kc_h, limits.max_damping_Ns_per_m) : kc_h);
   }
-  Model model = LoadModel(config.scene_path, load);
-
   device::DeviceModelParams dm = config.device_model.value_or(spec.model);
   dm.tick_rate_hz = config.rate_hz;
+  // an acceleration material's force is this device's effective mass times its acceleration
+  setup.material_note = io::RenderMaterialOnDevice(
+      load.render, device::EffectiveMassKg(dm, config.hand), setup.device.name);
+  Model model = LoadModel(config.scene_path, load);
+
   device::TapScript script = config.script;
   if (config.wall_point_m) {
     setup.wall.point_m = *config.wall_point_m;
@@ -506,6 +510,7 @@ TapRun RunTapExperiment(const TapExperimentConfig& config) {
   }
   run.model = std::move(model);
   run.wall = setup.wall;
+  run.material_note = setup.material_note;
   CheckTheWallWasTapped(run, config.scene_path);
   return run;
 }

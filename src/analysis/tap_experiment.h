@@ -104,6 +104,7 @@ struct TapRun {
   Model model;  // as rendered (tool mass, stiffness, schedule)
   Wall wall;    // where the taps were aimed
   DeviceLimits device;
+  std::string material_note;               // TapSetup::material_note
   std::vector<TraceSample> trace;          // one sample per tick
   std::vector<TapMetrics> taps;            // one per scripted tap
   double energy_to_user_J = 0.0;           // the device's own bookkeeping over the whole run
@@ -149,9 +150,14 @@ struct TapSetup {
   Wall wall;
   DeviceLimits device;
   std::unique_ptr<device::SimulatedDevice> simulated;
+  /// Set when the material's amplitude was converted for this device with another mass than its
+  /// file's (io::RenderMaterialOnDevice): the note for the user; else empty.
+  std::string material_note;
 };
 
-/// Builds the model and simulated device of `config`. Throws Error on bad configuration (naming
+/// Builds the model and simulated device of `config`. The model's material is the one rendered on
+/// the device: an acceleration material converted with the device's and hand's effective mass
+/// (io::RenderMaterialOnDevice). Throws Error on bad configuration (naming
 /// the parameter).
 TapSetup PrepareTap(const TapExperimentConfig& config);
 

@@ -30,6 +30,10 @@ double RequiredSpecNumber(const io::StrictObject& o, const std::string& key, dou
 
 }  // namespace
 
+double EffectiveMassKg(const DeviceModelParams& model, const HandParams& hand) {
+  return model.apparent_mass_kg + hand.mass_kg;
+}
+
 DeviceSpec PresetSpec(std::string_view name) {
   DeviceSpec spec;
   spec.limits = FindPreset(name);

@@ -20,6 +20,12 @@ struct DeviceSpec {
   std::string file;         // the JSON file it was read from; empty for a preset
 };
 
+/// The mass the device's force moves at the handle [kg]: the device's apparent mass plus the
+/// hand's (HandParams, 0.554 kg by default). `material fit` converts a recorded acceleration to
+/// a force with it, and every device renders an acceleration material with it
+/// (io::MaterialOnDevice, docs/materials.md "From acceleration to force").
+double EffectiveMassKg(const DeviceModelParams& model, const HandParams& hand = HandParams{});
+
 /// The spec of the preset `name`: the preset's limits, and the sensing and inertia of
 /// DeviceModelParams' defaults (the PHANToM Omni's), except `ideal`: no force limit, a 1 um
 /// encoder, no delay. Throws Error listing the presets for an unknown name.

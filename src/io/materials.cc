@@ -42,8 +42,9 @@ const std::vector<std::string> kFitFields = {
 
 // amplitude_quantity "force" (the default: amplitude_Ns_per_m is the force at the device) or
 // "acceleration" (measured as the handle's acceleration: amplitude_mps2_per_mps, converted with
-// effective_mass_kg, and amplitude_Ns_per_m must be their product, so neither is edited alone)
-void ReadAmplitudeSource(const io::StrictObject& o, double amplitude_Ns_per_m) {
+// effective_mass_kg, and amplitude_Ns_per_m must be their product, so neither is edited alone).
+// An acceleration material keeps both: a device converts it with its own mass (MaterialOnDevice).
+void ReadAmplitudeSource(const io::StrictObject& o, Material& m) {
   const std::string quantity =
       o.OneOf("amplitude_quantity", {"force", "acceleration"}, "amplitude quantities")
           .value_or("force");
@@ -55,12 +56,14 @@ void ReadAmplitudeSource(const io::StrictObject& o, double amplitude_Ns_per_m) {
   }
   const double a = RequiredMaterialNumber(o, "amplitude_mps2_per_mps", 0.0, 1e6, "(m/s^2)/(m/s)");
   const double mass = RequiredMaterialNumber(o, "effective_mass_kg", 1e-6, 1e3, "kg");
-  if (std::abs(mass * a - amplitude_Ns_per_m) > 1e-6 * std::max(1e-9, amplitude_Ns_per_m)) {
-    o.FailAt("amplitude_Ns_per_m", text::FormatNumber(amplitude_Ns_per_m) +
+  if (std::abs(mass * a - m.amplitude_Ns_per_m) > 1e-6 * std::max(1e-9, m.amplitude_Ns_per_m)) {
+    o.FailAt("amplitude_Ns_per_m", text::FormatNumber(m.amplitude_Ns_per_m) +
                                        " is not effective_mass_kg x " +
                                        "amplitude_mps2_per_mps = " + text::FormatNumber(mass * a) +
                                        " (docs/materials.md, \"From acceleration to force\")");
   }
+  m.amplitude_mps2_per_mps = a;
+  m.effective_mass_kg = mass;
 }
 
 }  // namespace
@@ -76,7 +79,8 @@ Material ReadMaterial(const std::string& path) {
 
 const Material* FindPreset(const Material& material) {
   for (const Material& m : Table()) {
-    if (m.name == material.name && m.amplitude_Ns_per_m == material.amplitude_Ns_per_m &&
+    if (!material.acceleration() && m.name == material.name &&
+        m.amplitude_Ns_per_m == material.amplitude_Ns_per_m &&
         m.decay_per_s == material.decay_per_s && m.frequency_hz == material.frequency_hz) {
       return &m;
     }
@@ -98,7 +102,7 @@ Material ReadMaterialJson(const io::JsonSource& source, const nlohmann::json& va
   m.decay_per_s = RequiredMaterialNumber(o, "decay_per_s", 1e-3, 1e5, "1/s");
   // the frequency's upper bound depends on the time step (Nyquist): Configure checks it
   m.frequency_hz = RequiredMaterialNumber(o, "frequency_hz", 1e-3, 1e5, "Hz");
-  ReadAmplitudeSource(o, m.amplitude_Ns_per_m);
+  ReadAmplitudeSource(o, m);
   if (o.Has("fit")) {
     // the fit's provenance (docs/materials.md): kept for people, not used to render
     o.Object("fit", kFitFields, "the fit's record");
@@ -126,6 +130,50 @@ MaterialTrainParams MaterialTrain(const Material& material) {
   p.t_collision_s =
       std::max(std::min(window_s, limits::kMaxCollisionWindow_s), 1.0 / p.frequency_hz);
   return p;
+}
+
+Material MaterialOnDevice(const Material& material, double effective_mass_kg) {
+  if (!material.acceleration()) return material;
+  if (!(std::isfinite(effective_mass_kg) && effective_mass_kg > 0.0)) {
+    throw Error("material '" + material.name + "': the device's effective mass " +
+                text::FormatNumber(effective_mass_kg) +
+                " kg cannot convert its acceleration amplitude to a force: valid > 0 kg");
+  }
+  // the mass it was converted with: the file's amplitude as written, to the last bit
+  const double mass = material.effective_mass_kg;
+  if (std::abs(effective_mass_kg - mass) <= kSameMass_kg * std::max(mass, effective_mass_kg)) {
+    return material;
+  }
+  Material m = material;
+  m.effective_mass_kg = effective_mass_kg;
+  m.amplitude_Ns_per_m = material.amplitude_mps2_per_mps * effective_mass_kg;
+  return m;
+}
+
+std::string MaterialDeviceNote(const Material& material, const Material& rendered,
+                               const std::string& device) {
+  if (!material.acceleration() || !rendered.acceleration()) return "";
+  const double fit = material.effective_mass_kg, now = rendered.effective_mass_kg;
+  if (std::abs(now - fit) <= kSameMass_kg * std::max(fit, now)) return "";
+  return "material '" + material.name + "' was fitted as an acceleration with effective mass " +
+         text::FormatNumber(fit) + " kg; on " + device + " (effective mass " +
+         text::FormatNumber(now) + " kg) its amplitude is " +
+         text::FormatNumber(rendered.amplitude_mps2_per_mps) + " (m/s^2)/(m/s) x " +
+         text::FormatNumber(now) + " kg = " + text::FormatNumber(rendered.amplitude_Ns_per_m) +
+         " N/(m/s) (the file's " + text::FormatNumber(material.amplitude_Ns_per_m) +
+         " N/(m/s); docs/materials.md, \"From acceleration to force\")";
+}
+
+std::string RenderMaterialOnDevice(RenderParams& render, double effective_mass_kg,
+                                   const std::string& device) {
+  if (render.material.name.empty()) return "";
+  const Material rendered = MaterialOnDevice(render.material, effective_mass_kg);
+  // only the event renderer plays A; a material train takes f and t_c (no note for it)
+  std::string note = render.renderer == RendererKind::kEvent
+                         ? MaterialDeviceNote(render.material, rendered, device)
+                         : std::string();
+  render.material = rendered;
+  return note;
 }
 
 void ApplyMaterial(RenderParams& render, const Material& material) {

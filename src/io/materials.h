@@ -21,7 +21,8 @@ std::span<const Material> MaterialPresets();
 /// Reads a JSON material: {"name": optional (default the file's stem), "amplitude_Ns_per_m",
 /// "decay_per_s", "frequency_hz"}, all three required; optional "amplitude_quantity" ("force",
 /// the default, or "acceleration" with "amplitude_mps2_per_mps" and "effective_mass_kg", whose
-/// product must be amplitude_Ns_per_m to 1e-6) and "fit" (`material fit`'s record: its field
+/// product must be amplitude_Ns_per_m to 1e-6; both are kept in the Material, so a device can
+/// convert with its own mass: MaterialOnDevice) and "fit" (`material fit`'s record: its field
 /// names are checked, its values not used; docs/materials.md). Throws Error "FILE: FIELD: ..."
 /// naming the field.
 Material ReadMaterial(const std::string& path);
@@ -48,6 +49,29 @@ struct MaterialTrainParams {
   double t_collision_s = 0.0;
 };
 MaterialTrainParams MaterialTrain(const Material& material);
+
+/// Masses within this relative difference are the same (no conversion note): a material file
+/// holds the fit's mass as written, to the last bit.
+inline constexpr double kSameMass_kg = 1e-9;
+
+/// `material` as rendered on a device whose effective mass is `effective_mass_kg` [kg] (the
+/// device's apparent mass plus the hand's: device::EffectiveMass, the mass `material fit`
+/// converts with): an acceleration material's A becomes amplitude_mps2_per_mps x
+/// effective_mass_kg and its effective_mass_kg that mass; a force material is returned as it is.
+/// Throws Error for a mass that is not > 0 and finite (acceleration materials only).
+Material MaterialOnDevice(const Material& material, double effective_mass_kg);
+
+/// The note for the user when `rendered` (MaterialOnDevice of `material`) has another mass than
+/// the file's (relative difference above kSameMass_kg): the material's name, both masses, the
+/// rendered amplitude, `device` naming the device. Empty when nothing was converted.
+std::string MaterialDeviceNote(const Material& material, const Material& rendered,
+                               const std::string& device);
+
+/// Converts `render.material` for a device (MaterialOnDevice) and returns the note
+/// (MaterialDeviceNote) when the event renderer plays a converted amplitude, else "". One call
+/// for every path where a material meets a device: tap, serve, view, study.
+std::string RenderMaterialOnDevice(RenderParams& render, double effective_mass_kg,
+                                   const std::string& device);
 
 /// Gives `render` the material `material` as `--material` does: the event renderer's transient,
 /// or, for the train renderer, a passive material train (its f and t_c from MaterialTrain). One

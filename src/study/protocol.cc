@@ -430,6 +430,13 @@ nlohmann::json Condition::ToJson() const {
                                {"amplitude_Ns_per_m", material->amplitude_Ns_per_m},
                                {"decay_per_s", material->decay_per_s},
                                {"frequency_hz", material->frequency_hz}};
+    // an acceleration material keeps its form (each device converts it with its own mass); a
+    // force material's fields stay as before, so its protocols keep their hash
+    if (material->acceleration()) {
+      j["material"]["amplitude_quantity"] = "acceleration";
+      j["material"]["amplitude_mps2_per_mps"] = material->amplitude_mps2_per_mps;
+      j["material"]["effective_mass_kg"] = material->effective_mass_kg;
+    }
   }
   // absent when off, so protocols written before the field existed keep their hash
   if (passivity_control) j["passivity_control"] = true;

@@ -32,8 +32,10 @@ struct Condition {
   /// event (required) and train only: a material as `--material` takes it (a preset name or a
   /// JSON material file, io::ParseMaterial), or the same fields written inline; a material
   /// train takes its f and t_c from it (io::ApplyMaterial). Read when the protocol is parsed:
-  /// the canonical JSON holds a preset's name, or else the material's own fields, so the hash
-  /// covers what is rendered and a log does not need the file
+  /// the canonical JSON holds a preset's name, or else the material's own fields (an
+  /// acceleration material's with its acceleration and mass: each device converts it with its
+  /// own, io::MaterialOnDevice), so the hash covers what is rendered and a log does not need the
+  /// file
   std::optional<Material> material;
   bool passivity_control = false;  ///< the passivity observer and controller, as the CLI flag
   /// an articulated scene's joint limits: penalty, impulse or train, as --joint-limit-renderer

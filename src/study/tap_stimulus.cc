@@ -4,12 +4,14 @@
 #include <atomic>
 #include <cmath>
 #include <iostream>
+#include <set>
 #include <sstream>
 
 #include "analysis/tap_experiment.h"
 #include "device/device_spec.h"
 #include "device/presets.h"
 #include "device/udp_device.h"
+#include "io/materials.h"
 #include "io/resources.h"
 #include "loop/haptic_loop.h"
 #include "study/stimulus.h"
@@ -41,6 +43,19 @@ analysis::TapExperimentConfig TapConfig(const Condition& c, const std::string& s
   }
   return config;
 }
+
+// a material's conversion note (analysis::TapRun::material_note), printed once per session for
+// each material and device however many taps render it
+class MaterialNotes {
+ public:
+  void Print(const std::string& note) {
+    if (note.empty() || !printed_.insert(note).second) return;
+    std::cerr << "rigidtouch: note: " << note << "\n";
+  }
+
+ private:
+  std::set<std::string> printed_;
+};
 
 // The transient part of the normal force over the collision window: displayed minus penalty,
 // i.e. what the impulses add after the device limit (as TapMetrics' transient spectrum).
@@ -79,6 +94,7 @@ class TapStimulusSource final : public StimulusSource {
     config.script.speed_spread =
         options_.approach_speed_relative_sd >= 0.0 ? options_.approach_speed_relative_sd : 0.1;
     const analysis::TapRun run = analysis::RunTapExperiment(config);
+    notes_.Print(run.material_note);
     TapPercept p;
     if (run.taps.empty() || !run.taps.front().contact) return p;  // the hand never touched
     const analysis::TapMetrics& m = run.taps.front();
@@ -113,6 +129,7 @@ class TapStimulusSource final : public StimulusSource {
 
  private:
   TapSourceOptions options_;
+  MaterialNotes notes_;
 };
 
 // renders a wall for a person: on the in-process simulated device (a dry run that reports what
@@ -139,6 +156,7 @@ class DeviceWallPresenter final : public WallPresenter {
     analysis::TapExperimentConfig config = TapConfig(condition, options_.scene, options_.preset, 0);
     config.script.taps = taps;
     const analysis::TapRun run = analysis::RunTapExperiment(config);
+    notes_.Print(run.material_note);
     double peak = 0.0;
     for (const auto& t : run.taps) peak = std::max(peak, t.peak_force_N);
     std::cout << "  (simulated device rendered " << taps << " taps, peak force " << peak << " N)\n";
@@ -157,10 +175,14 @@ class DeviceWallPresenter final : public WallPresenter {
     // the preset's limits on every path, as serve applies them: the wall defaults to what the
     // device can display (its stiffness, damping k h capped at its damping), the force to its
     // limit, and the device's own announced limits tighten them further
-    const DeviceLimits preset = device::ParseDeviceSpec(options_.preset).limits;
+    const device::DeviceSpec spec = device::ParseDeviceSpec(options_.preset);
+    const DeviceLimits& preset = spec.limits;
     const double h = 0.001;
     LoadOptions load;
     load.render = ToRenderParams(condition);
+    // an acceleration material's force on this device, as serve converts it
+    notes_.Print(
+        io::RenderMaterialOnDevice(load.render, device::EffectiveMassKg(spec.model), preset.name));
     load.device.coupling = Coupling::kDirect;
     load.timestep_s = h;
     load.contact.stiffness_N_per_m = condition.stiffness_N_per_m.value_or(
@@ -190,6 +212,7 @@ class DeviceWallPresenter final : public WallPresenter {
   }
 
   PresenterOptions options_;
+  MaterialNotes notes_;
 };
 
 }  // namespace

@@ -112,6 +112,46 @@ TEST(ServeCliTest, NoAnsweringDeviceFailsAfterTheStartupTimeout) {
   EXPECT_LT(took_s, 5.0);
 }
 
+// an acceleration material on a device of another mass: serve converts it on both device paths
+// (simulated, and the bridge, whose note comes before the session looks for the device) and says
+// so once with the rendered amplitude (docs/materials.md, "From acceleration to force")
+TEST(ServeCliTest, AnAccelerationMaterialIsConvertedForTheDevice) {
+  const auto dir = TempDir("serve_material");
+  const std::string material = (dir / "accel.json").string();
+  const std::string device = (dir / "heavy.json").string();
+  std::ofstream(material) << nlohmann::json{
+      {"name", "accel"},
+      {"amplitude_Ns_per_m", 15.0},
+      {"decay_per_s", 60},
+      {"frequency_hz", 100},
+      {"amplitude_quantity", "acceleration"},
+      {"amplitude_mps2_per_mps", 25.0},
+      {"effective_mass_kg", 0.6}}.dump();
+  std::ofstream(device) << nlohmann::json{{"name", "heavy"},
+                                          {"max_force_N", 0},
+                                          {"max_stiffness_N_per_m", 0},
+                                          {"max_damping_Ns_per_m", 0},
+                                          {"apparent_mass_kg", 0.646},
+                                          {"encoder_resolution_m", 1e-6},
+                                          {"velocity_filter_hz", 100},
+                                          {"delay_ticks", 0}}
+                               .dump();
+  const std::string flags =
+      " --device " + device + " --renderer event --material " + material + " --json";
+  const std::string note =
+      "rigidtouch: note: material 'accel' was fitted as an acceleration with effective mass "
+      "0.6 kg; on heavy (effective mass 1.2 kg) its amplitude is 25 (m/s^2)/(m/s) x 1.2 kg = 30 "
+      "N/(m/s)";
+  const CliResult sim = RunCli("serve --connect sim --taps 1 --duration 1" + flags);
+  EXPECT_EQ(sim.exit_code, 0) << sim.err;
+  EXPECT_NE(sim.err.find(note), std::string::npos) << sim.err;
+  const std::string addr = "udp://127.0.0.1:" + std::to_string(FreePort());
+  const CliResult bridge = RunCli("serve --connect " + addr + " --startup-timeout 0.3" + flags);
+  EXPECT_EQ(bridge.exit_code, 5) << bridge.err;
+  EXPECT_NE(bridge.err.find(note), std::string::npos) << bridge.err;
+  EXPECT_EQ(bridge.err.find(note), bridge.err.rfind(note)) << bridge.err;
+}
+
 // an output path that cannot be written is refused before the session, not after it
 TEST(ServeCliTest, UnwritableTracePathIsRefusedBeforeTheSession) {
   const auto t0 = std::chrono::steady_clock::now();

@@ -71,6 +71,62 @@ TEST(MaterialsTest, BadMaterialsNameTheField) {
   EXPECT_NE(e.find("aluminium"), std::string::npos) << e;
 }
 
+// an acceleration material keeps its form when read, and a device converts it with its own
+// effective mass: A = amplitude_mps2_per_mps x the device's mass; on the fit's mass the file's A
+// to the last bit, no note; a force material is the same on every device
+TEST(MaterialsTest, AnAccelerationMaterialIsConvertedWithTheDevicesMass) {
+  const std::string path = Write(R"({"name": "fitted", "amplitude_Ns_per_m": 15.0,
+      "decay_per_s": 60, "frequency_hz": 100, "amplitude_quantity": "acceleration",
+      "amplitude_mps2_per_mps": 25.0, "effective_mass_kg": 0.6})");
+  const Material file = ParseMaterial(path);
+  std::filesystem::remove(path);
+  ASSERT_TRUE(file.acceleration());
+  EXPECT_EQ(file.amplitude_Ns_per_m, 15.0);
+  EXPECT_EQ(file.amplitude_mps2_per_mps, 25.0);
+  EXPECT_EQ(file.effective_mass_kg, 0.6);
+  EXPECT_EQ(FindPreset(file), nullptr);
+
+  const Material same = MaterialOnDevice(file, 0.6);
+  EXPECT_EQ(same.amplitude_Ns_per_m, 15.0);
+  EXPECT_EQ(MaterialDeviceNote(file, same, "touch"), "");
+
+  const Material heavy = MaterialOnDevice(file, 1.2);
+  EXPECT_DOUBLE_EQ(heavy.amplitude_Ns_per_m, 25.0 * 1.2);
+  EXPECT_EQ(heavy.effective_mass_kg, 1.2);
+  EXPECT_EQ(heavy.amplitude_mps2_per_mps, 25.0);
+  EXPECT_EQ(heavy.decay_per_s, file.decay_per_s);
+  EXPECT_EQ(heavy.frequency_hz, file.frequency_hz);
+  EXPECT_EQ(MaterialOnDevice(heavy, 1.2).amplitude_Ns_per_m, heavy.amplitude_Ns_per_m);
+  const std::string note = MaterialDeviceNote(file, heavy, "heavy");
+  for (const char* part : {"'fitted'", "0.6 kg", "1.2 kg", "heavy", "30 N/(m/s)"}) {
+    EXPECT_NE(note.find(part), std::string::npos) << part << ": " << note;
+  }
+
+  RenderParams event;
+  event.renderer = RendererKind::kEvent;
+  event.material = file;
+  EXPECT_EQ(RenderMaterialOnDevice(event, 1.2, "heavy"), note);
+  EXPECT_DOUBLE_EQ(event.material.amplitude_Ns_per_m, 30.0);
+  // a material train plays f and t_c only: converted, no note
+  RenderParams train;
+  train.renderer = RendererKind::kTrain;
+  train.material = file;
+  EXPECT_EQ(RenderMaterialOnDevice(train, 1.2, "heavy"), "");
+  EXPECT_DOUBLE_EQ(train.material.amplitude_Ns_per_m, 30.0);
+
+  const Material wood = ParseMaterial("wood");
+  EXPECT_FALSE(wood.acceleration());
+  EXPECT_EQ(MaterialOnDevice(wood, 1.2).amplitude_Ns_per_m, wood.amplitude_Ns_per_m);
+  EXPECT_EQ(MaterialDeviceNote(wood, MaterialOnDevice(wood, 1.2), "heavy"), "");
+
+  try {
+    MaterialOnDevice(file, 0.0);
+    ADD_FAILURE() << "a zero mass converted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("fitted"), std::string::npos) << e.what();
+  }
+}
+
 // passive material trains: f the material's, the window three decay time constants; over the
 // walls' passivity sweep no tap gives the user energy, and the train's impulsive force peaks
 // within 10 % of f over its window. Aluminium's 300 Hz needs 2 kHz: at 1 kHz the nearest whole

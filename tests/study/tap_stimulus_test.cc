@@ -1,6 +1,10 @@
 // The study's engine binding: percepts of simulated taps from the real tap experiment.
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -89,6 +93,56 @@ TEST(TapStimulusTest, MaterialConditionsRenderAsTheTapCommand) {
   }
   // and the material matters: rubber's transient is not wood's
   EXPECT_NE(peaks[0], peaks[2]);
+}
+
+// an acceleration material on a device of another mass: the study renders it as `tap --device`
+// does (the force converted with the device's effective mass), also after the protocol's
+// canonical form, which keeps the material's acceleration and mass
+TEST(TapStimulusTest, AnAccelerationMaterialIsConvertedForTheDeviceAsTheTapCommandDoes) {
+  const std::string stem = (std::filesystem::temp_directory_path() /
+                            ("rigidtouch_study_accel_" + std::to_string(::getpid())))
+                               .string();
+  const std::string material = stem + "_wood.json", device = stem + "_heavy.json";
+  // the preset wood's 15 N/(m/s) as fitted on the Touch (0.599 kg), and the Touch with its
+  // apparent mass 0.645 kg instead of 0.045 kg (effective 1.199 kg)
+  std::ofstream(material) << json{
+      {"name", "accel_wood"},
+      {"amplitude_Ns_per_m", 15.0},
+      {"decay_per_s", 60},
+      {"frequency_hz", 100},
+      {"amplitude_quantity", "acceleration"},
+      {"amplitude_mps2_per_mps", 15.0 / 0.599},
+      {"effective_mass_kg",
+       0.599}}.dump();
+  std::ofstream(device) << json{{"name", "heavy"},
+                                {"max_force_N", 0},
+                                {"max_stiffness_N_per_m", 400},
+                                {"max_damping_Ns_per_m", 4},
+                                {"apparent_mass_kg", 0.645},
+                                {"encoder_resolution_m", 0.055e-3},
+                                {"velocity_filter_hz", 100},
+                                {"delay_ticks", 0}}
+                               .dump();
+  TapSourceOptions options;
+  options.approach_speed_relative_sd = 0.0;  // as tap without --spread
+  options.device = device;
+  const auto source = MakeTapStimulusSource(options);
+  const Condition parsed = Wall({{"renderer", "event"}, {"material", material}});
+  ASSERT_TRUE(parsed.material && parsed.material->acceleration());
+  const Condition canonical = Wall(parsed.ToJson());
+  ASSERT_TRUE(canonical.material && canonical.material->acceleration());
+  const json cli =
+      json::parse(Output(std::string(RIGIDTOUCH_CLI) + " tap --renderer event --material " +
+                         material + " --device " + device + " --taps 1 --json 2>/dev/null"));
+  EXPECT_NEAR(cli["material_amplitude_Ns_per_m"].get<double>(), 15.0 / 0.599 * 1.199, 1e-9);
+  const json tap = cli["taps"][0];
+  for (const Condition& c : {parsed, canonical}) {
+    const TapPercept p = source->RenderTap(c, 1);
+    EXPECT_DOUBLE_EQ(p.peak_force_N, tap["peak_force_N"].get<double>());
+    EXPECT_DOUBLE_EQ(p.transient_peak_to_mean, tap["transient_peak_to_mean"].get<double>());
+  }
+  std::filesystem::remove(material);
+  std::filesystem::remove(device);
 }
 
 // the percept's vibration is the transient part (what the impulses add) and its pitch the
