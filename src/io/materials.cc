@@ -141,7 +141,7 @@ Material MaterialOnDevice(const Material& material, double effective_mass_kg) {
   }
   // the mass it was converted with: the file's amplitude as written, to the last bit
   const double mass = material.effective_mass_kg;
-  if (std::abs(effective_mass_kg - mass) <= kSameMass_kg * std::max(mass, effective_mass_kg)) {
+  if (std::abs(effective_mass_kg - mass) <= kSameMassRelative * std::max(mass, effective_mass_kg)) {
     return material;
   }
   Material m = material;
@@ -154,7 +154,7 @@ std::string MaterialDeviceNote(const Material& material, const Material& rendere
                                const std::string& device) {
   if (!material.acceleration() || !rendered.acceleration()) return "";
   const double fit = material.effective_mass_kg, now = rendered.effective_mass_kg;
-  if (std::abs(now - fit) <= kSameMass_kg * std::max(fit, now)) return "";
+  if (std::abs(now - fit) <= kSameMassRelative * std::max(fit, now)) return "";
   return "material '" + material.name + "' was fitted as an acceleration with effective mass " +
          text::FormatNumber(fit) + " kg; on " + device + " (effective mass " +
          text::FormatNumber(now) + " kg) its amplitude is " +

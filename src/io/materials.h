@@ -52,17 +52,17 @@ MaterialTrainParams MaterialTrain(const Material& material);
 
 /// Masses within this relative difference are the same (no conversion note): a material file
 /// holds the fit's mass as written, to the last bit.
-inline constexpr double kSameMass_kg = 1e-9;
+inline constexpr double kSameMassRelative = 1e-9;
 
 /// `material` as rendered on a device whose effective mass is `effective_mass_kg` [kg] (the
-/// device's apparent mass plus the hand's: device::EffectiveMass, the mass `material fit`
+/// device's apparent mass plus the hand's: device::EffectiveMassKg, the mass `material fit`
 /// converts with): an acceleration material's A becomes amplitude_mps2_per_mps x
 /// effective_mass_kg and its effective_mass_kg that mass; a force material is returned as it is.
 /// Throws Error for a mass that is not > 0 and finite (acceleration materials only).
 Material MaterialOnDevice(const Material& material, double effective_mass_kg);
 
 /// The note for the user when `rendered` (MaterialOnDevice of `material`) has another mass than
-/// the file's (relative difference above kSameMass_kg): the material's name, both masses, the
+/// the file's (relative difference above kSameMassRelative): the material's name, both masses, the
 /// rendered amplitude, `device` naming the device. Empty when nothing was converted.
 std::string MaterialDeviceNote(const Material& material, const Material& rendered,
                                const std::string& device);
